@@ -1,0 +1,29 @@
+"""Observability of underwater electric-dipole tracking: fields, Γ, measures and maps.
+
+The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` and
+:func:`observable_rank`; the rest builds on them. No web stack is imported here.
+"""
+
+from .fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
+from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, FisherMeasures, fisher_information, fisher_measures
+from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
+from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
+from .observability import (
+    ETA_TOL,
+    RANK_RTOL,
+    gamma,
+    log10_abs_det_gamma,
+    observability_index,
+    observable_rank,
+    unobservable_direction,
+)
+from .validation import STATE_NAMES
+
+__all__ = [
+    "DEFAULT_NOISE", "DEFAULT_STEPS", "ETA_TOL", "MAX_RESOLUTION", "MEASURES", "MODELS",
+    "RANK_RTOL", "STATE_NAMES", "STATE_UNITS", "FisherMeasures", "MapResult", "Plane",
+    "dipole_field", "dual_station", "evaluate_map", "field_jacobian", "fisher_information",
+    "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
+    "log10_ratio", "observability_index", "observable_rank", "single_station",
+    "unobservable_direction", "velocity_from_heading",
+]

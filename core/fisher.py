@@ -1,0 +1,116 @@
+"""Fisher information, the D-optimal measure and Cramér–Rao bounds (spec §3, general rule).
+
+With every component of every station over N instants (Γ of shape (3·S·N) × n) and white sensor
+noise of standard deviation ``noise`` (V/m) on each component, ``R = noise² I`` and
+
+    F = Γᵀ R⁻¹ Γ,    D-optimal measure = ½ log10 det F,    Cov ≥ F⁻¹ (Cramér–Rao).
+
+Where Γ is structurally rank-deficient (η < :data:`core.observability.ETA_TOL`) F is singular:
+the D-optimal measure is ``-inf`` and every bound is ``+inf``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels, validation
+from .observability import ETA_TOL, _prepare, gamma
+
+__all__ = ["DEFAULT_NOISE", "DEFAULT_STEPS", "FisherMeasures", "fisher_information", "fisher_measures"]
+
+#: Sensor noise standard deviation (V/m), as in the filter-bank paper (seed 001).
+DEFAULT_NOISE = 1e-7
+#: Instants used by default for the all-rows Γ.
+DEFAULT_STEPS = 3
+
+
+@dataclass(frozen=True)
+class FisherMeasures:
+    """Per-point results of :func:`fisher_measures`; every array has the states' leading shape.
+
+    Attributes
+    ----------
+    d_optimal : ndarray
+        ½ log10 det F (F in 1 / state-unit², dimensionless log); -inf where not observable.
+    log10_eta : ndarray
+        Scale-free observability index log10 sqrt(det Γ_sᵀΓ_s) ≤ 0.
+    observable : ndarray of bool
+        η ≥ ETA_TOL.
+    std : ndarray, shape (..., n)
+        CRLB standard deviation of each unknown state (m, m/s, A·m); +inf where not observable.
+    position_std : ndarray
+        sqrt(σx² + σy² + σz²) over the unknown position states (m); +inf where not observable.
+    free : tuple of str
+        Names of the unknown states, the order of ``std``'s last axis.
+    """
+
+    d_optimal: np.ndarray
+    log10_eta: np.ndarray
+    observable: np.ndarray
+    std: np.ndarray
+    position_std: np.ndarray
+    free: tuple
+
+
+def fisher_measures(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
+                    sigma=4.0, model="exact", known=()):
+    """D-optimal measure and Cramér–Rao bounds at every state.
+
+    Parameters
+    ----------
+    states, stations, T, sigma, model, known
+        As for :func:`core.gamma`.
+    noise : float
+        Sensor noise standard deviation (V/m) on each field component, > 0.
+    steps : int
+        Number of instants N ≥ 1 (all rows of all stations).
+
+    Returns
+    -------
+    FisherMeasures
+
+    Examples
+    --------
+    >>> import core
+    >>> m = core.fisher_measures([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100], [15, 0, 100]])
+    >>> bool(m.observable), m.std.shape
+    (True, (7,))
+    >>> bool(core.fisher_measures([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]).observable)
+    False
+    """
+    noise = validation.positive("noise", noise, "V/m")
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, square_min_steps=1)
+    npts, free = args[0].shape[0], args[-1]
+    log_eta, log_norms, inv_diag = np.empty(npts), np.empty(npts), np.empty((npts, free.size))
+    kernels.fisher_measures(*args, n_rows, log_eta, log_norms, inv_diag)
+    observable = log_eta >= np.log10(ETA_TOL)
+    # ½ log10 det(ΓᵀΓ / noise²) = log10 η + Σ log10‖Γ_j‖ − n log10(noise)
+    d_opt = np.where(observable, log_eta + log_norms - free.size * np.log10(noise), -np.inf)
+    var = np.where(observable[:, None], inv_diag * noise**2, np.inf)
+    pos = [q for q, j in enumerate(free) if j < 3]
+    pos_std = np.sqrt(var[:, pos].sum(axis=1)) if pos else np.zeros(npts)
+    names = tuple(validation.STATE_NAMES[j] for j in free)
+    return FisherMeasures(
+        d_optimal=d_opt.reshape(lead),
+        log10_eta=log_eta.reshape(lead),
+        observable=observable.reshape(lead),
+        std=np.sqrt(var).reshape(lead + (free.size,)),
+        position_std=pos_std.reshape(lead),
+        free=names,
+    )
+
+
+def fisher_information(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
+                       sigma=4.0, model="exact", known=()):
+    """Fisher information matrix F = ΓᵀΓ / noise².
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        In 1 / (state unit × state unit), n = 7 − len(known).
+    """
+    noise = validation.positive("noise", noise, "V/m")
+    g = gamma(states, stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+    return np.einsum("...ri,...rj->...ij", g, g) / noise**2  # (..., n, n)

@@ -1,0 +1,216 @@
+"""Compiled kernels that build Γ point by point and reduce it to scalar measures.
+
+Private: they assume validated float64 input (see :mod:`core.validation`) and never allocate
+per point. Work is split into blocks of ``_BLOCK`` points run in parallel (``prange``); each
+block owns its scratch buffers, so a 1000 × 1000 map needs no more memory than its outputs.
+
+Column scaling is used throughout: with ``Γ_s = Γ / ‖Γ_j‖`` (unit columns),
+
+    log10|det Γ| = log10|det Γ_s| + Σ_j log10 ‖Γ_j‖,
+
+and ``η = sqrt(det Γ_sᵀ Γ_s) ∈ [0, 1]`` (for square Γ, ``|det Γ_s|``, the Hadamard ratio) is the
+scale-free observability index: 1 for orthogonal columns, 0 for a rank-deficient Γ.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .fields import _local_jacobian
+
+_BLOCK = 256
+
+
+@nb.njit(cache=True, inline="always")
+def _gamma_point(x, stations, step, kappa, t_idx, t_coef, free, n_rows, nbuf, dndr, dndf, e, jac, g):
+    """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (7,).
+
+    Rows are time-major, then station-major, then component (Ex, Ey, Ez): the paper's order.
+    Row block of instant i is ``(∂h/∂X)(Φ^i x) · Φ^i``; Φ^i adds i·T·(∂/∂x, ∂/∂y) to the
+    velocity columns (constant-velocity motion, no vertical speed).
+    """
+    n_s = stations.shape[0]
+    row = 0
+    i = 0
+    while row < n_rows:
+        dt = i * step
+        px = x[0] + dt * x[3]
+        py = x[1] + dt * x[4]
+        for s in range(n_s):
+            if row >= n_rows:
+                break
+            _local_jacobian(
+                px - stations[s, 0], py - stations[s, 1], x[2] - stations[s, 2],
+                x[3], x[4], x[5], x[6], kappa, t_idx, t_coef, nbuf, dndr, dndf, e, jac,
+            )
+            for comp in range(3):
+                if row >= n_rows:
+                    break
+                for q in range(free.shape[0]):
+                    col = free[q]
+                    v = jac[comp, col]
+                    if col == 3:
+                        v += dt * jac[comp, 0]  # Φ^i: ∂x_{k+i}/∂vx_k = i·T
+                    elif col == 4:
+                        v += dt * jac[comp, 1]  # Φ^i: ∂y_{k+i}/∂vy_k = i·T
+                    g[row, q] = v
+                row += 1
+        i += 1
+
+
+@nb.njit(cache=True, parallel=True)
+def fill_gamma(states, stations, step, kappa, t_idx, t_coef, free, n_rows, out):
+    """Γ for every state: states (P, 7) -> out (P, n_rows, n_free)."""
+    npts = states.shape[0]
+    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
+        nbuf = np.empty(3)
+        dndr = np.empty((3, 3))
+        dndf = np.empty((3, 4))
+        e = np.empty(3)
+        jac = np.empty((3, 7))
+        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
+            _gamma_point(states[p], stations, step, kappa, t_idx, t_coef, free, n_rows,
+                         nbuf, dndr, dndf, e, jac, out[p])
+
+
+@nb.njit(cache=True, inline="always")
+def _scale_columns(g, lognorm):
+    """Normalise the columns of g in place; lognorm[j] = log10 ‖g_j‖. False if a column is 0."""
+    ok = True
+    for j in range(g.shape[1]):
+        acc = 0.0
+        for r in range(g.shape[0]):
+            acc += g[r, j] * g[r, j]
+        if acc == 0.0:
+            ok = False
+            lognorm[j] = -np.inf
+            continue
+        nrm = math.sqrt(acc)
+        lognorm[j] = math.log10(nrm)
+        for r in range(g.shape[0]):
+            g[r, j] /= nrm
+    return ok
+
+
+@nb.njit(cache=True, inline="always")
+def _lu_abs_det(a):
+    """|det a| of a square matrix by LU with partial pivoting; destroys ``a``."""
+    n = a.shape[0]
+    det = 1.0
+    for k in range(n):
+        piv = k
+        big = abs(a[k, k])
+        for r in range(k + 1, n):
+            if abs(a[r, k]) > big:
+                big = abs(a[r, k])
+                piv = r
+        if big == 0.0:
+            return 0.0
+        if piv != k:
+            for c in range(k, n):
+                tmp = a[k, c]
+                a[k, c] = a[piv, c]
+                a[piv, c] = tmp
+        det *= big
+        inv = 1.0 / a[k, k]
+        for r in range(k + 1, n):
+            f = a[r, k] * inv
+            if f != 0.0:
+                for c in range(k + 1, n):
+                    a[r, c] -= f * a[k, c]
+    return det
+
+
+@nb.njit(cache=True, parallel=True)
+def square_measures(states, stations, step, kappa, t_idx, t_coef, free, log_det, log_eta):
+    """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point."""
+    npts = states.shape[0]
+    n = free.shape[0]
+    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
+        nbuf = np.empty(3)
+        dndr = np.empty((3, 3))
+        dndf = np.empty((3, 4))
+        e = np.empty(3)
+        jac = np.empty((3, 7))
+        g = np.empty((n, n))
+        lognorm = np.empty(n)
+        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
+            _gamma_point(states[p], stations, step, kappa, t_idx, t_coef, free, n,
+                         nbuf, dndr, dndf, e, jac, g)
+            _scale_columns(g, lognorm)
+            det = _lu_abs_det(g)
+            le = math.log10(det) if det > 0.0 else -np.inf
+            log_eta[p] = le
+            log_det[p] = le + lognorm.sum()
+
+
+@nb.njit(cache=True, parallel=True)
+def fisher_measures(states, stations, step, kappa, t_idx, t_coef, free, n_rows,
+                    log_eta, log_norm_sum, inv_diag):
+    """All-rows Γ (n_rows × n_free) reduced through the Fisher matrix F = ΓᵀΓ.
+
+    Per point: ``log_eta`` = log10 sqrt(det Γ_sᵀΓ_s); ``log_norm_sum`` = Σ log10 ‖Γ_j‖;
+    ``inv_diag`` (P, n_free) = diag((ΓᵀΓ)⁻¹) (multiply by the noise variance for the CRLB),
+    +inf where the Cholesky factorisation of Γ_sᵀΓ_s breaks down (rank-deficient).
+    """
+    npts = states.shape[0]
+    n = free.shape[0]
+    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
+        nbuf = np.empty(3)
+        dndr = np.empty((3, 3))
+        dndf = np.empty((3, 4))
+        e = np.empty(3)
+        jac = np.empty((3, 7))
+        g = np.empty((n_rows, n))
+        lognorm = np.empty(n)
+        chol = np.empty((n, n))
+        linv = np.empty((n, n))
+        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
+            _gamma_point(states[p], stations, step, kappa, t_idx, t_coef, free, n_rows,
+                         nbuf, dndr, dndf, e, jac, g)
+            ok = _scale_columns(g, lognorm)
+            log_norm_sum[p] = lognorm.sum()
+            # 1. Cholesky of the unit-diagonal Gram matrix Γ_sᵀΓ_s (lower, in chol).
+            half_logdet = 0.0
+            for j in range(n):
+                for k in range(j + 1):
+                    acc = 0.0
+                    for r in range(n_rows):
+                        acc += g[r, j] * g[r, k]
+                    for m in range(k):
+                        acc -= chol[j, m] * chol[k, m]
+                    if j == k:
+                        if acc <= 0.0:
+                            ok = False
+                            acc = 1.0
+                        chol[j, j] = math.sqrt(acc)
+                        half_logdet += math.log10(chol[j, j])
+                    else:
+                        chol[j, k] = acc / chol[k, k]
+                for k in range(j + 1, n):
+                    chol[j, k] = 0.0
+            if not ok:
+                log_eta[p] = -np.inf
+                for j in range(n):
+                    inv_diag[p, j] = np.inf
+                continue
+            log_eta[p] = half_logdet
+            # 2. diag((Γ_sᵀΓ_s)⁻¹) = column sums of L⁻¹ squared; L⁻¹ by forward substitution.
+            for k in range(n):
+                for j in range(n):
+                    if j < k:
+                        linv[j, k] = 0.0
+                        continue
+                    acc = 1.0 if j == k else 0.0
+                    for m in range(k, j):
+                        acc -= chol[j, m] * linv[m, k]
+                    linv[j, k] = acc / chol[j, j]
+            for k in range(n):
+                acc = 0.0
+                for j in range(k, n):
+                    acc += linv[j, k] * linv[j, k]
+                # undo the column scaling: (ΓᵀΓ)⁻¹_kk = (Γ_sᵀΓ_s)⁻¹_kk / ‖Γ_k‖²
+                inv_diag[p, k] = acc / 10.0 ** (2.0 * lognorm[k])

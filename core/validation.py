@@ -1,0 +1,100 @@
+"""Input checks at the public boundary of :mod:`core`.
+
+Every public function converts and checks here, then hands plain float64 arrays to kernels
+that assume valid input. Messages name the parameter, the offending value and what is accepted.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Order of the state vector ``X = [x, y, z, vx, vy, Ph, Pv]``.
+STATE_NAMES = ("x", "y", "z", "vx", "vy", "Ph", "Pv")
+
+
+def _finite(name, arr):
+    if not np.all(np.isfinite(arr)):
+        bad = arr[~np.isfinite(arr)].ravel()[0]
+        raise ValueError(f"{name} must be finite; got a value {bad!r} (NaN and inf are not accepted)")
+
+
+def states_and_stations(states, stations):
+    """Return ``states`` as (P, 7), ``stations`` as (S, 3) float64 and the leading shape."""
+    try:
+        states = np.asarray(states, dtype=np.float64)
+        stations = np.asarray(stations, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"states and stations must be numeric arrays: {exc}") from None
+    if states.ndim < 1 or states.shape[-1] != 7:
+        raise ValueError(
+            f"states must have shape (..., 7) = [x, y, z, vx, vy, Ph, Pv]; got shape {states.shape}"
+        )
+    if stations.ndim == 1 and stations.shape == (3,):
+        stations = stations[None, :]
+    if stations.ndim != 2 or stations.shape[1] != 3:
+        raise ValueError(f"stations must have shape (S, 3) station positions in m; got shape {stations.shape}")
+    if stations.shape[0] == 0:
+        raise ValueError("stations must hold at least one station; got an empty list")
+    _finite("states", states)
+    _finite("stations", stations)
+    lead = states.shape[:-1]
+    flat = np.ascontiguousarray(states.reshape(-1, 7))
+    speed = np.hypot(flat[:, 3], flat[:, 4])
+    if np.any(speed == 0.0):
+        raise ValueError(
+            "target speed must be > 0: the horizontal dipole points along the heading "
+            "θ = atan2(vy, vx), which is undefined at vx = vy = 0"
+        )
+    return flat, np.ascontiguousarray(stations), lead
+
+
+def positive(name, value, unit):
+    """A finite float > 0, or ValueError."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number > 0 ({unit}); got {value!r}") from None
+    if not np.isfinite(v) or v <= 0.0:
+        raise ValueError(f"{name} must be a finite number > 0 ({unit}); got {value!r}")
+    return v
+
+
+def model_terms(model, table):
+    if not isinstance(model, str) or model not in table:
+        raise ValueError(f"model must be one of {sorted(table)}; got {model!r}")
+    return table[model]
+
+
+def steps(value, minimum):
+    """Number of instants N: an int ≥ ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"steps must be an integer ≥ {minimum} (number of instants); got {value!r}")
+    return int(value)
+
+
+def free_columns(known):
+    """Indices of the unknown states, given the names of the known ones."""
+    known = () if known is None else ((known,) if isinstance(known, str) else tuple(known))
+    for name in known:
+        if name not in STATE_NAMES:
+            raise ValueError(f"known states must be names from {STATE_NAMES}; got {name!r}")
+    free = [j for j, name in enumerate(STATE_NAMES) if name not in known]
+    if not free:
+        raise ValueError("at least one state must be unknown; got all seven as known")
+    return np.array(free, dtype=np.int64)
+
+
+def station_distances(states, stations):
+    """Distance (m) from every target (P, 7) to every station (S, 3): (P, S)."""
+    return np.linalg.norm(states[:, None, :3] - stations[None, :, :], axis=-1)
+
+
+def no_target_on_station(states, stations):
+    d = station_distances(states, stations)
+    if np.any(d == 0.0):
+        p, s = np.argwhere(d == 0.0)[0]
+        raise ValueError(
+            f"target position {tuple(states[p, :3])} m coincides with station {s} at "
+            f"{tuple(stations[s])} m: the dipole field is singular at D = 0; "
+            "move the target or mask such points (core.maps does)"
+        )
