@@ -1,16 +1,15 @@
 """Electric field of a moving current dipole at a sensor station, and its Jacobian.
 
-Both field models share one form. With ``r = target − station`` (m), ``D = |r|``, the
-moment features ``f = (Ph cos θ, Ph sin θ, Pv, Ph)`` (A·m) and ``θ = atan2(vy, vx)``,
+Both field models share one form. With ``r = (a, b, c) = target − station`` (m), ``D = |r|``,
+the moment features ``f = (Ph cos θ, Ph sin θ, Pv, Ph)`` (A·m) and ``θ = atan2(vy, vx)``,
 
-    E_i = K · Σ_k A_ik(r) f_k / D⁵,    K = 1 / (4 π σ),
+    E = K · N(r, f) / D⁵,    K = 1 / (4 π σ),
 
-where every entry ``A_ik`` is a quadratic form in ``r``: a sum of terms ``coef · r_m r_n`` or
-``coef · D²``. A field model is therefore nothing but a table of such terms
-(:data:`MODEL_TERMS`), and one compiled kernel differentiates any table exactly.
+with N quadratic in r and linear in f. One kernel applies the quotient rule and the heading
+chain to either model's N and its hand-derived partials.
 
-- ``exact``: the point current dipole in a homogeneous conductor,
-  ``A = 3 r rᵀ − D² I`` on the first three features (spec §2).
+- ``exact``: the point current dipole in a homogeneous conductor, N = 3 (p·r) r − p D² with
+  p = f[:3] (spec §2).
 - ``paper``: eqs. (10)–(12) of the source paper *as printed*. Compared with ``exact`` its
   E_x has ``−3ab`` where ``+3ab`` belongs, its E_y uses ``3a² − D²`` where ``3b² − D²``
   belongs, and its E_z uses the bare ``Ph`` (feature 3) instead of the heading-resolved
@@ -30,46 +29,65 @@ import numpy as np
 from . import validation
 from .validation import STATE_NAMES
 
-__all__ = ["MODELS", "STATE_NAMES", "MODEL_TERMS", "dipole_field", "field_jacobian"]
+__all__ = ["MODELS", "STATE_UNITS", "dipole_field", "field_jacobian"]
 
 #: State units, in the same order.
 STATE_UNITS = ("m", "m", "m", "m/s", "m/s", "A·m", "A·m")
 
-# A term is (i, k, m, n, coef): E_i gets coef·f_k·r_m·r_n, or coef·f_k·D² when n == -1.
-_D2 = -1
-_EXACT_TERMS = (
-    # 3 r_i r_k f_k for i, k in x, y, z
-    *[(i, k, i, k, 3.0) for i in range(3) for k in range(3)],
-    # −D² f_i
-    *[(i, i, 0, _D2, -1.0) for i in range(3)],
-)
-_PAPER_TERMS = (
+#: Accepted field-model names; the index is the kernels' model code.
+MODELS = ("exact", "paper")
+
+
+@nb.njit(cache=True, inline="always")
+def _numerator_exact(a, b, c, f, nbuf, dndr, dndf):
+    """Exact dipole: N = 3 (p·r) r − p D², p = f[:3]. Hand-derived partials."""
+    d2 = a * a + b * b + c * c
+    r = (a, b, c)
+    pr = f[0] * a + f[1] * b + f[2] * c
+    for i in range(3):
+        nbuf[i] = 3.0 * pr * r[i] - f[i] * d2
+        for j in range(3):
+            # dN_i/dr_j = 3 p_j r_i + 3 (p·r) δ_ij − 2 p_i r_j
+            dndr[i, j] = 3.0 * f[j] * r[i] - 2.0 * f[i] * r[j]
+            # dN_i/dp_j = 3 r_i r_j − δ_ij D²
+            dndf[i, j] = 3.0 * r[i] * r[j]
+        dndr[i, i] += 3.0 * pr
+        dndf[i, i] -= d2
+        dndf[i, 3] = 0.0  # the bare Ph feature does not enter the exact field
+
+
+@nb.njit(cache=True, inline="always")
+def _numerator_paper(a, b, c, f, nbuf, dndr, dndf):
+    """The paper's eqs. (10)–(12) as printed, with (a, b, c) = (x, y, z − h) of the target
+    relative to the station; f = (Ph cos θ, Ph sin θ, Pv, Ph)."""
+    d2 = a * a + b * b + c * c
+    q = 3.0 * a * a - d2  # the printed 3x² − D², used in both Ex and Ey
     # eq. (10): Ex = Ph cosθ (3a² − D²) − Ph sinθ 3ab + Pv 3ac
-    (0, 0, 0, 0, 3.0), (0, 0, 0, _D2, -1.0), (0, 1, 0, 1, -3.0), (0, 2, 0, 2, 3.0),
+    nbuf[0] = f[0] * q - 3.0 * f[1] * a * b + 3.0 * f[2] * a * c
+    dndr[0, 0] = 4.0 * f[0] * a - 3.0 * f[1] * b + 3.0 * f[2] * c
+    dndr[0, 1] = -2.0 * f[0] * b - 3.0 * f[1] * a
+    dndr[0, 2] = -2.0 * f[0] * c + 3.0 * f[2] * a
+    dndf[0, 0], dndf[0, 1], dndf[0, 2], dndf[0, 3] = q, -3.0 * a * b, 3.0 * a * c, 0.0
     # eq. (11): Ey = Ph sinθ (3a² − D²) + Ph cosθ 3ab + Pv 3bc
-    (1, 1, 0, 0, 3.0), (1, 1, 0, _D2, -1.0), (1, 0, 0, 1, 3.0), (1, 2, 1, 2, 3.0),
-    # eq. (12): Ez = Ph 3ac + Pv (3c² − D²)
-    (2, 3, 0, 2, 3.0), (2, 2, 2, 2, 3.0), (2, 2, 0, _D2, -1.0),
-)
-
-
-def _table(terms):
-    idx = np.array([t[:4] for t in terms], dtype=np.int64)  # (nterms, 4): i, k, m, n
-    coef = np.array([t[4] for t in terms], dtype=np.float64)  # (nterms,)
-    return idx, coef
-
-
-#: Field models: name -> (term indices (nterms, 4), coefficients (nterms,)).
-MODEL_TERMS = {"exact": _table(_EXACT_TERMS), "paper": _table(_PAPER_TERMS)}
-#: Accepted field-model names.
-MODELS = tuple(MODEL_TERMS)
+    nbuf[1] = f[1] * q + 3.0 * f[0] * a * b + 3.0 * f[2] * b * c
+    dndr[1, 0] = 4.0 * f[1] * a + 3.0 * f[0] * b
+    dndr[1, 1] = -2.0 * f[1] * b + 3.0 * f[0] * a + 3.0 * f[2] * c
+    dndr[1, 2] = -2.0 * f[1] * c + 3.0 * f[2] * b
+    dndf[1, 0], dndf[1, 1], dndf[1, 2], dndf[1, 3] = 3.0 * a * b, q, 3.0 * b * c, 0.0
+    # eq. (12): Ez = Ph 3ac + Pv (3c² − D²)   (no heading: the bare Ph, feature 3)
+    nbuf[2] = 3.0 * f[3] * a * c + f[2] * (3.0 * c * c - d2)
+    dndr[2, 0] = 3.0 * f[3] * c - 2.0 * f[2] * a
+    dndr[2, 1] = -2.0 * f[2] * b
+    dndr[2, 2] = 3.0 * f[3] * a + 4.0 * f[2] * c
+    dndf[2, 0], dndf[2, 1], dndf[2, 2], dndf[2, 3] = 0.0, 0.0, 3.0 * c * c - d2, 3.0 * a * c
 
 
 @nb.njit(cache=True, fastmath=False, inline="always")
-def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, t_idx, t_coef, nbuf, dndr, dndf, e, jac):
+def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model, nbuf, dndr, dndf, e, jac):
     """Field ``e`` (3,) and ∂E/∂X ``jac`` (3, 7) at one target–station offset ``r``.
 
-    ``nbuf`` (3,), ``dndr`` (3, 3) and ``dndf`` (3, 4) are scratch. Assumes D > 0, speed > 0.
+    ``model`` is an index into :data:`MODELS`; ``nbuf`` (3,), ``dndr`` (3, 3) and ``dndf``
+    (3, 4) are scratch. Assumes D > 0, speed > 0.
     """
     speed = math.sqrt(vx * vx + vy * vy)
     c = vx / speed
@@ -77,33 +95,11 @@ def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, t_idx, t_coef, nbuf, dndr
     f0 = ph * c
     f1 = ph * s
     d2 = rx * rx + ry * ry + rz * rz
-    for i in range(3):
-        nbuf[i] = 0.0
-        for j in range(3):
-            dndr[i, j] = 0.0
-        for k in range(4):
-            dndf[i, k] = 0.0
-    # 1. Numerator N = A(r) f and its exact partials, term by term.
-    for t in range(t_idx.shape[0]):
-        i = t_idx[t, 0]
-        k = t_idx[t, 1]
-        m = t_idx[t, 2]
-        n = t_idx[t, 3]
-        cf = t_coef[t]
-        fk = f0 if k == 0 else (f1 if k == 1 else (pv if k == 2 else ph))
-        rm = rx if m == 0 else (ry if m == 1 else rz)
-        if n < 0:  # coef · f_k · D²
-            nbuf[i] += cf * fk * d2
-            dndf[i, k] += cf * d2
-            dndr[i, 0] += 2.0 * cf * fk * rx
-            dndr[i, 1] += 2.0 * cf * fk * ry
-            dndr[i, 2] += 2.0 * cf * fk * rz
-        else:  # coef · f_k · r_m r_n
-            rn = rx if n == 0 else (ry if n == 1 else rz)
-            nbuf[i] += cf * fk * rm * rn
-            dndf[i, k] += cf * rm * rn
-            dndr[i, m] += cf * fk * rn
-            dndr[i, n] += cf * fk * rm
+    # 1. Numerator N = D⁵ E / K and its partials in r and in the features f.
+    if model == 0:
+        _numerator_exact(rx, ry, rz, (f0, f1, pv, ph), nbuf, dndr, dndf)
+    else:
+        _numerator_paper(rx, ry, rz, (f0, f1, pv, ph), nbuf, dndr, dndf)
     # 2. E = K N / D⁵ and the quotient rule: ∂E/∂r = K (∂N/∂r − 5 N rᵀ / D²) / D⁵.
     inv5 = kappa / (d2 * d2 * math.sqrt(d2))
     for i in range(3):
@@ -124,7 +120,7 @@ def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, t_idx, t_coef, nbuf, dndr
 
 
 @nb.njit(cache=True, parallel=True)
-def _field_and_jacobian_kernel(states, stations, kappa, t_idx, t_coef, e_out, j_out):
+def _field_and_jacobian_kernel(states, stations, kappa, model, e_out, j_out):
     # states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7)
     npts = states.shape[0]
     nblock = (npts + 255) // 256
@@ -137,7 +133,7 @@ def _field_and_jacobian_kernel(states, stations, kappa, t_idx, t_coef, e_out, j_
             for s in range(stations.shape[0]):
                 _local_jacobian(
                     x[0] - stations[s, 0], x[1] - stations[s, 1], x[2] - stations[s, 2],
-                    x[3], x[4], x[5], x[6], kappa, t_idx, t_coef,
+                    x[3], x[4], x[5], x[6], kappa, model,
                     nbuf, dndr, dndf, e_out[p, s], j_out[p, s],
                 )
 
@@ -146,12 +142,12 @@ def _field_and_jacobian(states, stations, sigma, model):
     """Validated front end: returns E (..., S, 3) and ∂E/∂X (..., S, 3, 7)."""
     states, stations, lead = validation.states_and_stations(states, stations)
     sigma = validation.positive("sigma", sigma, "S/m")
-    idx, coef = validation.model_terms(model, MODEL_TERMS)
+    code = validation.model_code(model, MODELS)
     validation.no_target_on_station(states, stations)
     n_s = stations.shape[0]
     e = np.empty((states.shape[0], n_s, 3))
     jac = np.empty((states.shape[0], n_s, 3, 7))
-    _field_and_jacobian_kernel(states, stations, 1.0 / (4.0 * np.pi * sigma), idx, coef, e, jac)
+    _field_and_jacobian_kernel(states, stations, 1.0 / (4.0 * np.pi * sigma), code, e, jac)
     return e.reshape(lead + (n_s, 3)), jac.reshape(lead + (n_s, 3, 7))
 
 

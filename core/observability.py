@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels, validation
-from .fields import MODEL_TERMS
+from .fields import MODELS
 
 __all__ = [
     "ETA_TOL",
@@ -45,7 +45,7 @@ def _prepare(states, stations, T, sigma, model, known, steps, *, square_min_step
     states, stations, lead = validation.states_and_stations(states, stations)
     step = validation.positive("T", T, "s")
     sigma = validation.positive("sigma", sigma, "S/m")
-    t_idx, t_coef = validation.model_terms(model, MODEL_TERMS)
+    code = validation.model_code(model, MODELS)
     free = validation.free_columns(known)
     validation.no_target_on_station(states, stations)
     if steps is None:
@@ -54,7 +54,7 @@ def _prepare(states, stations, T, sigma, model, known, steps, *, square_min_step
         steps = validation.steps(steps, square_min_steps)
         n_rows = 3 * stations.shape[0] * steps
     kappa = 1.0 / (4.0 * np.pi * sigma)
-    return (states, stations, step, kappa, t_idx, t_coef, free), n_rows, lead
+    return (states, stations, step, kappa, code, free), n_rows, lead
 
 
 def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, known=()):

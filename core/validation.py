@@ -59,10 +59,11 @@ def positive(name, value, unit):
     return v
 
 
-def model_terms(model, table):
-    if not isinstance(model, str) or model not in table:
-        raise ValueError(f"model must be one of {sorted(table)}; got {model!r}")
-    return table[model]
+def model_code(model, models):
+    """Index of ``model`` in ``models`` (the kernels' model code)."""
+    if not isinstance(model, str) or model not in models:
+        raise ValueError(f"model must be one of {list(models)}; got {model!r}")
+    return models.index(model)
 
 
 def steps(value, minimum):
