@@ -30,14 +30,17 @@ __all__ = [
 ]
 
 #: A column-scaled Γ whose smallest singular value is below ``RANK_RTOL`` times its largest is
-#: rank-deficient. Exactly singular Γ (one station) give ~1e-16 here in float64; the weakest
-#: genuinely observable cases met in the paper's scenarios (two stations 2 m apart, targets
-#: 400 m away) stay above ~1e-8 (measured in tests/test_observability.py).
-RANK_RTOL = 1e-11
-#: Observability index η = sqrt(det Γ_sᵀΓ_s) (Hadamard ratio for square Γ) below which a point
-#: is flagged structurally unobservable. Round-off for a singular Γ gives η ~ 1e-17 … 1e-21;
-#: the weakest observable paper scenario gives η ~ 1e-12 (dual, d = 2 m, far corners).
-ETA_TOL = 1e-14
+#: rank-deficient. Measured on the paper's x–y grid (tests/test_observability.py): one station,
+#: exactly singular, gives at most 3e-16 (round-off); two stations 2–15 m apart give at least
+#: 4e-8 for the paper-rule Γ and 6e-4 for the all-rows Γ. 1e-10 sits between with ≥ 2.5
+#: decades of margin on either side.
+RANK_RTOL = 1e-10
+#: Observability index η = sqrt(det Γ_sᵀΓ_s) (the Hadamard ratio for square Γ) below which a
+#: point is flagged unobservable. One station's round-off gives η ≤ 4e-18 on the paper grids.
+#: Below 1e-15 the float64 determinant of a unit-column matrix carries at most one significant
+#: digit (relative error ~ eps/η), so such a value cannot be told from round-off either: this
+#: also flags the thin curves where a dual-station paper-rule det Γ changes sign.
+ETA_TOL = 1e-15
 
 
 def _prepare(states, stations, T, sigma, model, known, steps, *, square_min_steps):
@@ -156,10 +159,12 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", st
 
 
 def _scaled_svd(g):
+    """SVD of Γ with unit columns; full V so that wide Γ (fewer rows than states) still yields
+    the null space. Returns ((U, s, Vᵀ), column norms (..., 1, n))."""
     norms = np.linalg.norm(g, axis=-2, keepdims=True)  # (..., 1, n)
     with np.errstate(invalid="ignore", divide="ignore"):
         gs = np.where(norms > 0, g / norms, 0.0)
-    return np.linalg.svd(gs, full_matrices=False), norms
+    return np.linalg.svd(gs, full_matrices=True), norms
 
 
 def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, known=()):

@@ -49,6 +49,17 @@ def field_functions(model):
     return sp.lambdify(args, exprs.tolist(), "numpy"), sp.lambdify(args, jac.tolist(), "numpy")
 
 
+def field(states, stations, sigma=4.0, model="exact"):
+    """E at every station, shape (..., S, 3), by the lambdified sympy expressions."""
+    states = np.asarray(states, dtype=float)
+    efun, _ = field_functions(model)
+    out = []
+    for st in np.asarray(stations, dtype=float):
+        e = efun(*np.moveaxis(states, -1, 0), *st, sigma)  # [[Ex], [Ey], [Ez]]
+        out.append(np.stack([np.broadcast_to(row[0], states.shape[:-1]) for row in e], axis=-1))
+    return np.stack(out, axis=-2)
+
+
 def field_jacobian(states, stations, sigma=4.0, model="exact"):
     """∂E/∂X, shape (..., S, 3, 7), by the lambdified sympy Jacobian."""
     states = np.asarray(states, dtype=float)

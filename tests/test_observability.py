@@ -1,0 +1,193 @@
+"""Γ, its determinant, rank and null direction: references, invariances, tolerances."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import core
+from tests.conftest import PAPER_STATE, random_stations, random_states
+from tests.reference import symbolic
+
+REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_logdet.json").read_text())
+SINGLE = core.single_station(100)
+DUAL15 = core.dual_station(100, 15)
+
+
+@pytest.mark.parametrize("model", core.MODELS)
+@pytest.mark.parametrize("steps", [None, 1, 3])
+@pytest.mark.parametrize("n_stations", [1, 2, 3])
+def test_gamma_matches_straightforward_assembly(rng, model, steps, n_stations):
+    stations = random_stations(rng, n_stations)
+    states = random_states(rng, 25, stations)
+    ours = core.gamma(states, stations, model=model, steps=steps, T=0.7, sigma=3.0)
+    ref = symbolic.gamma(states, stations, model=model, steps=steps, T=0.7, sigma=3.0)
+    assert ours.shape == ref.shape
+    scale = np.max(np.abs(ref), axis=-1, keepdims=True)  # per row
+    assert np.max(np.abs(ours - ref) / scale) < 1e-10
+
+
+def test_paper_rule_row_order_is_eq15_and_eq16():
+    full1 = core.gamma(PAPER_STATE, SINGLE, steps=3)  # (9, 7)
+    np.testing.assert_array_equal(core.gamma(PAPER_STATE, SINGLE), full1[:7])  # eq. (15)
+    full2 = core.gamma(PAPER_STATE, DUAL15, steps=2)  # (12, 7)
+    np.testing.assert_array_equal(core.gamma(PAPER_STATE, DUAL15), full2[:7])  # eq. (16)
+    # station 1's Ex at k+1 is row 6 of the all-rows Γ at two instants
+    np.testing.assert_array_equal(full2[6], core.gamma(PAPER_STATE, DUAL15, steps=2)[6])
+
+
+@pytest.mark.parametrize("case", [c for c in REFERENCE if c["log10_abs_det"] is not None],
+                         ids=lambda c: f"{c['model']}-{c['state'][:2]}")
+def test_log10_det_matches_60_digit_reference(case):
+    got = core.log10_abs_det_gamma(case["state"], case["stations"], model=case["model"])
+    # float64 LU: relative error of det ~ eps·κ(Γ_s) ≲ 1e-16 / η; with η ≥ 1e-9 here the
+    # log10 error is below 1e-7 / ln 10. Measured: < 1e-9.
+    assert abs(got - case["log10_abs_det"]) < 1e-7
+    eta = core.observability_index(case["state"], case["stations"], model=case["model"])
+    assert abs(eta - case["log10_hadamard"]) < 1e-7
+
+
+@pytest.mark.parametrize("case", [c for c in REFERENCE if c["log10_abs_det"] is None],
+                         ids=lambda c: c["model"])
+def test_single_station_det_is_exactly_zero_and_float64_is_round_off(case):
+    # 60-digit arithmetic: det Γ = 0. float64 returns round-off: η far below ETA_TOL.
+    eta = core.observability_index(case["state"], case["stations"], model=case["model"])
+    assert eta < np.log10(core.ETA_TOL) - 1
+    assert core.observable_rank(case["state"], case["stations"], model=case["model"]) == 6
+
+
+@pytest.mark.parametrize("model", core.MODELS)
+@pytest.mark.parametrize("steps", [None, 2, 5])
+def test_single_station_null_direction(rng, model, steps):
+    station = random_stations(rng, 1)
+    states = random_states(rng, 50, station)
+    g = core.gamma(states, station, model=model, steps=steps)
+    rel = states[:, :3] - station[0]
+    n = np.concatenate([rel, states[:, 3:5], 3 * states[:, 5:7]], axis=1)  # spec §4
+    # Γ n = 0 up to round-off: compare with the size of the terms Σ_j |Γ_ij n_j|
+    residual = np.abs(np.einsum("...ij,...j->...i", g, n))
+    size = np.einsum("...ij,...j->...i", np.abs(g), np.abs(n))
+    assert np.max(residual / size) < 1e-12
+    assert np.all(core.observable_rank(states, station, model=model, steps=steps) == 6)
+    direction = core.unobservable_direction(states, station, model=model, steps=steps)
+    n_unit = n / np.linalg.norm(n, axis=1, keepdims=True)
+    cosine = np.abs(np.sum(direction * n_unit, axis=1))
+    assert np.min(cosine) > 1 - 1e-8
+
+
+def test_two_stations_15m_apart_are_observable():
+    assert core.observable_rank(PAPER_STATE, DUAL15) == 7
+    assert core.observable_rank(PAPER_STATE, DUAL15, steps=3) == 7
+    assert core.observability_index(PAPER_STATE, DUAL15) > np.log10(core.ETA_TOL) + 5
+
+
+def test_known_moments_make_single_station_observable():
+    assert core.observable_rank(PAPER_STATE, SINGLE, known=("Ph", "Pv")) == 5
+    assert core.gamma(PAPER_STATE, SINGLE, known=("Ph", "Pv")).shape == (5, 5)
+    assert core.observability_index(PAPER_STATE, SINGLE, known=("Ph", "Pv")) > -8
+
+
+@pytest.mark.parametrize("model", core.MODELS)
+def test_ten_times_moments_adds_exactly_five(rng, model):
+    # Γ's position and velocity columns (5 of 7) are linear in (Ph, Pv); the moment columns
+    # are not: ×10 multiplies det Γ by 10⁵.
+    states = random_states(rng, 30, DUAL15)
+    louder = states.copy()
+    louder[:, 5:] *= 10
+    diff = core.log10_abs_det_gamma(louder, DUAL15, model=model) - core.log10_abs_det_gamma(
+        states, DUAL15, model=model)
+    np.testing.assert_allclose(diff, 5.0, atol=1e-9)
+
+
+def _rotate(states, stations, angle):
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.array([[c, -s], [s, c]])
+    states, stations = states.copy(), stations.copy()
+    states[..., 0:2] = states[..., 0:2] @ rot.T
+    states[..., 3:5] = states[..., 3:5] @ rot.T
+    stations[:, 0:2] = stations[:, 0:2] @ rot.T
+    return states, stations
+
+
+def test_rotation_about_vertical_leaves_fisher_measure_unchanged(rng):
+    states = random_states(rng, 20, DUAL15)
+    base = core.fisher_measures(states, DUAL15)
+    for angle in (0.3, 1.9, -2.5):
+        rs, rst = _rotate(states, DUAL15, angle)
+        rotated = core.fisher_measures(rs, rst)
+        np.testing.assert_allclose(rotated.d_optimal, base.d_optimal, atol=1e-9)
+        np.testing.assert_allclose(rotated.position_std, base.position_std, rtol=1e-8)
+
+
+def test_rotation_changes_paper_rule_measure():
+    # Spec §4: truncating to Ex at the last instant makes the paper measure frame-dependent.
+    base = core.log10_abs_det_gamma(PAPER_STATE, DUAL15)
+    rs, rst = _rotate(PAPER_STATE, DUAL15, 0.7)
+    assert abs(core.log10_abs_det_gamma(rs, rst) - base) > 0.01
+
+
+def test_broadcast_shapes_match_one_at_a_time(rng):
+    states = random_states(rng, 6, DUAL15).reshape(2, 3, 7)
+    for fn in (core.log10_abs_det_gamma, core.observable_rank, core.observability_index):
+        batch = fn(states, DUAL15)
+        assert batch.shape == (2, 3)
+        for idx in np.ndindex(2, 3):
+            assert batch[idx] == fn(states[idx], DUAL15)
+    assert core.gamma(states, DUAL15, steps=2).shape == (2, 3, 12, 7)
+
+
+def test_tolerances_separate_round_off_from_observability():
+    """The documented tolerances, measured on the paper's Fig. 1 / Fig. 5 grids."""
+    plane = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 61)
+    states = plane.states((2, 2), (100, 20)).reshape(-1, 7)
+    for model in core.MODELS:
+        single = core.gamma(states, SINGLE, model=model)
+        dual = core.gamma(states, core.dual_station(100, 2), model=model)
+        dual_all = core.gamma(states, core.dual_station(100, 2), model=model, steps=3)
+        ratio = lambda g: (lambda s: s[:, -1] / s[:, 0])(  # noqa: E731
+            np.linalg.svd(g / np.linalg.norm(g, axis=1, keepdims=True), compute_uv=False))
+        assert ratio(single).max() < core.RANK_RTOL * 1e-4
+        assert ratio(dual).min() > core.RANK_RTOL * 100
+        assert ratio(dual_all).min() > core.RANK_RTOL * 1e5
+        eta = core.observability_index(states, SINGLE, model=model)
+        assert eta.max() < np.log10(core.ETA_TOL) - 1
+
+
+BAD = [
+    (dict(states=[1, 2, 3]), "states must have shape"),
+    (dict(states=[[np.nan, 0, 0, 1, 1, 1, 1]]), "finite"),
+    (dict(states=[[0, 0, 0, 0, 0, 1, 1]]), "speed must be > 0"),
+    (dict(stations=np.empty((0, 3))), "at least one station"),
+    (dict(stations=[[0, 0]]), "stations must have shape"),
+    (dict(stations=[[0, np.inf, 0]]), "finite"),
+    (dict(states=[[0, 0, 100, 1, 1, 1, 1]]), "coincides with station"),
+    (dict(model="exakt"), "model must be one of"),
+    (dict(T=0.0), "T must be"),
+    (dict(T=-1.0), "T must be"),
+    (dict(sigma=0.0), "sigma must be"),
+    (dict(sigma=-4.0), "sigma must be"),
+    (dict(sigma=np.nan), "sigma must be"),
+    (dict(states="abc"), "numeric"),
+]
+
+
+@pytest.mark.parametrize("fn", [core.gamma, core.log10_abs_det_gamma, core.observable_rank])
+@pytest.mark.parametrize("bad,message", BAD, ids=[m for _, m in BAD])
+def test_bad_input_raises_clear_value_error(fn, bad, message):
+    kw = dict(states=PAPER_STATE, stations=SINGLE)
+    kw.update(bad)
+    states, stations = kw.pop("states"), kw.pop("stations")
+    with pytest.raises(ValueError, match=message):
+        fn(states, stations, **kw)
+
+
+@pytest.mark.parametrize("bad,message", [
+    (dict(steps=0), "steps must be an integer"),
+    (dict(steps=2.5), "steps must be an integer"),
+    (dict(known=("Q",)), "known states must be names"),
+    (dict(known=core.STATE_NAMES), "at least one state must be unknown"),
+])
+def test_bad_options_raise(bad, message):
+    with pytest.raises(ValueError, match=message):
+        core.gamma(PAPER_STATE, SINGLE, **bad)
