@@ -53,8 +53,9 @@ STOPSIGNAL SIGINT
 # --session-ids signed needs BOKEH_SECRET_KEY: make a random one unless given, then exec the CMD so
 # that the server is PID 1 and gets the stop signal itself.
 ENTRYPOINT ["/bin/sh", "-c", "export BOKEH_SECRET_KEY=\"${BOKEH_SECRET_KEY:-$(python -c 'import secrets; print(secrets.token_urlsafe(32))')}\"; exec \"$@\"", "entrypoint"]
-# One process, a thread pool for callbacks (numba releases the GIL); sessions whose browser tab is
-# gone are checked every 10 s and dropped after 60 s. No --admin, no --autoreload.
+# One process with a pool of 4 threads for session callbacks (not --num-procs: one process keeps
+# one numba cache and one secret key); sessions whose browser tab is gone are checked every 10 s
+# and dropped after 60 s. No --admin, no --autoreload.
 CMD ["panel", "serve", "app/main.py", \
      "--address", "0.0.0.0", "--port", "5006", \
      "--index", "main", \

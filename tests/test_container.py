@@ -30,11 +30,11 @@ import pytest
 pytestmark = pytest.mark.container
 
 REPO = Path(__file__).resolve().parents[1]
-CONTEXT = Path(os.environ.get("CONTAINER_CONTEXT", REPO)).resolve()
+CONTEXT = Path(os.environ.get("CONTAINER_CONTEXT", str(REPO))).resolve()
 OCI_BUILD_RUN = Path(__file__).resolve().parents[2] / "shared" / "tools" / "oci-build-run"
 TAG = "dipole-observability-test"
 PORT = 5006  # the port the image's CMD and HEALTHCHECK use
-BUILD_TIMEOUT = float(os.environ.get("CONTAINER_BUILD_TIMEOUT", 1800))
+BUILD_TIMEOUT = float(os.environ.get("CONTAINER_BUILD_TIMEOUT", "1800"))
 START_TIMEOUT = 120.0  # seconds from `run` until /liveness answers
 
 
@@ -50,7 +50,7 @@ def _unavailable(reason: str):
 
 def _sh(args, timeout=120.0, check=True, **kw) -> subprocess.CompletedProcess:
     proc = subprocess.run(
-        [str(a) for a in args], capture_output=True, text=True, timeout=timeout, **kw
+        [str(a) for a in args], capture_output=True, text=True, timeout=timeout, check=False, **kw
     )
     if check and proc.returncode != 0:
         pytest.fail(
@@ -64,9 +64,10 @@ def _docker_works() -> bool:
     if shutil.which("docker") is None:
         return False
     try:
-        return subprocess.run(["docker", "info"], capture_output=True, timeout=60).returncode == 0
+        proc = subprocess.run(["docker", "info"], capture_output=True, timeout=60, check=False)
     except subprocess.TimeoutExpired:
         return False
+    return proc.returncode == 0
 
 
 def _port_free(port: int) -> bool:
@@ -116,24 +117,29 @@ class Engine:
     def inspect(self) -> dict:
         return json.loads(_sh([*self.cli, "image", "inspect", self.image]).stdout)[0]
 
-    def run(self, cmd: list[str]) -> tuple[str, int]:
-        """Start the image with `cmd`; return (container id, host port it is reachable on)."""
+    def run(self, config: dict) -> tuple[str, int]:
+        """Start the image as configured; return (container id, host port it answers on)."""
         if self.kind == "docker":
             port = _free_port()
             out = _sh(["docker", "run", "-d", "-p", f"127.0.0.1:{port}:{PORT}", self.image])
+        elif _port_free(PORT):
+            port = PORT
+            out = _sh(["bash", OCI_BUILD_RUN, "run", TAG])
         else:
-            # Host network: the image's own command if 5006 is free, otherwise the same command
-            # with only the port changed, so that a server already on 5006 cannot answer for it.
-            port = PORT if _port_free(PORT) else _free_port()
-            if port != PORT:
-                cmd = [str(port) if a == str(PORT) else a for a in cmd]
-                out = _sh(["bash", OCI_BUILD_RUN, "run", TAG, *cmd])
-            else:
-                out = _sh(["bash", OCI_BUILD_RUN, "run", TAG])
+            # Host network and 5006 taken (a dev server?): the image's own entrypoint and command
+            # with only the port changed, so that the other server cannot answer for this one.
+            port = _free_port()
+            argv = [str(port) if a == str(PORT) else a for a in config["Cmd"]]
+            entry = json.dumps([*(config.get("Entrypoint") or []), *argv])
+            out = _sh(["bash", OCI_BUILD_RUN, "run", TAG, "--entrypoint", entry])
         return out.stdout.strip().splitlines()[-1], port
 
     def exec(self, cid: str, *args: str, check=True) -> subprocess.CompletedProcess:
         return _sh([*self.cli, "exec", cid, *args], check=check)
+
+    def running(self, cid: str) -> bool:
+        proc = _sh([*self.cli, "inspect", "--format", "{{.State.Running}}", cid], check=False)
+        return proc.stdout.strip() == "true"
 
     def logs(self, cid: str) -> str:
         proc = _sh([*self.cli, "logs", cid], check=False)
@@ -167,7 +173,7 @@ def _config(image: dict) -> dict:
 @pytest.fixture(scope="module")
 def server(engine, image):
     """A running container: yields (engine, container id, base URL); always removed afterwards."""
-    cid, port = engine.run(list(_config(image)["Cmd"]))
+    cid, port = engine.run(_config(image))
     try:
         base = f"http://127.0.0.1:{port}"
         deadline, last = time.monotonic() + START_TIMEOUT, None
@@ -179,6 +185,8 @@ def server(engine, image):
                 last = f"HTTP {status}: {body[:200]}"
             except (OSError, urllib.error.URLError) as exc:
                 last = repr(exc)
+            if not engine.running(cid):
+                pytest.fail(f"container exited before /liveness answered\n{engine.logs(cid)}")
             if time.monotonic() > deadline:
                 pytest.fail(
                     f"/liveness did not answer within {START_TIMEOUT:.0f} s (last: {last})\n"
