@@ -167,14 +167,42 @@ def square_measures(states, stations, step, kappa, model, free, log_det, log_eta
             log_eta[p] = ld - norms
 
 
+@nb.njit(cache=True, inline="always")
+def _householder_r(g, rdiag):
+    """Householder QR of g (m × n, m ≥ n) in place: R's strict upper part stays in g, its
+    diagonal goes to ``rdiag``. Q is not kept. Backward stable, unlike forming ΓᵀΓ, so an
+    exactly singular Γ gives |R_nn| at round-off level (~1e-16), not its square root."""
+    m, n = g.shape
+    for k in range(n):
+        norm2 = 0.0
+        for r in range(k, m):
+            norm2 += g[r, k] * g[r, k]
+        if norm2 == 0.0:
+            rdiag[k] = 0.0
+            continue
+        alpha = -math.sqrt(norm2) if g[k, k] >= 0.0 else math.sqrt(norm2)
+        g[k, k] -= alpha  # v = x − α e₁ stored in column k
+        vnorm2 = norm2 - 2.0 * alpha * (g[k, k] + alpha) + alpha * alpha
+        rdiag[k] = alpha
+        if vnorm2 == 0.0:
+            continue
+        for j in range(k + 1, n):
+            dot = 0.0
+            for r in range(k, m):
+                dot += g[r, k] * g[r, j]
+            t = 2.0 * dot / vnorm2
+            for r in range(k, m):
+                g[r, j] -= t * g[r, k]
+
+
 @nb.njit(cache=True, parallel=True)
 def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                     log_eta, log_norm_sum, inv_diag):
-    """All-rows Γ (n_rows × n_free) reduced through the Fisher matrix F = ΓᵀΓ.
+    """All-rows Γ (n_rows × n_free) reduced through its QR factorisation.
 
-    Per point: ``log_eta`` = log10 sqrt(det Γ_sᵀΓ_s); ``log_norm_sum`` = Σ log10 ‖Γ_j‖;
-    ``inv_diag`` (P, n_free) = diag((ΓᵀΓ)⁻¹) (multiply by the noise variance for the CRLB),
-    +inf where the Cholesky factorisation of Γ_sᵀΓ_s breaks down (rank-deficient).
+    Per point: ``log_eta`` = log10 η, η = sqrt(det Γ_sᵀΓ_s) = Π|R_jj| of the unit-column Γ_s;
+    ``log_norm_sum`` = Σ log10 ‖Γ_j‖; ``inv_diag`` (P, n_free) = diag((ΓᵀΓ)⁻¹) (times the
+    noise variance, the CRLB variances). The caller decides observability from η.
     """
     npts = states.shape[0]
     n = free.shape[0]
@@ -186,58 +214,43 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
         jac = np.empty((3, 7))
         g = np.empty((n_rows, n))
         lognorm = np.empty(n)
-        chol = np.empty((n, n))
-        linv = np.empty((n, n))
+        rdiag = np.empty(n)
+        rinv = np.empty((n, n))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
             _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
                          nbuf, dndr, dndf, e, jac, g)
             log_norm_sum[p] = _log10_column_norms(g, lognorm)
-            ok = True
             for j in range(n):  # unit columns: Γ_s = Γ / ‖Γ_j‖
-                if lognorm[j] == -np.inf:
-                    ok = False
-                    continue
-                scale = 10.0 ** -lognorm[j]
+                scale = 10.0 ** -lognorm[j] if lognorm[j] > -np.inf else 0.0
                 for r in range(n_rows):
                     g[r, j] *= scale
-            # 1. Cholesky of the unit-diagonal Gram matrix Γ_sᵀΓ_s (lower, in chol).
-            half_logdet = 0.0
+            # 1. η = Π |R_jj| of Γ_s = QR.
+            _householder_r(g, rdiag)
+            le = 0.0
+            singular = False
             for j in range(n):
-                for k in range(j + 1):
-                    acc = 0.0
-                    for r in range(n_rows):
-                        acc += g[r, j] * g[r, k]
-                    for m in range(k):
-                        acc -= chol[j, m] * chol[k, m]
-                    if j == k:
-                        if acc <= 0.0:
-                            ok = False
-                            acc = 1.0
-                        chol[j, j] = math.sqrt(acc)
-                        half_logdet += math.log10(chol[j, j])
-                    else:
-                        chol[j, k] = acc / chol[k, k]
-                for k in range(j + 1, n):
-                    chol[j, k] = 0.0
-            if not ok:
-                log_eta[p] = -np.inf
+                if rdiag[j] == 0.0:
+                    singular = True
+                else:
+                    le += math.log10(abs(rdiag[j]))
+            log_eta[p] = -np.inf if singular else le
+            if singular:
                 for j in range(n):
                     inv_diag[p, j] = np.inf
                 continue
-            log_eta[p] = half_logdet
-            # 2. diag((Γ_sᵀΓ_s)⁻¹) = column sums of L⁻¹ squared; L⁻¹ by forward substitution.
+            # 2. (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)². Back substitution.
             for k in range(n):
-                for j in range(n):
-                    if j < k:
-                        linv[j, k] = 0.0
+                for i in range(n - 1, -1, -1):
+                    if i > k:
+                        rinv[i, k] = 0.0
                         continue
-                    acc = 1.0 if j == k else 0.0
-                    for m in range(k, j):
-                        acc -= chol[j, m] * linv[m, k]
-                    linv[j, k] = acc / chol[j, j]
-            for k in range(n):
+                    acc = 1.0 if i == k else 0.0
+                    for j in range(i + 1, k + 1):
+                        acc -= g[i, j] * rinv[j, k]
+                    rinv[i, k] = acc / rdiag[i]
+            for i in range(n):
                 acc = 0.0
-                for j in range(k, n):
-                    acc += linv[j, k] * linv[j, k]
-                # undo the column scaling: (ΓᵀΓ)⁻¹_kk = (Γ_sᵀΓ_s)⁻¹_kk / ‖Γ_k‖²
-                inv_diag[p, k] = acc / 10.0 ** (2.0 * lognorm[k])
+                for k in range(i, n):
+                    acc += rinv[i, k] * rinv[i, k]
+                # undo the column scaling: (ΓᵀΓ)⁻¹_ii = (Γ_sᵀΓ_s)⁻¹_ii / ‖Γ_i‖²
+                inv_diag[p, i] = acc / 10.0 ** (2.0 * lognorm[i])
