@@ -81,24 +81,39 @@ def fisher_measures(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
     False
     """
     noise = validation.positive("noise", noise, "V/m")
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, square_min_steps=1)
-    npts, free = args[0].shape[0], args[-1]
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
+    m = _fisher_from_kernel(args[0], args[1:], n_rows, noise)
+    return FisherMeasures(
+        d_optimal=m.d_optimal.reshape(lead),
+        log10_eta=m.log10_eta.reshape(lead),
+        observable=m.observable.reshape(lead),
+        std=m.std.reshape(lead + (m.std.shape[-1],)),
+        position_std=m.position_std.reshape(lead),
+        free=m.free,
+    )
+
+
+def _fisher_from_kernel(states, options, n_rows, noise):
+    """Run the compiled kernel on (P, 7) valid states; FisherMeasures with flat (P,) arrays."""
+    npts, free = states.shape[0], options[-1]
     log_eta, log_norms, inv_diag = np.empty(npts), np.empty(npts), np.empty((npts, free.size))
-    kernels.fisher_measures(*args, n_rows, log_eta, log_norms, inv_diag)
-    observable = log_eta >= np.log10(ETA_TOL)
+    kernels.fisher_measures(states, *options, n_rows, log_eta, log_norms, inv_diag)
+    with np.errstate(invalid="ignore"):
+        observable = log_eta >= np.log10(ETA_TOL)  # NaN (on a station) compares False
     # ½ log10 det(ΓᵀΓ / noise²) = log10 η + Σ log10‖Γ_j‖ − n log10(noise)
     d_opt = np.where(observable, log_eta + log_norms - free.size * np.log10(noise), -np.inf)
     var = np.where(observable[:, None], inv_diag * noise**2, np.inf)
     pos = [q for q, j in enumerate(free) if j < 3]
     pos_std = np.sqrt(var[:, pos].sum(axis=1)) if pos else np.zeros(npts)
-    names = tuple(validation.STATE_NAMES[j] for j in free)
+    on_station = np.isnan(log_eta)
+    d_opt[on_station], pos_std[on_station] = np.nan, np.nan
     return FisherMeasures(
-        d_optimal=d_opt.reshape(lead),
-        log10_eta=log_eta.reshape(lead),
-        observable=observable.reshape(lead),
-        std=np.sqrt(var).reshape(lead + (free.size,)),
-        position_std=pos_std.reshape(lead),
-        free=names,
+        d_optimal=d_opt,
+        log10_eta=log_eta,
+        observable=observable,
+        std=np.sqrt(var),
+        position_std=pos_std,
+        free=tuple(validation.STATE_NAMES[j] for j in free),
     )
 
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import validation
+from . import kernels
 
 __all__ = ["Plane", "dual_station", "single_station", "velocity_from_heading"]
 
@@ -72,13 +72,8 @@ class Plane:
     def states(self, velocity, moments, rows=slice(None)):
         """Target states on the grid (or on a slice of its rows): shape (rows, n, 7)."""
         u, v = self.axes
-        uu, vv = np.meshgrid(u, v[rows])
-        out = np.empty(uu.shape + (7,))
-        out[..., 0] = uu
-        if self.kind == "xy":
-            out[..., 1], out[..., 2] = vv, self.fixed
-        else:
-            out[..., 1], out[..., 2] = self.fixed, vv
-        out[..., 3:5] = velocity
-        out[..., 5:7] = moments
+        v = v[rows]
+        template = np.array([0.0, self.fixed, self.fixed, *velocity, *moments], dtype=np.float64)
+        out = np.empty((v.size, u.size, 7))
+        kernels.grid_states(template, u, v, 1 if self.kind == "xy" else 2, out)
         return out

@@ -19,14 +19,16 @@ import math
 import numba as nb
 import numpy as np
 
-from .fields import _local_jacobian
+from .fields import FASTMATH, _local_jacobian
+from .validation import ON_STATION
 
 _BLOCK = 256
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf, e, jac, g):
     """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (7,).
+    Returns False, with ``g`` incomplete, if the target comes within ON_STATION of a station.
 
     Rows are time-major, then station-major, then component (Ex, Ey, Ez): the paper's order.
     Row block of instant i is ``(∂h/∂X)(Φ^i x) · Φ^i``; Φ^i adds i·T·(∂/∂x, ∂/∂y) to the
@@ -42,8 +44,13 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf
         for s in range(n_s):
             if row >= n_rows:
                 break
+            rx = px - stations[s, 0]
+            ry = py - stations[s, 1]
+            rz = x[2] - stations[s, 2]
+            if rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION:
+                return False
             _local_jacobian(
-                px - stations[s, 0], py - stations[s, 1], x[2] - stations[s, 2],
+                rx, ry, rz,
                 x[3], x[4], x[5], x[6], kappa, model, nbuf, dndr, dndf, e, jac,
             )
             for comp in range(3):
@@ -59,11 +66,12 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf
                     g[row, q] = v
                 row += 1
         i += 1
+    return True
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
 def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
-    """Γ for every state: states (P, 7) -> out (P, n_rows, n_free)."""
+    """Γ for every state: states (P, 7) -> out (P, n_rows, n_free) (NaN on stations)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
         nbuf = np.empty(3)
@@ -72,11 +80,12 @@ def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
         e = np.empty(3)
         jac = np.empty((3, 7))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
-                         nbuf, dndr, dndf, e, jac, out[p])
+            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
+                                nbuf, dndr, dndf, e, jac, out[p]):
+                out[p] = np.nan
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def _log10_column_norms(g, lognorm):
     """lognorm[j] = log10 ‖g_j‖ (-inf for a zero column); returns their sum."""
     total = 0.0
@@ -89,7 +98,7 @@ def _log10_column_norms(g, lognorm):
     return total
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def _log10_norm_product(g):
     """Σ_j log10 ‖g_j‖ with one logarithm (the hot path), per column only if the product of
     squared norms leaves float64's normal range."""
@@ -110,7 +119,7 @@ def _log10_norm_product(g):
     return total
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def _lu_abs_det(a):
     """|det a| of a square matrix (n ≤ 63) by Gaussian elimination with partial pivoting;
     destroys ``a``.
@@ -145,9 +154,10 @@ def _lu_abs_det(a):
     return det
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
 def square_measures(states, stations, step, kappa, model, free, log_det, log_eta):
-    """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point."""
+    """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point (NaN on
+    stations)."""
     npts = states.shape[0]
     n = free.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
@@ -158,8 +168,11 @@ def square_measures(states, stations, step, kappa, model, free, log_det, log_eta
         jac = np.empty((3, 7))
         g = np.empty((n, n))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            _gamma_point(states[p], stations, step, kappa, model, free, n,
-                         nbuf, dndr, dndf, e, jac, g)
+            if not _gamma_point(states[p], stations, step, kappa, model, free, n,
+                                nbuf, dndr, dndf, e, jac, g):
+                log_det[p] = np.nan
+                log_eta[p] = np.nan
+                continue
             norms = _log10_norm_product(g)
             det = _lu_abs_det(g)
             ld = math.log10(det) if det > 0.0 else -np.inf
@@ -167,7 +180,7 @@ def square_measures(states, stations, step, kappa, model, free, log_det, log_eta
             log_eta[p] = ld - norms
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def _householder_r(g, rdiag):
     """Householder QR of g (m × n, m ≥ n) in place: R's strict upper part stays in g, its
     diagonal goes to ``rdiag``. Q is not kept. Backward stable, unlike forming ΓᵀΓ, so an
@@ -195,14 +208,15 @@ def _householder_r(g, rdiag):
                 g[r, j] -= t * g[r, k]
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
 def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                     log_eta, log_norm_sum, inv_diag):
     """All-rows Γ (n_rows × n_free) reduced through its QR factorisation.
 
     Per point: ``log_eta`` = log10 η, η = sqrt(det Γ_sᵀΓ_s) = Π|R_jj| of the unit-column Γ_s;
     ``log_norm_sum`` = Σ log10 ‖Γ_j‖; ``inv_diag`` (P, n_free) = diag((ΓᵀΓ)⁻¹) (times the
-    noise variance, the CRLB variances). The caller decides observability from η.
+    noise variance, the CRLB variances). The caller decides observability from η. NaN on
+    stations.
     """
     npts = states.shape[0]
     n = free.shape[0]
@@ -217,8 +231,12 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
         rdiag = np.empty(n)
         rinv = np.empty((n, n))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
-                         nbuf, dndr, dndf, e, jac, g)
+            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
+                                nbuf, dndr, dndf, e, jac, g):
+                log_eta[p] = np.nan
+                log_norm_sum[p] = np.nan
+                inv_diag[p] = np.nan
+                continue
             log_norm_sum[p] = _log10_column_norms(g, lognorm)
             for j in range(n):  # unit columns: Γ_s = Γ / ‖Γ_j‖
                 scale = 10.0 ** -lognorm[j] if lognorm[j] > -np.inf else 0.0
@@ -254,3 +272,14 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                     acc += rinv[i, k] * rinv[i, k]
                 # undo the column scaling: (ΓᵀΓ)⁻¹_ii = (Γ_sᵀΓ_s)⁻¹_ii / ‖Γ_i‖²
                 inv_diag[p, i] = acc / 10.0 ** (2.0 * lognorm[i])
+
+
+@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+def grid_states(template, u, v, v_index, out):
+    """States on a plane: out[i, j] = template with x = u[j] and state[v_index] = v[i]."""
+    for i in nb.prange(v.shape[0]):
+        for j in range(u.shape[0]):
+            for k in range(7):
+                out[i, j, k] = template[k]
+            out[i, j, 0] = u[j]
+            out[i, j, v_index] = v[i]

@@ -1,8 +1,7 @@
 """Measures evaluated over a plane of target positions, and difference maps (spec §5).
 
-Grid points within :data:`ON_STATION` of a station are masked (NaN), not raised on. Rows are
-processed in chunks of at most :data:`CHUNK_POINTS` points, so memory stays bounded for any
-resolution up to :data:`core.grids.MAX_RESOLUTION`.
+Grid points within :data:`core.validation.ON_STATION` of a station are masked (NaN), not
+raised on.
 """
 
 from __future__ import annotations
@@ -11,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import validation
-from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures
-from .observability import ETA_TOL, _square
+from . import kernels, validation
+from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, _fisher_from_kernel
+from .observability import ETA_TOL, _options
 
 __all__ = ["MEASURES", "MapResult", "evaluate_map", "log10_positive_difference", "log10_ratio"]
 
@@ -24,8 +23,6 @@ MEASURES = {
     "d_optimal": ("D-optimal ½·log10 det F", "log10 of F's units", False),
     "crlb_position": ("CRLB position error (1σ)", "m", False),
 }
-#: Targets closer than this to a station (m) are masked: the field is singular at D = 0.
-ON_STATION = 1e-6
 CHUNK_POINTS = 1 << 16
 
 
@@ -37,15 +34,6 @@ class MapResult:
     value: np.ndarray
     observable: np.ndarray
     measure: str
-
-
-def _chunk(states, stations, measure, T, sigma, model, known, noise, steps):
-    if MEASURES[measure][2]:
-        log_det, log_eta = _square(states, stations, T, sigma, model, known)
-        return (log_det if measure == "log10_det" else log_eta), log_eta >= np.log10(ETA_TOL)
-    m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
-                        model=model, known=known)
-    return (m.d_optimal if measure == "d_optimal" else m.position_std), m.observable
 
 
 def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1.0, sigma=4.0,
@@ -68,31 +56,41 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     Returns
     -------
     MapResult
-        ``observable`` is False where Γ is structurally rank-deficient (η < ETA_TOL) or on a
-        station; there ``log10_det`` still holds float64's round-off value, for display as such.
+        ``value`` is NaN within ``ON_STATION`` of a station. ``observable`` is False there and
+        where Γ is structurally rank-deficient (η < ETA_TOL); there ``log10_det`` still holds
+        float64's round-off value, for display as such.
+
+    Notes
+    -----
+    Rows are evaluated in chunks of at most :data:`CHUNK_POINTS` points, so memory is bounded
+    by the outputs for any resolution up to :data:`core.grids.MAX_RESOLUTION`.
     """
     if measure not in MEASURES:
         raise ValueError(f"measure must be one of {sorted(MEASURES)}; got {measure!r}")
-    stations = np.atleast_2d(np.asarray(stations, dtype=np.float64))
+    square = MEASURES[measure][2]
+    options, n_rows = _options(stations, T, sigma, model, known, None if square else steps)
+    template, _ = validation.states([0.0, 0.0, 0.0, *velocity, *moments])  # checks speed > 0
+    noise = validation.positive("noise", noise, "V/m")
     n = plane.n
-    value = np.full((n, n), np.nan)
-    observable = np.zeros((n, n), dtype=bool)
+    value = np.empty((n, n))
+    log_eta = np.empty((n, n))
     rows_per_chunk = max(1, CHUNK_POINTS // n)
     for r0 in range(0, n, rows_per_chunk):
         rows = slice(r0, min(n, r0 + rows_per_chunk))
-        states = plane.states(velocity, moments, rows).reshape(-1, 7)
-        if stations.ndim == 2 and stations.shape[-1] == 3:
-            on = (validation.station_distances(states, stations) < ON_STATION).any(axis=1)
+        states = plane.states(template[0, 3:5], template[0, 5:7], rows).reshape(-1, 7)
+        eta = log_eta[rows].reshape(-1)  # views: the kernels write straight into the map
+        out = value[rows].reshape(-1)
+        if square:
+            kernels.square_measures(states, *options, out if measure == "log10_det" else
+                                    np.empty(len(states)), eta)
+            if measure == "log10_eta":
+                out[:] = eta
         else:
-            on = np.zeros(len(states), dtype=bool)
-        if on.all():
-            continue
-        v, ok = _chunk(states[~on], stations, measure, T, sigma, model, known, noise, steps)
-        block_v = np.full(len(states), np.nan)
-        block_ok = np.zeros(len(states), dtype=bool)
-        block_v[~on], block_ok[~on] = v, ok
-        value[rows] = block_v.reshape(-1, n)
-        observable[rows] = block_ok.reshape(-1, n)
+            m = _fisher_from_kernel(states, options, n_rows, noise)
+            eta[:] = m.log10_eta
+            out[:] = m.d_optimal if measure == "d_optimal" else m.position_std
+    with np.errstate(invalid="ignore"):
+        observable = log_eta >= np.log10(ETA_TOL)  # NaN (on a station) compares False
     return MapResult(value=value, observable=observable, measure=measure)
 
 

@@ -43,21 +43,24 @@ RANK_RTOL = 1e-10
 ETA_TOL = 1e-15
 
 
-def _prepare(states, stations, T, sigma, model, known, steps, *, square_min_steps):
-    """Validate everything; return the kernel arguments and the leading shape."""
-    states, stations, lead = validation.states_and_stations(states, stations)
+def _options(stations, T, sigma, model, known, steps):
+    """Validate everything but the states: returns the kernel arguments after ``states``
+    (stations, T, κ = 1/(4πσ), model code, free columns) and the number of rows of Γ."""
+    stations = validation.stations(stations)
     step = validation.positive("T", T, "s")
     sigma = validation.positive("sigma", sigma, "S/m")
     code = validation.model_code(model, MODELS)
     free = validation.free_columns(known)
-    validation.no_target_on_station(states, stations)
-    if steps is None:
-        n_rows = free.size
-    else:
-        steps = validation.steps(steps, square_min_steps)
-        n_rows = 3 * stations.shape[0] * steps
-    kappa = 1.0 / (4.0 * np.pi * sigma)
-    return (states, stations, step, kappa, code, free), n_rows, lead
+    n_rows = free.size if steps is None else 3 * stations.shape[0] * validation.steps(steps, 1)
+    return (stations, step, 1.0 / (4.0 * np.pi * sigma), code, free), n_rows
+
+
+def _prepare(states, stations, T, sigma, model, known, steps):
+    """Validate states and options; return the kernel arguments, rows of Γ, leading shape."""
+    options, n_rows = _options(stations, T, sigma, model, known, steps)
+    states, lead = validation.states(states)
+    validation.no_target_on_station(states, options[0])
+    return (states, *options), n_rows, lead
 
 
 def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, known=()):
@@ -98,7 +101,7 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, know
     >>> core.gamma([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]], steps=4).shape
     (12, 7)
     """
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, square_min_steps=1)
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
     n_free = args[-1].size
     out = np.empty((args[0].shape[0], n_rows, n_free))
     kernels.fill_gamma(*args, n_rows, out)
@@ -106,7 +109,7 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, know
 
 
 def _square(states, stations, T, sigma, model, known):
-    args, _, lead = _prepare(states, stations, T, sigma, model, known, None, square_min_steps=1)
+    args, _, lead = _prepare(states, stations, T, sigma, model, known, None)
     log_det = np.empty(args[0].shape[0])
     log_eta = np.empty(args[0].shape[0])
     kernels.square_measures(*args, log_det, log_eta)
@@ -151,7 +154,7 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", st
     """
     if steps is None:
         return _square(states, stations, T, sigma, model, known)[1]
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, square_min_steps=1)
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
     npts, n = args[0].shape[0], args[-1].size
     log_eta, lns, inv = np.empty(npts), np.empty(npts), np.empty((npts, n))
     kernels.fisher_measures(*args, n_rows, log_eta, lns, inv)

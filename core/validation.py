@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+#: Targets closer than this to a station (m) are "on" it: the field is singular at D = 0.
+#: The public functions raise ValueError; maps (and the kernels) give NaN there.
+ON_STATION = 1e-6
+
 #: Order of the state vector ``X = [x, y, z, vx, vy, Ph, Pv]``.
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "Ph", "Pv")
 
@@ -18,34 +22,47 @@ def _finite(name, arr):
         raise ValueError(f"{name} must be finite; got a value {bad!r} (NaN and inf are not accepted)")
 
 
-def states_and_stations(states, stations):
-    """Return ``states`` as (P, 7), ``stations`` as (S, 3) float64 and the leading shape."""
+def _array(name, value):
     try:
-        states = np.asarray(states, dtype=np.float64)
-        stations = np.asarray(stations, dtype=np.float64)
+        return np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"states and stations must be numeric arrays: {exc}") from None
-    if states.ndim < 1 or states.shape[-1] != 7:
+        raise ValueError(f"{name} must be a numeric array: {exc}") from None
+
+
+def states(value):
+    """Return states as a contiguous (P, 7) float64 array and the leading shape."""
+    arr = _array("states", value)
+    if arr.ndim < 1 or arr.shape[-1] != 7:
         raise ValueError(
-            f"states must have shape (..., 7) = [x, y, z, vx, vy, Ph, Pv]; got shape {states.shape}"
+            f"states must have shape (..., 7) = [x, y, z, vx, vy, Ph, Pv]; got shape {arr.shape}"
         )
-    if stations.ndim == 1 and stations.shape == (3,):
-        stations = stations[None, :]
-    if stations.ndim != 2 or stations.shape[1] != 3:
-        raise ValueError(f"stations must have shape (S, 3) station positions in m; got shape {stations.shape}")
-    if stations.shape[0] == 0:
-        raise ValueError("stations must hold at least one station; got an empty list")
-    _finite("states", states)
-    _finite("stations", stations)
-    lead = states.shape[:-1]
-    flat = np.ascontiguousarray(states.reshape(-1, 7))
-    speed = np.hypot(flat[:, 3], flat[:, 4])
-    if np.any(speed == 0.0):
+    _finite("states", arr)
+    flat = np.ascontiguousarray(arr.reshape(-1, 7))
+    if np.any((flat[:, 3] == 0.0) & (flat[:, 4] == 0.0)):
         raise ValueError(
             "target speed must be > 0: the horizontal dipole points along the heading "
             "θ = atan2(vy, vx), which is undefined at vx = vy = 0"
         )
-    return flat, np.ascontiguousarray(stations), lead
+    return flat, arr.shape[:-1]
+
+
+def stations(value):
+    """Return stations as a contiguous (S, 3) float64 array, S ≥ 1."""
+    arr = _array("stations", value)
+    if arr.shape == (3,):
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"stations must have shape (S, 3) station positions in m; got shape {arr.shape}")
+    if arr.shape[0] == 0:
+        raise ValueError("stations must hold at least one station; got an empty list")
+    _finite("stations", arr)
+    return np.ascontiguousarray(arr)
+
+
+def states_and_stations(states_value, stations_value):
+    """Both of the above: (P, 7) states, (S, 3) stations, leading shape."""
+    flat, lead = states(states_value)
+    return flat, stations(stations_value), lead
 
 
 def positive(name, value, unit):
@@ -92,10 +109,10 @@ def station_distances(states, stations):
 
 def no_target_on_station(states, stations):
     d = station_distances(states, stations)
-    if np.any(d == 0.0):
-        p, s = np.argwhere(d == 0.0)[0]
+    if np.any(d < ON_STATION):
+        p, s = np.argwhere(d < ON_STATION)[0]
         raise ValueError(
             f"target position {tuple(states[p, :3])} m coincides with station {s} at "
-            f"{tuple(stations[s])} m: the dipole field is singular at D = 0; "
+            f"{tuple(stations[s])} m: the dipole field is singular at D = 0 (closer than {ON_STATION} m counts); "
             "move the target or mask such points (core.maps does)"
         )
