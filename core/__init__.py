@@ -5,6 +5,23 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 """
 
 from .fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
+from .design import (
+    CRITERIA,
+    LAYOUTS,
+    MAX_STATIONS,
+    CriterionResult,
+    CrlbErrors,
+    LayoutResult,
+    SpacingResult,
+    best_spacing,
+    crlb_covariance,
+    crlb_maps,
+    horizontal_error_ellipse,
+    layout_criterion,
+    optimise_layout,
+    spacing_curve,
+    station_layout,
+)
 from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, FisherMeasures, fisher_information, fisher_measures
 from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
 from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
@@ -26,4 +43,8 @@ __all__ = [
     "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
     "log10_ratio", "observability_index", "observable_rank", "single_station",
     "unobservable_direction", "velocity_from_heading",
+    # sensor-layout design (core.design)
+    "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
+    "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
+    "layout_criterion", "optimise_layout", "spacing_curve", "station_layout",
 ]

@@ -1,0 +1,778 @@
+"""Sensor-layout design: CRLB error ellipses in metres, N-station layouts, the best spacing.
+
+Everything here builds on the all-rows Fisher information of :mod:`core.fisher`
+(F = ΓᵀΓ / noise², every component of every station over ``steps`` instants, spec §3):
+
+- :func:`crlb_covariance` — the full Cramér–Rao covariance F⁻¹, from a QR factorisation of the
+  column-scaled Γ (backward stable; forming ΓᵀΓ would square its condition number).
+- :func:`horizontal_error_ellipse` and :func:`crlb_maps` — the 1-σ horizontal position error
+  ellipse (m, degrees), depth error σz (m), speed error σ|v| (m/s) per point or over a plane.
+- :func:`station_layout` — "line", "triangle", "square" and "free" layouts of N = 1..8 stations.
+- :func:`layout_criterion`, :func:`spacing_curve`, :func:`best_spacing`,
+  :func:`optimise_layout` — how good a layout is for a surveillance region, and the best one.
+
+Unobservable points
+-------------------
+Where Γ is structurally rank-deficient (η < :data:`core.ETA_TOL`, the flag of
+:func:`core.fisher_measures`, which agrees with :func:`core.observable_rank`), F is singular: the
+CRLB is +inf and the D-optimal measure −inf. Region criteria cannot average −inf, so
+:func:`layout_criterion` counts such a point at its **D-optimal floor**, the value it would
+have at η = ETA_TOL:
+
+    floor = log10(ETA_TOL) + Σ_j log10 ‖Γ_j‖ − n·log10(noise),
+
+the largest D-optimal value that float64 round-off could fake at that point. It joins the
+observable values continuously at the flag boundary (D-opt = log10 η + Σ log10‖Γ_j‖ −
+n log10 noise there), so the criterion stays finite and an optimiser sees a slope towards
+observability; :attr:`CriterionResult.observable_fraction` says how much of the region is
+truly observable. For ``"area_crlb"`` an unobservable point simply fails the threshold.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from . import validation
+from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures
+from .grids import Plane
+from .observability import ETA_TOL, gamma
+
+__all__ = [
+    "CRITERIA",
+    "LAYOUTS",
+    "MAX_STATIONS",
+    "CriterionResult",
+    "CrlbErrors",
+    "LayoutResult",
+    "SpacingResult",
+    "best_spacing",
+    "crlb_covariance",
+    "crlb_maps",
+    "horizontal_error_ellipse",
+    "layout_criterion",
+    "optimise_layout",
+    "spacing_curve",
+    "station_layout",
+]
+
+#: Layout kinds accepted by :func:`station_layout`.
+LAYOUTS = ("line", "triangle", "square", "free")
+#: Largest number of stations a layout may have.
+MAX_STATIONS = 8
+#: Region criteria: name -> (label, unit). Larger is better for every one of them.
+CRITERIA = {
+    "mean_dopt": ("mean D-optimal ½·log10 det F over the region", "log10 of F's units"),
+    "worst_dopt": ("worst (minimum) D-optimal ½·log10 det F over the region", "log10 of F's units"),
+    "area_crlb": ("fraction of the region with CRLB position error < threshold", "dimensionless"),
+}
+#: Γ entries per chunk of :func:`crlb_maps` (bounds memory at ~32 MB per array).
+_CHUNK_ENTRIES = 1 << 22
+
+
+# --------------------------------------------------------------------------------------------
+# CRLB covariance and the errors derived from it
+# --------------------------------------------------------------------------------------------
+
+def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model, known):
+    """Full 7 × 7 CRLB covariance of (P, 7) valid states, (P, 7, 7).
+
+    Known states get zero rows and columns (they are known exactly). Where ``observable`` is
+    False the unknown block is NaN off the diagonal and +inf on it.
+    """
+    free = validation.free_columns(known)
+    npts, n = states.shape[0], free.size
+    cov = np.zeros((npts, 7, 7))
+    block = np.full((npts, n, n), np.nan)
+    block[:, np.arange(n), np.arange(n)] = np.inf
+    idx = np.flatnonzero(observable)
+    if idx.size:
+        g = gamma(states[idx], stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+        norms = np.linalg.norm(g, axis=-2)  # (p, n): column norms, (V/m) per state unit
+        # 1. Γ_s = Γ / ‖Γ_j‖ = Q R; (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ. The flag guarantees R is invertible.
+        r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (p, n, n)
+        rinv = np.linalg.solve(r, np.broadcast_to(np.eye(n), r.shape))
+        inv_s = rinv @ np.swapaxes(rinv, -1, -2)
+        # 2. Undo the column scaling and apply R = noise² I: Cov = noise² D⁻¹ (Γ_sᵀΓ_s)⁻¹ D⁻¹.
+        block[idx] = noise**2 * inv_s / (norms[:, :, None] * norms[:, None, :])
+    cov[:, free[:, None], free[None, :]] = block
+    return cov
+
+
+def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
+                    sigma=4.0, model="exact", known=()):
+    """Full Cramér–Rao covariance F⁻¹ of the 7 states.
+
+    Parameters
+    ----------
+    states : array_like, shape (..., 7)
+        ``[x, y, z, vx, vy, Ph, Pv]`` in m, m/s, A·m (speed > 0).
+    stations : array_like, shape (S, 3)
+        Station positions (m).
+    noise : float
+        Sensor noise standard deviation (V/m) on every field component, > 0.
+    steps : int
+        Number of instants N ≥ 1 (all rows of all stations).
+    T, sigma, model, known
+        As for :func:`core.gamma`.
+
+    Returns
+    -------
+    cov : ndarray, shape (..., 7, 7)
+        Covariance in state units (m², m²/s, …, (A·m)²), always 7 × 7 in the state order of
+        :data:`core.STATE_NAMES`. Rows and columns of ``known`` states are 0. Where the point
+        is unobservable (the flag of :func:`core.fisher_measures`) the unknown block has +inf on
+        its diagonal and NaN elsewhere.
+    observable : ndarray of bool, shape (...)
+
+    Raises
+    ------
+    ValueError
+        As :func:`core.fisher_measures` (bad shapes, non-finite values, target on a station …).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> cov, ok = core.crlb_covariance([30, 40, 120, 2, 2, 100, 20], core.dual_station(100, 15))
+    >>> cov.shape, bool(ok)
+    ((7, 7), True)
+    """
+    m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
+                        model=model, known=known)  # validates everything, flags observability
+    flat, lead = validation.states(states)
+    cov = _covariance_flat(flat, validation.stations(stations), m.observable.reshape(-1),
+                           float(noise), steps, T, sigma, model, known)
+    return cov.reshape(lead + (7, 7)), m.observable
+
+
+@dataclass(frozen=True)
+class CrlbErrors:
+    """1-σ Cramér–Rao errors; every array has the points' shape (or the plane's (n, n)).
+
+    Attributes
+    ----------
+    semi_major, semi_minor : ndarray
+        Semi-axes (m) of the 1-σ horizontal position error ellipse, the (x, y) block of the
+        covariance. +inf where unobservable.
+    orientation : ndarray
+        Direction of the semi-major axis (degrees from +x towards +y, in (−90, 90]). NaN where
+        unobservable; 0 for a circle.
+    sigma_z : ndarray
+        Depth error σz (m).
+    sigma_speed : ndarray
+        Error of the speed |v| = sqrt(vx² + vy²) (m/s), by the gradient (vx, vy)/|v| through the
+        (vx, vy) covariance block.
+    position : ndarray
+        sqrt(σx² + σy² + σz²) (m), as :attr:`core.FisherMeasures.position_std`.
+    observable : ndarray of bool
+        False where unobservable and (for maps) on stations.
+
+    Notes
+    -----
+    Maps from :func:`crlb_maps` hold NaN on stations (within ``ON_STATION``).
+    """
+
+    semi_major: np.ndarray
+    semi_minor: np.ndarray
+    orientation: np.ndarray
+    sigma_z: np.ndarray
+    sigma_speed: np.ndarray
+    position: np.ndarray
+    observable: np.ndarray
+
+
+def _errors_from_cov(states, cov, observable):
+    """CrlbErrors fields (flat) from (P, 7) states, (P, 7, 7) covariance, (P,) flag."""
+    cxx, cyy, cxy = cov[:, 0, 0], cov[:, 1, 1], cov[:, 0, 1]
+    with np.errstate(invalid="ignore"):
+        half_gap = np.hypot(0.5 * (cxx - cyy), cxy)
+        mid = 0.5 * (cxx + cyy)
+        semi_major = np.sqrt(mid + half_gap)
+        semi_minor = np.sqrt(np.maximum(mid - half_gap, 0.0))  # round-off may give −0
+        orient = 0.5 * np.degrees(np.arctan2(2.0 * cxy, cxx - cyy))  # (−90, 90]
+        grad = states[:, 3:5] / np.hypot(states[:, 3], states[:, 4])[:, None]  # ∂|v|/∂(vx, vy)
+        var_speed = np.einsum("pi,pij,pj->p", grad, cov[:, 3:5, 3:5], grad)
+        sigma_speed = np.sqrt(np.maximum(var_speed, 0.0))
+        position = np.sqrt(cxx + cyy + cov[:, 2, 2])
+        sigma_z = np.sqrt(cov[:, 2, 2])
+    bad = ~observable
+    for arr in (semi_major, semi_minor, sigma_z, sigma_speed, position):
+        arr[bad] = np.inf
+    orient[bad] = np.nan
+    return dict(semi_major=semi_major, semi_minor=semi_minor, orientation=orient,
+                sigma_z=sigma_z, sigma_speed=sigma_speed, position=position,
+                observable=observable.copy())
+
+
+def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
+                             T=1.0, sigma=4.0, model="exact", known=()):
+    """1-σ horizontal position error ellipse, depth and speed errors from the CRLB.
+
+    Parameters
+    ----------
+    states : array_like, shape (..., 7)
+        ``[x, y, z, vx, vy, Ph, Pv]`` in m, m/s, A·m (speed > 0).
+    stations : array_like, shape (S, 3)
+        Station positions (m).
+    noise, steps, T, sigma, model, known
+        As for :func:`crlb_covariance`. A known state has zero error.
+
+    Returns
+    -------
+    CrlbErrors
+        Arrays of shape (...): ellipse semi-axes (m) and orientation (degrees), σz (m),
+        σ|v| (m/s), 3-D position error (m). +inf (orientation NaN) where unobservable.
+
+    Notes
+    -----
+    The ellipse {p : pᵀ C⁻¹ p = 1} of the 2 × 2 block C = Cov[(x, y)]: semi-axes are the square
+    roots of C's eigenvalues, λ = (cxx + cyy)/2 ± sqrt(((cxx − cyy)/2)² + cxy²), and the major
+    axis is at ½·atan2(2 cxy, cxx − cyy).
+
+    Examples
+    --------
+    >>> import core
+    >>> e = core.horizontal_error_ellipse([30, 40, 120, 2, 2, 100, 20], core.dual_station(100, 15))
+    >>> bool(e.semi_major >= e.semi_minor > 0)
+    True
+    >>> bool(core.horizontal_error_ellipse([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]).semi_major
+    ...      == float("inf"))
+    True
+    """
+    cov, observable = crlb_covariance(states, stations, noise=noise, steps=steps, T=T,
+                                      sigma=sigma, model=model, known=known)
+    flat, lead = validation.states(states)
+    fields = _errors_from_cov(flat, cov.reshape(-1, 7, 7), observable.reshape(-1))
+    return CrlbErrors(**{k: v.reshape(lead) for k, v in fields.items()})
+
+
+def _plane_states(plane, velocity, moments):
+    if not isinstance(plane, Plane):
+        raise ValueError(f"plane must be a core.Plane; got {type(plane).__name__}")
+    template, _ = validation.states([0.0, 0.0, 0.0, *_pair("velocity", velocity),
+                                     *_pair("moments", moments)])  # checks speed > 0
+    return plane.states(template[0, 3:5], template[0, 5:7]).reshape(-1, 7)
+
+
+def _pair(name, value):
+    arr = np.asarray(value, dtype=np.float64) if np.ndim(value) == 1 else None
+    if arr is None or arr.shape != (2,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be a pair of finite numbers; got {value!r}")
+    return arr
+
+
+def _off_station(states, stations):
+    return np.min(validation.station_distances(states, stations), axis=1) >= validation.ON_STATION
+
+
+def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
+              T=1.0, sigma=4.0, model="exact", known=()):
+    """CRLB errors (ellipse, depth, speed, position) over a :class:`core.Plane`.
+
+    Parameters
+    ----------
+    plane : core.Plane
+    stations : array_like, shape (S, 3)
+        Station positions (m).
+    velocity : (vx, vy)
+        Target velocity (m/s), speed > 0.
+    moments : (Ph, Pv)
+        Dipole moments (A·m).
+    noise, steps, T, sigma, model, known
+        As for :func:`crlb_covariance`.
+
+    Returns
+    -------
+    CrlbErrors
+        Arrays of shape (n, n), rows along the plane's second axis (y or z), columns x, as in
+        :class:`core.MapResult`. NaN within ``ON_STATION`` of a station, +inf where
+        unobservable.
+
+    Examples
+    --------
+    >>> import core
+    >>> plane = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
+    >>> e = core.crlb_maps(plane, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20))
+    >>> e.semi_major.shape
+    (11, 11)
+    """
+    states = _plane_states(plane, velocity, moments)
+    stations = validation.stations(stations)
+    ok = np.flatnonzero(_off_station(states, stations))
+    out = {k: np.full(states.shape[0], np.nan) for k in
+           ("semi_major", "semi_minor", "orientation", "sigma_z", "sigma_speed", "position")}
+    out["observable"] = np.zeros(states.shape[0], dtype=bool)
+    rows = 3 * stations.shape[0] * validation.steps(steps, 1)
+    chunk = max(1, _CHUNK_ENTRIES // (rows * 7))
+    for c0 in range(0, ok.size, chunk):
+        idx = ok[c0:c0 + chunk]
+        e = horizontal_error_ellipse(states[idx], stations, noise=noise, steps=steps, T=T,
+                                     sigma=sigma, model=model, known=known)
+        for k in out:
+            out[k][idx] = getattr(e, k)
+    n = plane.n
+    return CrlbErrors(**{k: v.reshape(n, n) for k, v in out.items()})
+
+
+# --------------------------------------------------------------------------------------------
+# Layouts
+# --------------------------------------------------------------------------------------------
+
+def _n_stations(n_stations):
+    if isinstance(n_stations, bool) or not isinstance(n_stations, (int, np.integer)) or not (
+        1 <= n_stations <= MAX_STATIONS
+    ):
+        raise ValueError(f"n_stations must be an integer in [1, {MAX_STATIONS}]; got {n_stations!r}")
+    return int(n_stations)
+
+
+def station_layout(kind, n_stations=2, *, d=15.0, h=100.0, positions=None):
+    """Positions of N stations at depth h in one of the :data:`LAYOUTS`.
+
+    Parameters
+    ----------
+    kind : {"line", "triangle", "square", "free"}
+        - ``"line"``: station i at (i·d, 0, h), i = 0 … N−1; station 1 at the origin as in the
+          paper, so ``"line"`` with N = 2 is :func:`core.dual_station`.
+        - ``"triangle"``: a triangular lattice of side d filled row by row (rows of
+          ⌈√N⌉ stations, each row shifted by d/2 and √3·d/2 in y): N = 3 is the equilateral
+          triangle (0,0), (d,0), (d/2, √3 d/2).
+        - ``"square"``: a square lattice of side d filled row by row (rows of ⌈√N⌉ stations):
+          N = 4 is the square of side d with a corner at the origin.
+        - ``"free"``: the given ``positions``.
+    n_stations : int
+        N, 1 … :data:`MAX_STATIONS`. For ``"free"`` it must match ``positions`` (or be None).
+    d : float
+        Spacing (m), > 0; ignored for ``"free"``.
+    h : float
+        Station depth (m), on the same axis as the target's z; ignored for ``"free"`` with
+        (S, 3) positions.
+    positions : array_like, shape (S, 2) or (S, 3), optional
+        ``"free"`` only: (x, y) at depth h, or (x, y, z) (m).
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Station positions (m).
+
+    Examples
+    --------
+    >>> import core
+    >>> core.station_layout("line", 3, d=10, h=100).tolist()
+    [[0.0, 0.0, 100.0], [10.0, 0.0, 100.0], [20.0, 0.0, 100.0]]
+    >>> core.station_layout("square", 4, d=5, h=50)[:, :2].tolist()
+    [[0.0, 0.0], [5.0, 0.0], [0.0, 5.0], [5.0, 5.0]]
+    """
+    if kind not in LAYOUTS:
+        raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
+    h = float(h) if np.isscalar(h) and np.isfinite(h) else None
+    if h is None:
+        raise ValueError("station depth h must be a finite number (m)")
+    if kind == "free":
+        if positions is None:
+            raise ValueError("layout 'free' needs positions: an (S, 2) or (S, 3) array in m")
+        pos = validation._array("positions", positions)
+        if pos.ndim != 2 or pos.shape[1] not in (2, 3):
+            raise ValueError(f"positions must have shape (S, 2) or (S, 3) in m; got shape {pos.shape}")
+        if pos.shape[1] == 2:
+            pos = np.column_stack([pos, np.full(pos.shape[0], h)])
+        if n_stations is not None and _n_stations(n_stations) != pos.shape[0]:
+            raise ValueError(f"n_stations={n_stations} does not match {pos.shape[0]} positions")
+        _n_stations(pos.shape[0])
+        return validation.stations(pos)
+    n = _n_stations(n_stations)
+    d = validation.positive("d", d, "m")
+    if kind == "line":
+        return np.column_stack([d * np.arange(n), np.zeros(n), np.full(n, h)])
+    cols = int(np.ceil(np.sqrt(n)))
+    i = np.arange(n)
+    row, col = i // cols, i % cols
+    if kind == "square":
+        x, y = d * col, d * row
+    else:  # triangle: alternate rows shifted by half a side
+        x, y = d * (col + 0.5 * (row % 2)), d * (np.sqrt(3.0) / 2.0) * row
+    return np.column_stack([x.astype(float), y.astype(float), np.full(n, h)])
+
+
+# --------------------------------------------------------------------------------------------
+# Region criteria and optimisation
+# --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class CriterionResult:
+    """A layout's criterion over a region.
+
+    Attributes
+    ----------
+    value : float
+        The criterion (see :data:`CRITERIA`); larger is better.
+    observable_fraction : float
+        Fraction of the region's (off-station) points that are observable.
+    """
+
+    value: float
+    observable_fraction: float
+
+
+def _check_criterion(criterion, threshold):
+    if criterion not in CRITERIA:
+        raise ValueError(f"criterion must be one of {sorted(CRITERIA)}; got {criterion!r}")
+    return validation.positive("threshold", threshold, "m")
+
+
+def _region_states(region, velocity, moments):
+    if not isinstance(region, Plane):
+        raise ValueError(
+            "region must be a core.Plane (an x–y rectangle at a target depth, or an x–z band of "
+            f"depths); got {type(region).__name__}"
+        )
+    return _plane_states(region, velocity, moments)
+
+
+def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, known):
+    """Criterion over (P, 7) region states; on-station points are left out."""
+    states = states[_off_station(states, stations)]
+    if states.shape[0] == 0:
+        raise ValueError("every point of the region lies on a station; nothing to evaluate")
+    m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
+                        model=model, known=known)
+    frac = float(np.mean(m.observable))
+    if criterion == "area_crlb":
+        return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
+    d_opt = m.d_optimal.copy()
+    bad = np.flatnonzero(~m.observable)
+    if bad.size:  # the D-optimal floor of the module notes
+        g = gamma(states[bad], stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+        with np.errstate(divide="ignore"):
+            log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
+        d_opt[bad] = np.log10(ETA_TOL) + log_norms - g.shape[-1] * np.log10(noise)
+    value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
+    return CriterionResult(float(value), frac)
+
+
+def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 20.0),
+                     criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
+                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=()):
+    """How well a station layout covers a surveillance region.
+
+    Parameters
+    ----------
+    stations : array_like, shape (S, 3)
+        Station positions (m).
+    region : core.Plane
+        ``"xy"``: rectangle of target positions at depth ``fixed`` (m); ``"xz"``: x–z band of
+        depths at y = ``fixed``.
+    velocity : (vx, vy)
+        Target velocity (m/s), the same at every region point.
+    moments : (Ph, Pv)
+        Dipole moments (A·m).
+    criterion : {"mean_dopt", "worst_dopt", "area_crlb"}
+        ``"mean_dopt"``: mean D-optimal measure over the region's points; ``"worst_dopt"``: its
+        minimum; ``"area_crlb"``: fraction of the points whose CRLB position error
+        sqrt(σx² + σy² + σz²) is below ``threshold``. Unobservable points count at their
+        D-optimal floor (module notes) or as failing the threshold.
+    threshold : float
+        Position error threshold (m) for ``"area_crlb"``, > 0.
+    noise, steps, T, sigma, model, known
+        As for :func:`crlb_covariance`.
+
+    Returns
+    -------
+    CriterionResult
+        Points within ``ON_STATION`` of a station are left out.
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
+    >>> one = core.layout_criterion(core.single_station(100), region)
+    >>> two = core.layout_criterion(core.dual_station(100, 15), region)
+    >>> one.observable_fraction, two.observable_fraction, two.value > one.value
+    (0.0, 1.0, True)
+    """
+    threshold = _check_criterion(criterion, threshold)
+    noise = validation.positive("noise", noise, "V/m")
+    return _criterion(_region_states(region, velocity, moments), validation.stations(stations),
+                      criterion, threshold, noise, steps, T, sigma, model, known)
+
+
+def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
+                             threshold, noise, steps, T, sigma, model, known):
+    """Validate once; return f(d) -> criterion value for a scaled layout."""
+    if kind not in ("line", "triangle", "square"):
+        raise ValueError(f"a spaced layout kind must be 'line', 'triangle' or 'square'; got {kind!r}")
+    n_stations = _n_stations(n_stations)
+    threshold = _check_criterion(criterion, threshold)
+    noise = validation.positive("noise", noise, "V/m")
+    states = _region_states(region, velocity, moments)
+    station_layout(kind, n_stations, d=1.0, h=h)  # validates h
+
+    def value(d):
+        return _criterion(states, station_layout(kind, n_stations, d=d, h=h), criterion,
+                          threshold, noise, steps, T, sigma, model, known).value
+    return value
+
+
+def _d_values(d_values):
+    d = validation._array("d_values", d_values)
+    if d.ndim != 1 or d.size < 1 or not np.all(np.isfinite(d)) or np.any(d <= 0):
+        raise ValueError(f"d_values must be a 1-D array of finite spacings > 0 (m); got {d_values!r}")
+    return d
+
+
+def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
+                  moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
+                  noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                  known=()):
+    """Criterion against station spacing d (default: the paper's dual, a 2-station line).
+
+    Parameters
+    ----------
+    d_values : array_like, shape (K,)
+        Spacings (m), > 0.
+    region : core.Plane
+        Surveillance region (see :func:`layout_criterion`).
+    kind : {"line", "triangle", "square"}
+        Layout scaled by d (see :func:`station_layout`).
+    n_stations : int
+        N, 1 … :data:`MAX_STATIONS`.
+    h : float
+        Station depth (m).
+    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
+        As for :func:`layout_criterion`.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Criterion at each d (larger is better).
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
+    >>> core.spacing_curve([10, 50], region).shape
+    (2,)
+    """
+    d = _d_values(d_values)
+    f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
+                                 threshold, noise, steps, T, sigma, model, known)
+    return np.array([f(v) for v in d])
+
+
+@dataclass(frozen=True)
+class SpacingResult:
+    """Result of :func:`best_spacing`.
+
+    Attributes
+    ----------
+    d : float
+        Best spacing (m).
+    value : float
+        Criterion at ``d``.
+    d_values, curve : ndarray, shape (K,)
+        The coarse curve the bracket was taken from.
+    at_bound : bool
+        The best grid point is an end of ``d_values``: the optimum may lie outside the range.
+    nfev : int
+        Criterion evaluations, curve included.
+    """
+
+    d: float
+    value: float
+    d_values: np.ndarray
+    curve: np.ndarray
+    at_bound: bool
+    nfev: int
+
+
+def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
+                 kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
+                 criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
+                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=()):
+    """Spacing d that maximises a region criterion.
+
+    Parameters
+    ----------
+    region : core.Plane
+        Surveillance region (see :func:`layout_criterion`).
+    d_values : array_like, shape (K,), optional
+        Coarse spacings (m) for the bracketing curve; default ``n_curve`` points evenly spaced
+        over ``d_range``.
+    d_range : (float, float)
+        (min, max) spacing (m), 0 < min < max, when ``d_values`` is not given.
+    n_curve : int
+        Points of the default coarse curve, ≥ 3.
+    xatol : float
+        Absolute tolerance on d (m) of the bounded Brent search, > 0.
+    kind, n_stations, h, velocity, moments, criterion, threshold, noise, steps, T, sigma, \
+model, known
+        As for :func:`spacing_curve`.
+
+    Returns
+    -------
+    SpacingResult
+
+    Notes
+    -----
+    1. Evaluate the criterion on the coarse curve and take its best point d_i.
+    2. Refine with ``scipy.optimize.minimize_scalar(method="bounded")`` on the bracket
+       [d_{i−1}, d_{i+1}] (clipped to the curve's ends), minimising −criterion.
+    3. Keep the better of the refined and the grid point (Brent on a multimodal stretch may
+       stop at a worse local optimum).
+
+    ``"area_crlb"`` is piecewise constant in d (a count of grid points), so the refinement only
+    moves within a plateau; the coarse curve decides.
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
+    >>> r = core.best_spacing(region, d_range=(5, 300), n_curve=7)
+    >>> bool(r.d_values[0] <= r.d <= r.d_values[-1])
+    True
+    """
+    if d_values is None:
+        lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
+        if not lo < hi:
+            raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
+        if isinstance(n_curve, bool) or not isinstance(n_curve, (int, np.integer)) or n_curve < 3:
+            raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
+        d = np.linspace(lo, hi, int(n_curve))
+    else:
+        d = np.unique(_d_values(d_values))
+        if d.size < 3:
+            raise ValueError(f"d_values must hold at least 3 distinct spacings; got {d_values!r}")
+    xatol = validation.positive("xatol", xatol, "m")
+    f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
+                                 threshold, noise, steps, T, sigma, model, known)
+    curve = np.array([f(v) for v in d])
+    i = int(np.argmax(curve))
+    lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
+    res = optimize.minimize_scalar(lambda v: -f(v), bounds=(lo, hi), method="bounded",
+                                   options={"xatol": xatol})
+    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
+    return SpacingResult(d=float(best_d), value=float(best_v), d_values=d, curve=curve,
+                         at_bound=i in (0, d.size - 1), nfev=int(d.size + res.nfev))
+
+
+@dataclass(frozen=True)
+class LayoutResult:
+    """Result of :func:`optimise_layout`.
+
+    Attributes
+    ----------
+    stations : ndarray, shape (N, 3)
+        Optimised station positions (m).
+    value : float
+        Criterion of that layout.
+    kind : str
+    d : float or None
+        Spacing (m) for the scaled kinds; None for ``"free"``.
+    nfev : int
+        Criterion evaluations.
+    """
+
+    stations: np.ndarray
+    value: float
+    kind: str
+    d: float | None
+    nfev: int
+
+
+def _default_bounds(region):
+    """Horizontal box for free station positions: the region's x–y extent (x–z band: x range,
+    and y within half the x width of the band's y)."""
+    if region.kind == "xy":
+        return tuple(map(float, region.u)), tuple(map(float, region.v))
+    half = 0.5 * (region.u[1] - region.u[0])
+    return tuple(map(float, region.u)), (region.fixed - half, region.fixed + half)
+
+
+def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
+                    moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
+                    noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                    known=(), d_range=(2.0, 200.0), n_curve=25, x0=None, bounds=None,
+                    maxfev=400):
+    """Optimise an N-station layout for a region criterion.
+
+    Parameters
+    ----------
+    kind : {"line", "triangle", "square", "free"}
+        Scaled kinds optimise their one spacing d with :func:`best_spacing` (over ``d_range``,
+        ``n_curve``). ``"free"`` optimises the (x, y) of all N stations at depth h with
+        ``scipy.optimize.minimize(method="Powell")`` within ``bounds`` (derivative-free, so it
+        copes with the piecewise-constant ``"area_crlb"``).
+    n_stations : int
+        N, 1 … :data:`MAX_STATIONS`.
+    region : core.Plane
+        Surveillance region.
+    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
+        As for :func:`spacing_curve`.
+    d_range, n_curve
+        Scaled kinds, and the default start of ``"free"``; see :func:`best_spacing`.
+    x0 : array_like, shape (N, 2), optional
+        ``"free"``: starting (x, y) (m). Default: the best ``"square"`` lattice (so the free
+        result is never worse than it), clipped into ``bounds``.
+    bounds : ((xmin, xmax), (ymin, ymax)), optional
+        ``"free"``: box for every station (m). Default: the region's horizontal extent (for an
+        x–z band, y within half the band's x width of its y).
+    maxfev : int
+        ``"free"``: budget of criterion evaluations for Powell, ≥ 1.
+
+    Returns
+    -------
+    LayoutResult
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9)
+    >>> r = core.optimise_layout("triangle", 3, region, d_range=(5, 300), n_curve=5)
+    >>> r.stations.shape
+    (3, 3)
+    """
+    if kind not in LAYOUTS:
+        raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
+    common = dict(h=h, velocity=velocity, moments=moments, criterion=criterion,
+                  threshold=threshold, noise=noise, steps=steps, T=T, sigma=sigma, model=model,
+                  known=known)
+    n = _n_stations(n_stations)
+    if kind != "free":
+        r = best_spacing(region, d_range=d_range, n_curve=n_curve, kind=kind, n_stations=n,
+                         **common)
+        return LayoutResult(station_layout(kind, n, d=r.d, h=h), r.value, kind, r.d, r.nfev)
+    if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
+        raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
+    (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
+        _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
+    if not (xlo < xhi and ylo < yhi):
+        raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
+    nfev = 0
+    if x0 is None:
+        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve, **common)
+        xy, nfev = start.stations[:, :2], start.nfev
+    else:
+        xy = validation._array("x0", x0)
+        if xy.shape != (n, 2) or not np.all(np.isfinite(xy)):
+            raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
+                             f"got shape {xy.shape}")
+    xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
+    threshold = _check_criterion(criterion, threshold)
+    noise = validation.positive("noise", noise, "V/m")
+    states = _region_states(region, velocity, moments)
+    station_layout("line", 1, h=h)  # validates h
+
+    def objective(p):
+        st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
+        return -_criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
+                           known).value
+
+    res = optimize.minimize(objective, xy.ravel(), method="Powell",
+                            bounds=[(xlo, xhi), (ylo, yhi)] * n,
+                            options={"maxfev": int(maxfev), "xtol": 1e-2, "ftol": 1e-6})
+    p = res.x if res.fun <= objective(xy.ravel()) else xy.ravel()
+    value = -objective(p)
+    st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
+    return LayoutResult(st, float(value), kind, None, int(nfev + res.nfev + 2))
