@@ -123,7 +123,7 @@ def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model, nbuf, dndr, dndf, 
         jac[i, 6] = dndf[i, 2] * inv5  # dE/dPv
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, nogil=True)
 def _field_and_jacobian_kernel(states, stations, kappa, model, e_out, j_out):
     # states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7)
     npts = states.shape[0]

@@ -69,7 +69,7 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf
     return True
 
 
-@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
 def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
     """Γ for every state: states (P, 7) -> out (P, n_rows, n_free) (NaN on stations)."""
     npts = states.shape[0]
@@ -154,7 +154,7 @@ def _lu_abs_det(a):
     return det
 
 
-@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
 def square_measures(states, stations, step, kappa, model, free, log_det, log_eta):
     """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point (NaN on
     stations)."""
@@ -208,7 +208,7 @@ def _householder_r(g, rdiag):
                 g[r, j] -= t * g[r, k]
 
 
-@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
 def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                     log_eta, log_norm_sum, inv_diag):
     """All-rows Γ (n_rows × n_free) reduced through its QR factorisation.
@@ -274,7 +274,7 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                 inv_diag[p, i] = acc / 10.0 ** (2.0 * lognorm[i])
 
 
-@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
 def grid_states(template, u, v, v_index, out):
     """States on a plane: out[i, j] = template with x = u[j] and state[v_index] = v[i]."""
     for i in nb.prange(v.shape[0]):

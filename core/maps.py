@@ -18,10 +18,10 @@ __all__ = ["MEASURES", "MapResult", "evaluate_map", "log10_positive_difference",
 
 #: Measure name -> (label, unit, paper rule?).
 MEASURES = {
-    "log10_det": ("log10 |det Γ| (paper rule)", "log10 of Γ's units", True),
-    "log10_eta": ("observability index log10 η", "dimensionless", True),
-    "d_optimal": ("D-optimal ½·log10 det F", "log10 of F's units", False),
-    "crlb_position": ("CRLB position error (1σ)", "m", False),
+    "log10_det": ("log10|det Γ|", "Γ in (V/m) per state unit", True),
+    "log10_eta": ("log10 η (observability index)", "dimensionless", True),
+    "d_optimal": ("½·log10 det F (D-optimal)", "F in 1/state unit²", False),
+    "crlb_position": ("CRLB position error (1σ, m)", "m", False),
 }
 CHUNK_POINTS = 1 << 16
 

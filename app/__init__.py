@@ -1,0 +1,1 @@
+"""The Panel dashboard. ``panel serve app`` runs :mod:`app.main`."""

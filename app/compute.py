@@ -1,0 +1,174 @@
+"""From a Scenario to the numbers on screen: two maps (A, B), their difference, and notes.
+
+Pure functions of a :class:`Snapshot` (the scenario's values, frozen and hashable), plus a small
+per-session cache so that three views of one scenario compute it once.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+
+import core
+
+from .scenario import ACCEPTED, COMPARISONS, DIFFERENCES, MEASURE_LABELS, Scenario
+
+#: Numba's fallback threading layer (workqueue) must not be entered from two threads at once,
+#: and one map already keeps both cores busy: kernels run one at a time. A map takes tens of ms,
+#: so no session waits longer than one map for another (issue: server never blocks a session).
+_KERNEL_LOCK = threading.Lock()
+
+#: Values that define the maps; everything else in Scenario is presentation.
+FIELDS = tuple(sorted(set(ACCEPTED) | {"plane", "layout", "comparison", "difference", "measure",
+                                        "model", "state_set"}))
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The scenario's values as a hashable tuple of (name, value) pairs."""
+
+    items: tuple
+
+    @classmethod
+    def of(cls, scenario: Scenario):
+        return cls(tuple((name, getattr(scenario, name)) for name in FIELDS))
+
+    def scenario(self):
+        """A detached Scenario with these values (for the helpers that build core inputs)."""
+        return Scenario(**dict(self.items))
+
+
+@dataclass(frozen=True)
+class Panels:
+    """Everything the three maps need."""
+
+    plane: core.Plane
+    a: core.MapResult
+    b: core.MapResult
+    diff: np.ndarray
+    titles: tuple  # (A, B, difference)
+    stations: tuple  # ((S_a, 3), (S_b, 3)) arrays, m
+    measure: str  # core measure key
+    value_label: str
+    value_unit: str
+    diff_label: str
+    clim: tuple  # shared colour range of A and B
+    note: str  # plain text; empty if every point is observable
+
+
+def scenarios_ab(s: Scenario):
+    """(stations, moments, title) for A and B under the chosen comparison."""
+    single, dual = core.single_station(s.h), core.dual_station(s.h, s.d)
+    layout = single if s.layout == "single" else dual
+    lname = "single" if s.layout == "single" else f"dual d = {s.d:g} m"
+    mom = (s.Ph, s.Pv)
+    kind = COMPARISONS[s.comparison]
+    if kind == "dual_vs_single":
+        return ((single, mom, "A: single station"), (dual, mom, f"B: dual, d = {s.d:g} m"))
+    if kind == "moments_scaled":
+        return ((layout, mom, f"A: {lname}, P = ({s.Ph:g}, {s.Pv:g}) A·m"),
+                (layout, (s.k * s.Ph, s.k * s.Pv), f"B: {lname}, moments × {s.k:g}"))
+    if kind == "moment_split":
+        return ((layout, mom, f"A: {lname}, P = ({s.Ph:g}, {s.Pv:g}) A·m"),
+                (layout, (s.Ph_b, s.Pv_b), f"B: {lname}, P = ({s.Ph_b:g}, {s.Pv_b:g}) A·m"))
+    ref = core.dual_station(s.h, s.d_ref)
+    return ((ref, mom, f"A: dual, d = {s.d_ref:g} m"), (dual, mom, f"B: dual, d = {s.d:g} m"))
+
+
+def difference(a, b, measure, mode):
+    """B compared with A: (values, label). Never subtracts determinants (spec §5)."""
+    if measure == "crlb_position":
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = np.log10(b.value / a.value)
+        return np.where(np.isfinite(out), out, np.nan), "log10(σ_B / σ_A) (< 0: B locates better)"
+    if DIFFERENCES[mode] == "paper" and measure in ("log10_det", "d_optimal"):
+        return core.log10_positive_difference(b.value, a.value), "log10(|B| − |A|), blank where ≤ 0"
+    return core.log10_ratio(b.value, a.value), "log10(B / A) (signed log-ratio)"
+
+
+def _shared_clim(*maps):
+    vals = np.concatenate([m.value[np.isfinite(m.value)] for m in maps])
+    if vals.size == 0:
+        return (0.0, 1.0)
+    lo, hi = np.percentile(vals, [0.5, 99.5])  # a station's singular neighbourhood must not wash out the rest
+    return (float(lo), float(hi if hi > lo else lo + 1.0))
+
+
+def unobservable_note(s: Scenario, results, stations):
+    """Plain-text explanation where a map is mostly structurally unobservable, else ''."""
+    lines = []
+    for (name, res), st in zip(results, stations):
+        frac = 1.0 - res.observable.mean()
+        if frac < 0.5:
+            continue
+        if len(st) == 1 and not s.core_options()["known"]:
+            sx, sy, sz = st[0]
+            probe = np.array([sx + s.extent / 3, sy + s.extent / 3, s.z if s.plane == "x–y" else
+                              0.5 * (s.z_min + s.z_max), *s.velocity(), s.Ph, s.Pv])
+            n = core.unobservable_direction(probe, st, T=s.T, sigma=s.sigma,
+                                            model=s.core_options()["model"])
+            nice = ", ".join(f"{v:+.3f}" for v in n)
+            lines.append(
+                f"{name}: one station, source strength unknown: rank Γ = 6 < 7 at every point "
+                f"({frac:.0%} of the map flagged). The field is homogeneous: moving the target λ "
+                f"times farther (and faster) with moments × λ³ changes no measurement, so range and "
+                f"source strength cannot be told apart. The colours there are float64 round-off "
+                f"(|det Γ| ≈ 1e-20 × Π‖Γ_j‖), not observability. Unobservable direction at "
+                f"({probe[0]:.0f}, {probe[1]:.0f}, {probe[2]:.0f}) m: n ∝ (x−sx, y−sy, z−sz, vx, vy, "
+                f"3Ph, 3Pv) = ({nice}). Use 'moments known' or a second station."
+            )
+        else:
+            lines.append(f"{name}: {frac:.0%} of the map is numerically singular (η < {core.ETA_TOL:g}).")
+    return "\n".join(lines)
+
+
+def compute(snapshot: Snapshot) -> Panels:
+    """The maps for one scenario. Pure: same snapshot, same numbers."""
+    s = snapshot.scenario()
+    opts = s.core_options()
+    measure = opts.pop("measure")
+    plane = s.core_plane()
+    (st_a, mom_a, title_a), (st_b, mom_b, title_b) = scenarios_ab(s)
+    vel = s.velocity()
+    with _KERNEL_LOCK:
+        a = core.evaluate_map(plane, st_a, velocity=vel, moments=mom_a, measure=measure, **opts)
+        b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure, **opts)
+    diff, diff_label = difference(a, b, measure, s.difference)
+    label, unit, _ = core.MEASURES[measure]
+    note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b))
+    return Panels(
+        plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_label),
+        stations=(st_a, st_b), measure=measure, value_label=label, value_unit=unit,
+        diff_label=diff_label, clim=_shared_clim(a, b), note=note,
+    )
+
+
+class PanelCache:
+    """A few recent :func:`compute` results for one session (freed with the session)."""
+
+    def __init__(self, size=4):
+        self.size = size
+        self._store = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, snapshot: Snapshot) -> Panels:
+        with self._lock:
+            if snapshot in self._store:
+                self._store.move_to_end(snapshot)
+                return self._store[snapshot]
+        result = compute(snapshot)
+        with self._lock:
+            self._store[snapshot] = result
+            while len(self._store) > self.size:
+                self._store.popitem(last=False)
+        return result
+
+    def clear(self):
+        with self._lock:
+            self._store.clear()
+
+
+__all__ = ["FIELDS", "MEASURE_LABELS", "PanelCache", "Panels", "Snapshot", "compute", "difference"]

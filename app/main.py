@@ -1,0 +1,8 @@
+"""Entry point for ``panel serve app``: build the page and serve it."""
+
+import panel as pn
+
+from app.dashboard import create_app
+
+pn.extension(throttled=True, loading_indicator=True, notifications=False)
+create_app().servable(title="Dipole observability explorer")

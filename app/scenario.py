@@ -1,0 +1,176 @@
+"""The dashboard's whole state: one param class, no Panel import.
+
+Numeric parameters carry only *soft* bounds (the slider range): a value typed outside them is
+still offered to :class:`Scenario`, which checks it against :data:`ACCEPTED` (what the core and a
+sane grid accept), restores the last good value and says why in :attr:`Scenario.message`. So a
+bad value never reaches the core, never raises in the server, and the last good maps stay.
+"""
+
+from __future__ import annotations
+
+import math
+
+import param
+
+import core
+
+#: Hard limits: name -> (lowest, highest, unit). Enforced by Scenario; sliders span less.
+ACCEPTED = {
+    "Ph": (0.0, 1e5, "A·m"),
+    "Pv": (0.0, 1e5, "A·m"),
+    "Ph_b": (0.0, 1e5, "A·m"),
+    "Pv_b": (0.0, 1e5, "A·m"),
+    "k": (1e-3, 1e3, ""),
+    "h": (-5000.0, 5000.0, "m"),
+    "z": (-5000.0, 5000.0, "m"),
+    "y": (-5000.0, 5000.0, "m"),
+    "speed": (0.01, 100.0, "m/s"),
+    "heading": (-180.0, 180.0, "°"),
+    "d": (0.1, 5000.0, "m"),
+    "d_ref": (0.1, 5000.0, "m"),
+    "T": (1e-3, 1000.0, "s"),
+    "sigma": (1e-3, 100.0, "S/m"),
+    "noise": (1e-12, 1e-2, "V/m"),
+    "steps": (1, 20, "instants"),
+    "extent": (1.0, 10000.0, "m"),
+    "z_min": (-5000.0, 5000.0, "m"),
+    "z_max": (-5000.0, 5000.0, "m"),
+    "resolution": (20, 400, "points per axis"),
+}
+
+MEASURE_LABELS = {
+    "log10|det Γ| (paper)": "log10_det",
+    "Observability index log10 η": "log10_eta",
+    "D-optimal ½·log10 det F": "d_optimal",
+    "CRLB position error (m)": "crlb_position",
+}
+COMPARISONS = {
+    "Dual − single (Fig. 5)": "dual_vs_single",
+    "Moments ×k − original (Fig. 3)": "moments_scaled",
+    "Moment split B − A (Fig. 4)": "moment_split",
+    "Spacing d − reference d (Fig. 6)": "spacing",
+}
+DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
+MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
+STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
+
+_COMMON = dict(Ph=100.0, Pv=20.0, h=100.0, z=120.0, speed=2.0 * math.sqrt(2.0), heading=45.0,
+               T=1.0, plane="x–y", extent=300.0, measure="log10|det Γ| (paper)")
+#: The paper's figures (spec §5) as parameter sets.
+PRESETS = {
+    "Fig. 1": dict(_COMMON, layout="single", comparison="Dual − single (Fig. 5)", d=15.0),
+    "Fig. 2": dict(_COMMON, plane="x–z", y=50.0, z_min=100.0, z_max=400.0, layout="single",
+                   comparison="Moment split B − A (Fig. 4)", Ph_b=100.0, Pv_b=100.0),
+    "Fig. 3": dict(_COMMON, layout="single", comparison="Moments ×k − original (Fig. 3)", k=10.0),
+    "Fig. 4": dict(_COMMON, layout="single", comparison="Moment split B − A (Fig. 4)",
+                   Ph=100.0, Pv=0.0, Ph_b=70.7, Pv_b=70.7),
+    "Fig. 5": dict(_COMMON, layout="dual", comparison="Dual − single (Fig. 5)", d=15.0),
+    "Fig. 6": dict(_COMMON, layout="dual", comparison="Spacing d − reference d (Fig. 6)",
+                   d=50.0, d_ref=10.0),
+}
+
+
+def _num(default, soft, label, doc, **kw):
+    return param.Number(default, softbounds=soft, label=label, doc=doc, **kw)
+
+
+class Scenario(param.Parameterized):
+    """Everything a view needs to draw the maps."""
+
+    # -- target and sources
+    Ph = _num(100.0, (0, 1000), "P_h (A·m)", "Horizontal dipole moment of the target, A·m.")
+    Pv = _num(20.0, (0, 1000), "P_v (A·m)", "Vertical dipole moment of the target, A·m.")
+    speed = _num(2.0 * math.sqrt(2.0), (0.1, 20), "Speed (m/s)", "Target speed, m/s (> 0).")
+    heading = _num(45.0, (-180, 180), "Heading (°)",
+                   "Course over ground, degrees from +x towards +y; the horizontal dipole points along it.")
+    # -- geometry
+    plane = param.Selector(objects=["x–y", "x–z"], default="x–y", label="Map plane",
+                           doc="x–y: horizontal plane at target depth z. x–z: vertical plane at fixed y.")
+    z = _num(120.0, (0, 1000), "Target depth z (m)", "Target depth for the x–y plane, m (same axis as h).")
+    y = _num(50.0, (-500, 500), "Fixed y (m)", "y of the x–z plane, m.")
+    h = _num(100.0, (0, 1000), "Station depth h (m)", "Depth of every station, m.")
+    d = _num(15.0, (0.5, 300), "Station spacing d (m)", "Station 2 sits at (d, 0, h); station 1 at (0, 0, h).")
+    layout = param.Selector(objects=["single", "dual"], default="dual", label="Layout for Figs. 3–4",
+                            doc="Station layout used by the moment comparisons.")
+    # -- comparison
+    comparison = param.Selector(objects=list(COMPARISONS), default="Dual − single (Fig. 5)", label="Compare",
+                                doc="Which two scenarios the maps A and B and their difference show.")
+    k = _num(10.0, (0.1, 100), "Moment factor k", "Fig. 3: B has both moments × k.")
+    Ph_b = _num(70.7, (0, 1000), "B: P_h (A·m)", "Fig. 4: horizontal moment of scenario B, A·m.")
+    Pv_b = _num(70.7, (0, 1000), "B: P_v (A·m)", "Fig. 4: vertical moment of scenario B, A·m.")
+    d_ref = _num(10.0, (0.5, 300), "Reference spacing (m)", "Fig. 6: spacing of scenario A, m.")
+    difference = param.Selector(objects=list(DIFFERENCES), default="log10 Δ|det| (paper, Δ ≤ 0 blank)",
+                                label="Difference map", doc="How B is compared with A.")
+    measure = param.Selector(objects=list(MEASURE_LABELS), default="log10|det Γ| (paper)", label="Measure",
+                             doc="What the maps show.")
+    # -- advanced
+    T = _num(1.0, (0.1, 10), "Sample interval T (s)", "Time between measurements, s.")
+    sigma = _num(4.0, (0.1, 10), "Conductivity σ (S/m)", "Sea conductivity, S/m; shifts log10|det Γ| only.")
+    noise = _num(1e-7, (1e-9, 1e-5), "Sensor noise (V/m)", "Noise standard deviation per component, V/m.")
+    steps = param.Integer(3, softbounds=(1, 10), label="Instants N (Fisher)",
+                          doc="Number of instants for the Fisher measures.")
+    model = param.Selector(objects=list(MODELS), default="exact dipole", label="Field model",
+                           doc="'paper' reproduces the printed equations, which are not a dipole field.")
+    state_set = param.Selector(objects=list(STATE_SETS), default="all 7 unknown", label="Unknown states",
+                               doc="Treat the moments as known to make one station observable.")
+    extent = _num(300.0, (10, 2000), "Half-width of x (and y) (m)", "Maps span ±extent in x (and y), m.")
+    z_min = _num(100.0, (0, 1000), "x–z plane: z from (m)", "Shallowest target depth of the x–z plane, m.")
+    z_max = _num(400.0, (0, 2000), "x–z plane: z to (m)", "Deepest target depth of the x–z plane, m.")
+    resolution = param.Integer(200, softbounds=(20, 400), label="Grid points per axis",
+                               doc="Map resolution; at most 400 per axis.")
+    # -- feedback
+    message = param.String("", doc="Why the last input was refused (plain text).")
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self._restoring = False
+        self.param.watch(self._check, list(ACCEPTED))
+
+    def _check(self, *events):
+        """Restore the last good value of any parameter set outside ACCEPTED, and say so."""
+        if self._restoring:
+            return
+        notes = [p for p in (self.problem(ev.name, ev.new) for ev in events) if p]
+        if not notes and self.z_min >= self.z_max:
+            notes.append("x–z plane: 'z to' must be deeper than 'z from'")
+        if not notes:
+            self.message = ""
+            return
+        self._restoring = True
+        try:
+            self.param.update({ev.name: ev.old for ev in events})
+        finally:
+            self._restoring = False
+        self.message = "; ".join(notes) + ". Kept the last good value."
+
+    @staticmethod
+    def problem(name, value):
+        """None if ``value`` is acceptable for ``name``, else a plain-text reason."""
+        lo, hi, unit = ACCEPTED[name]
+        label = Scenario.param[name].label
+        is_int = isinstance(Scenario.param[name], param.Integer)
+        ok_type = isinstance(value, int) if is_int else isinstance(value, (int, float))
+        if isinstance(value, bool) or not ok_type or not math.isfinite(value):
+            kind = "a whole number" if is_int else "a number"
+            return f"{label} must be {kind}; got {str(value)[:40]!r}"
+        if not lo <= value <= hi:
+            return f"{label} = {value:g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
+        return None
+
+    def apply_preset(self, name):
+        """Set the parameters of one of the paper's figures (:data:`PRESETS`)."""
+        self.param.update(PRESETS[name])
+
+    # -- what the core needs
+    def core_plane(self):
+        n = int(self.resolution)
+        if self.plane == "x–y":
+            return core.Plane("xy", (-self.extent, self.extent), (-self.extent, self.extent), self.z, n)
+        return core.Plane("xz", (-self.extent, self.extent), (self.z_min, self.z_max), self.y, n)
+
+    def velocity(self):
+        return core.velocity_from_heading(self.speed, self.heading)
+
+    def core_options(self):
+        return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
+                    noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure])
