@@ -201,9 +201,9 @@ def _errors_from_cov(states, cov, observable):
     for arr in (semi_major, semi_minor, sigma_z, sigma_speed, position):
         arr[bad] = np.inf
     orient[bad] = np.nan
-    return dict(semi_major=semi_major, semi_minor=semi_minor, orientation=orient,
-                sigma_z=sigma_z, sigma_speed=sigma_speed, position=position,
-                observable=observable.copy())
+    return {"semi_major": semi_major, "semi_minor": semi_minor, "orientation": orient,
+            "sigma_z": sigma_z, "sigma_speed": sigma_speed, "position": position,
+            "observable": observable.copy()}
 
 
 def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
@@ -249,8 +249,9 @@ def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEF
 
 
 def _plane_states(plane, velocity, moments):
-    if not isinstance(plane, Plane):
-        raise ValueError(f"plane must be a core.Plane; got {type(plane).__name__}")
+    if not isinstance(plane, Plane):  # ValueError for all bad input, as core does
+        raise ValueError(  # noqa: TRY004
+            f"plane must be a core.Plane; got {type(plane).__name__}")
     template, _ = validation.states([0.0, 0.0, 0.0, *_pair("velocity", velocity),
                                      *_pair("moments", moments)])  # checks speed > 0
     return plane.states(template[0, 3:5], template[0, 5:7]).reshape(-1, 7)
@@ -310,8 +311,8 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=
         idx = ok[c0:c0 + chunk]
         e = horizontal_error_ellipse(states[idx], stations, noise=noise, steps=steps, T=T,
                                      sigma=sigma, model=model, known=known)
-        for k in out:
-            out[k][idx] = getattr(e, k)
+        for k, arr in out.items():
+            arr[idx] = getattr(e, k)
     n = plane.n
     return CrlbErrors(**{k: v.reshape(n, n) for k, v in out.items()})
 
@@ -424,7 +425,7 @@ def _check_criterion(criterion, threshold):
 
 def _region_states(region, velocity, moments):
     if not isinstance(region, Plane):
-        raise ValueError(
+        raise ValueError(  # noqa: TRY004
             "region must be a core.Plane (an x–y rectangle at a target depth, or an x–z band of "
             f"depths); got {type(region).__name__}"
         )
@@ -735,9 +736,9 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     """
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
-    common = dict(h=h, velocity=velocity, moments=moments, criterion=criterion,
-                  threshold=threshold, noise=noise, steps=steps, T=T, sigma=sigma, model=model,
-                  known=known)
+    common = {"h": h, "velocity": velocity, "moments": moments, "criterion": criterion,
+              "threshold": threshold, "noise": noise, "steps": steps, "T": T, "sigma": sigma,
+              "model": model, "known": known}
     n = _n_stations(n_stations)
     if kind != "free":
         r = best_spacing(region, d_range=d_range, n_curve=n_curve, kind=kind, n_stations=n,

@@ -124,17 +124,17 @@ def parse_region(text):
 
 def scenario(params):
     """Target state (7,) and Γ options from a full parameter dict (see :data:`PARAMETERS`)."""
-    import core  # noqa: PLC0415 (workers import core lazily, after pinning numba's threads)
+    import core
 
     ph = params["Ph"] if params.get("ratio") is None else params["ratio"] * params["Pv"]
     vx, vy = core.velocity_from_heading(params["speed"], params["heading"])
     state = np.array([params["x"], params["y"], params["z"], vx, vy, ph, params["Pv"]])
-    return state, dict(T=params["T"], sigma=params["sigma"])
+    return state, {"T": params["T"], "sigma": params["sigma"]}
 
 
 def evaluate(params, settings):
     """The measure for one cell; raises ValueError on invalid parameters (e.g. d ≤ 0)."""
-    import core  # noqa: PLC0415
+    import core
 
     state, opts = scenario(params)
     stations = core.station_layout(settings["layout"], settings["stations"], d=params["d"],
@@ -177,14 +177,14 @@ def _row(base, xname, xvals, yname, yval, settings):
 
 def _init_worker():
     """One numba thread per worker process: the pool supplies the parallelism."""
-    import numba  # noqa: PLC0415
+    import numba
 
     numba.set_num_threads(1)
 
 
 def run(xaxis, yaxis, settings, base, workers=2, progress=True):
     """Evaluate the grid; returns values (len(y), len(x)). Rows run in ``workers`` processes."""
-    from tqdm import tqdm  # noqa: PLC0415
+    from tqdm import tqdm
 
     (xname, xvals), (yname, yvals) = xaxis, yaxis
     values = np.full((yvals.size, xvals.size), np.nan)
@@ -225,10 +225,10 @@ def _axis_label(name):
 
 def write_heatmap(path, xname, xvals, yname, yvals, measure, values, title):
     """Heatmap PNG (matplotlib Agg); non-finite cells grey."""
-    import matplotlib  # noqa: PLC0415
+    import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
+    import matplotlib.pyplot as plt
 
     label, unit, _ = SWEEP_MEASURES[measure]
     fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
@@ -298,9 +298,9 @@ def main(argv=None):
                                  f"got {np.asarray(vals).min():g}")
         if args.workers < 1:
             raise ValueError(f"--workers must be ≥ 1; got {args.workers}")
-        settings = dict(measure=args.measure, layout=args.layout, stations=args.stations,
-                        model=args.model, steps=args.steps, region=parse_region(args.region),
-                        threshold=args.threshold)
+        settings = {"measure": args.measure, "layout": args.layout, "stations": args.stations,
+                    "model": args.model, "steps": args.steps,
+                    "region": parse_region(args.region), "threshold": args.threshold}
         # Check one cell here, so that bad input fails fast with its message, not in a worker.
         evaluate(dict(base, **{xaxis[0]: xaxis[1][0], yaxis[0]: yaxis[1][0]}), settings)
     except ValueError as exc:

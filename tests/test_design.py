@@ -224,8 +224,8 @@ def test_optimise_layout_scaled_and_free():
     free = core.optimise_layout("free", 3, small, d_range=(5, 300), n_curve=7, maxfev=150)
     assert free.stations.shape == (3, 3) and np.all(free.stations[:, 2] == 100)
     assert np.all(np.abs(free.stations[:, :2]) <= 200)
-    tri_start = core.optimise_layout("square", 3, small, d_range=(5, 300), n_curve=7)
-    assert free.value >= tri_start.value - 1e-12  # never worse than its start
+    square_start = core.optimise_layout("square", 3, small, d_range=(5, 300), n_curve=7)
+    assert free.value >= square_start.value - 1e-12  # never worse than its start
     np.testing.assert_allclose(free.value, core.layout_criterion(free.stations, small).value)
 
 
@@ -233,7 +233,8 @@ def test_sweep_cli_writes_csv_and_png(tmp_path):
     out = tmp_path / "sweep"
     cmd = [sys.executable, "-m", "core.sweep", "--x", "d=5:45:3", "--y", "z=110,200",
            "--measure", "d_optimal", "--out", str(out), "--workers", "2", "--no-progress"]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120,
+                          check=False)
     assert done.returncode == 0, done.stderr
     with open(out / "sweep.csv") as fh:
         rows = list(csv.reader(fh))
@@ -248,5 +249,5 @@ def test_sweep_cli_writes_csv_and_png(tmp_path):
         np.testing.assert_allclose(value, expect, rtol=1e-12)
     assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     bad = subprocess.run([sys.executable, "-m", "core.sweep", "--x", "d=0:5:2", "--y", "z=1,2",
-                          "--out", str(out)], capture_output=True, text=True, timeout=60)
+                          "--out", str(out)], capture_output=True, text=True, timeout=60, check=False)
     assert bad.returncode == 2 and "d must be > 0" in bad.stderr
