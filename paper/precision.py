@@ -1,0 +1,118 @@
+"""High-precision evidence that the single-station determinant is round-off (spec §4).
+
+Γ is rebuilt here independently of :mod:`core`'s kernels: the field formulas of spec §2 written
+in sympy (copied from the test suite's reference, which this package must not import),
+differentiated symbolically and evaluated with mpmath at any number of digits.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import mpmath as mp
+import numpy as np
+import sympy as sp
+
+import core
+
+from . import scenarios as sc
+
+X = sp.symbols("x y z vx vy Ph Pv", real=True)
+S = sp.symbols("sx sy sz", real=True)
+SIGMA = sp.Symbol("sigma", positive=True)
+#: Working precisions (significant digits) of the evidence table.
+DIGITS = (50, 100)
+#: Fig. 1 points (x, y) in m at z = 120 m.
+POINTS = ((30.0, 40.0), (0.0, 0.0), (-150.0, 100.0), (300.0, 300.0))
+
+
+def field_expressions(model):
+    """(Ex, Ey, Ez) at station S for state X as sympy expressions (spec §2)."""
+    x, y, z, vx, vy, ph, pv = X
+    theta = sp.atan2(vy, vx)
+    k = 1 / (4 * sp.pi * SIGMA)
+    if model == "exact":
+        R = sp.Matrix([S[0] - x, S[1] - y, S[2] - z])  # station − target
+        D = sp.sqrt(R.dot(R))
+        p = sp.Matrix([ph * sp.cos(theta), ph * sp.sin(theta), pv])
+        return tuple(k * (3 * p.dot(R) * R / D**5 - p / D**3))
+    a, b, c = x - S[0], y - S[1], z - S[2]  # eqs. (10)–(12) as printed
+    D = sp.sqrt(a**2 + b**2 + c**2)
+    ct, st = sp.cos(theta), sp.sin(theta)
+    ex = k * (ph * ct * (3 * a**2 - D**2) / D**5 - ph * st * 3 * a * b / D**5 + pv * 3 * a * c / D**5)
+    ey = k * (ph * st * (3 * a**2 - D**2) / D**5 + ph * ct * 3 * a * b / D**5 + pv * 3 * b * c / D**5)
+    ez = k * (ph * 3 * a * c / D**5 + pv * (3 * c**2 - D**2) / D**5)
+    return ex, ey, ez
+
+
+@functools.lru_cache(maxsize=None)
+def _jacobian_function(model):
+    jac = sp.Matrix(field_expressions(model)).jacobian(sp.Matrix(X))
+    return sp.lambdify((*X, *S, SIGMA), jac.tolist(), "mpmath")
+
+
+def gamma_mp(state, stations, model, digits):
+    """Paper-rule Γ (7 × 7) as an mpmath matrix at ``digits`` significant digits."""
+    jfun = _jacobian_function(model)
+    with mp.workdps(digits):
+        st = [mp.mpf(repr(float(v))) for v in state]
+        rows = []
+        for i in range(-(-7 // (3 * len(stations)))):
+            phi = mp.eye(7)
+            phi[0, 3] = phi[1, 4] = i * sc.T
+            moved = phi * mp.matrix(st)
+            for s in stations:
+                jac = mp.matrix(jfun(*moved, *[mp.mpf(repr(float(c))) for c in s], mp.mpf(sc.SIGMA)))
+                block = jac * phi
+                rows.extend([[block[r, c] for c in range(7)] for r in range(3)])
+        return mp.matrix(rows[:7])
+
+
+def _log10_det_and_eta(g, digits):
+    with mp.workdps(digits):
+        det = mp.det(g)
+        norms = mp.fprod(mp.norm(g[:, j]) for j in range(g.cols))
+        if det == 0:
+            return float("-inf"), float("-inf")
+        return float(mp.log10(abs(det))), float(mp.log10(abs(det) / norms))
+
+
+def null_vector(state, station):
+    """The spec §4 null direction n = (x − sx, y − sy, z − sz, vx, vy, 3 Ph, 3 Pv)."""
+    x = np.asarray(state, dtype=float)
+    return np.r_[x[:3] - np.asarray(station, dtype=float), x[3:5], 3 * x[5:7]]
+
+
+def evidence(model, points=POINTS):
+    """Rows of the round-off table for one model.
+
+    For each Fig. 1 point: float64 log10|det Γ| and log10 η (core), the same at each of
+    :data:`DIGITS` (mpmath), the dual (d = 15 m) log10 η in float64 and at DIGITS[0] for
+    contrast, the relative null residual ‖Γ n‖ / Σ‖Γ_j‖|n_j| in float64 and at DIGITS[0],
+    and |cos| between n and core.unobservable_direction.
+    """
+    single, dual = sc.stations(), sc.stations(sc.DUAL_D)
+    kw = dict(T=sc.T, sigma=sc.SIGMA, model=model)
+    rows = []
+    for x, y in points:
+        state = np.array([x, y, sc.Z, *sc.VELOCITY, sc.PH, sc.PV])
+        row = {"x": x, "y": y,
+               "f64_log10_det": float(core.log10_abs_det_gamma(state, single, **kw)),
+               "f64_log10_eta": float(core.observability_index(state, single, **kw)),
+               "dual_f64_log10_eta": float(core.observability_index(state, dual, **kw))}
+        for dg in DIGITS:
+            row[f"mp{dg}_log10_det"], row[f"mp{dg}_log10_eta"] = _log10_det_and_eta(
+                gamma_mp(state, single, model, dg), dg)
+        row["dual_mp_log10_eta"] = _log10_det_and_eta(gamma_mp(state, dual, model, DIGITS[0]), DIGITS[0])[1]
+        n = null_vector(state, single[0])
+        g = core.gamma(state, single, **kw)
+        row["f64_null_residual"] = float(np.linalg.norm(g @ n) / np.sum(np.linalg.norm(g, axis=0) * np.abs(n)))
+        with mp.workdps(DIGITS[0]):
+            gm = gamma_mp(state, single, model, DIGITS[0])
+            nm = mp.matrix([mp.mpf(repr(float(v))) for v in n])
+            scale = mp.fsum(mp.norm(gm[:, j]) * abs(nm[j]) for j in range(7))
+            row["mp_null_residual"] = float(mp.norm(gm * nm) / scale)
+        u = core.unobservable_direction(state, single, **kw)
+        row["cos_core_direction"] = float(abs(u @ n) / np.linalg.norm(n))
+        rows.append(row)
+    return rows
