@@ -25,7 +25,7 @@ def _img(doc_dir, path, alt):
 
 
 def verdict_table(claim_list):
-    head = "| Claim | " + " | ".join(cl.METHOD_TITLES[m] for m in cl.METHODS) + " |\n"
+    head = "| Claim | " + " | ".join(cl.METHOD_TITLES[m].replace("|", "\\|") for m in cl.METHODS) + " |\n"
     head += "|---" * (len(cl.METHODS) + 1) + "|\n"
     rows = []
     for c in claim_list:
@@ -111,7 +111,7 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
     fig_keys = {}
     for (model, key) in pngs:
         if model == sc.MODELS[0]:
-            fig_keys.setdefault(key.split("_")[0], []).append(key)
+            fig_keys.setdefault(key[:4], []).append(key)  # "fig4b_ratio" -> "fig4"
     titles = {"fig1": "Fig. 1", "fig2": "Fig. 2 (a: Ph > Pv, b: Ph = Pv)", "fig3": "Fig. 3", "fig4":
               "Fig. 4: (a) (70.7, 70.7) − (100, 0), (b) (0, 100) − (70.7, 70.7), (c) (0, 100) − (100, 0)",
               "fig5": "Fig. 5", "fig6": "Fig. 6"}
