@@ -43,6 +43,9 @@ def _widgets():
                                                 "z_min", "z_max")}
     spec.update(steps=dict(integer), resolution=dict(integer))
     spec["noise"] = {"type": pn.widgets.FloatInput, "format": "0.0e+0", "sizing_mode": "stretch_width"}
+    for name in Scenario.param:
+        if name not in ("name", "message"):  # stable hooks for the browser tests
+            spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
     return spec
 
 
@@ -98,15 +101,14 @@ def create_app():
                              visible=bool(text), sizing_mode="stretch_width")
 
     fix_buttons = pn.Row(
-        pn.widgets.Button(name="Treat moments as known (5 states)", button_type="warning",
-                          on_click=lambda e: setattr(scenario, "state_set", "moments known (5 states)")),
+        pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
+                          on_click=lambda e: scenario.param.update(state_set="moments known (5 states)",
+                                                                   measure="D-optimal ½·log10 det F")),
         pn.widgets.Button(name="Show CRLB position error (m)", button_type="warning",
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
     plots = pn.pane.HoloViews(pn.bind(partial(maps, scenario, cache), scenario.param.plane),
                               sizing_mode="stretch_width", linked_axes=True)
-    busy = pn.indicators.LoadingSpinner(value=pn.state.param.busy, size=28, color="light",
-                                        bgcolor="dark")
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario)"), presets,
@@ -115,7 +117,6 @@ def create_app():
         main=[pn.Column(plots, pn.bind(note, *[scenario.param[f] for f in FIELDS]), fix_buttons,
                         pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                         sizing_mode="stretch_width")],
-        header=[busy],
         sidebar_width=360,
         header_background="#1f5f8b",
     )

@@ -34,11 +34,11 @@ def map_image(values, plane, vdim):
 
 
 def veil(observable, plane):
-    """Grey overlay where Γ is structurally rank-deficient (NaN elsewhere, so transparent)."""
-    mask = np.where(observable, np.nan, 1.0)
+    """Grey overlay where Γ is structurally rank-deficient (fully transparent elsewhere)."""
+    mask = (~observable).astype(float)
     return hv.Image(np.flipud(mask), bounds=_bounds(plane), kdims=list(axes(plane)),
                     vdims=[hv.Dimension("unobservable", label="structurally unobservable")]).opts(
-        cmap=[VEIL], alpha=0.55, clipping_colors={"NaN": (0, 0, 0, 0)}, colorbar=False, tools=[])
+        cmap=["#ffffff00", VEIL], clim=(0, 1), alpha=0.55, colorbar=False, tools=[])
 
 
 def stations_points(stations, plane):

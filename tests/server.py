@@ -1,0 +1,53 @@
+"""Start `panel serve app` on a free loopback port for tests and benchmarks."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def served_app(*extra, port=None, timeout=120):
+    """Yield the base URL of a running dashboard; stop it afterwards."""
+    port = port or free_port()
+    cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address", "127.0.0.1",
+           "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness", "--num-threads", "4", *extra]
+    quiet = subprocess.DEVNULL if os.environ.get("QUIET_SERVER") else None
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=quiet, stderr=quiet)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.time() + timeout
+        while True:
+            if proc.poll() is not None:
+                raise RuntimeError(f"panel serve exited with {proc.returncode}")
+            try:
+                urllib.request.urlopen(url + "/liveness", timeout=2)
+                break
+            except OSError:
+                if time.time() > deadline:
+                    raise TimeoutError("the dashboard did not answer /liveness") from None
+                time.sleep(0.3)
+        yield url, proc
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()

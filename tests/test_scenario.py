@@ -1,0 +1,130 @@
+"""The dashboard's state and computations, without a browser."""
+
+import io
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from app import views
+from app.compute import PanelCache, Snapshot, compute
+from app.scenario import ACCEPTED, PRESETS, Scenario
+
+
+def test_presets_set_what_the_paper_says():
+    s = Scenario()
+    for name in PRESETS:
+        s.apply_preset(name)
+        # common parameters (spec §5)
+        assert (s.Ph, s.h, s.T) == (PRESETS[name]["Ph"], 100.0, 1.0)
+        vx, vy = s.velocity()
+        assert math.isclose(vx, 2.0) and math.isclose(vy, 2.0)
+        assert s.message == ""
+    s.apply_preset("Fig. 1")
+    assert (s.plane, s.z, s.layout, s.Pv, s.extent) == ("x–y", 120.0, "single", 20.0, 300.0)
+    s.apply_preset("Fig. 2")
+    assert (s.plane, s.y, s.z_min, s.z_max, s.Ph_b, s.Pv_b) == ("x–z", 50.0, 100.0, 400.0, 100.0, 100.0)
+    s.apply_preset("Fig. 3")
+    assert s.k == 10.0 and s.comparison.startswith("Moments ×k")
+    s.apply_preset("Fig. 4")
+    assert (s.Ph, s.Pv, s.Ph_b, s.Pv_b) == (100.0, 0.0, 70.7, 70.7)
+    s.apply_preset("Fig. 5")
+    assert s.comparison.startswith("Dual − single") and s.d == 15.0
+    s.apply_preset("Fig. 6")
+    assert (s.d, s.d_ref) == (50.0, 10.0)
+
+
+@pytest.mark.parametrize("name", sorted(ACCEPTED))
+def test_out_of_range_values_are_refused_with_a_message(name):
+    s = Scenario()
+    before = getattr(s, name)
+    lo, hi, _ = ACCEPTED[name]
+    for bad in (hi * 10 + 10, lo - abs(lo) - 10):
+        setattr(s, name, int(bad) if isinstance(before, int) else float(bad))
+        assert getattr(s, name) == before, "the last good value is kept"
+        assert "outside the accepted range" in s.message
+    if not isinstance(before, int):
+        setattr(s, name, float("nan"))
+        assert getattr(s, name) == before and "must be a number" in s.message
+    # a good value clears the message
+    setattr(s, name, before + 1 if before + 1 <= hi else before * 1.5)
+    assert s.message == ""
+
+
+def test_accepted_ranges_are_what_the_core_accepts():
+    # The lowest accepted speed, T, σ and noise must still be accepted by the core.
+    s = Scenario(speed=ACCEPTED["speed"][0], T=ACCEPTED["T"][0], sigma=ACCEPTED["sigma"][0],
+                 noise=ACCEPTED["noise"][0], resolution=ACCEPTED["resolution"][0])
+    p = compute(Snapshot.of(s))
+    assert np.isfinite(p.b.value).mean() > 0.99
+
+
+def test_depth_band_must_be_ordered():
+    s = Scenario()
+    s.z_max = 50.0  # shallower than z_min = 100
+    assert s.z_max == 400.0 and "deeper" in s.message
+
+
+def test_fig5_single_is_flagged_dual_is_observable():
+    s = Scenario(resolution=41)
+    s.apply_preset("Fig. 5")
+    p = compute(Snapshot.of(s))
+    assert not p.a.observable.any()
+    assert p.b.observable.mean() > 0.95
+    assert "rank Γ = 6" in p.note and "round-off" in p.note
+    # the one-click remedy: moments known and a measure that uses all rows
+    s.param.update(state_set="moments known (5 states)", measure="D-optimal ½·log10 det F")
+    p = compute(Snapshot.of(s))
+    assert p.a.observable.mean() > 0.95 and p.b.observable.mean() > 0.95 and p.note == ""
+    # the paper's square rule with known moments keeps only instant-k rows for two stations
+    s.measure = "log10|det Γ| (paper)"
+    assert "cannot see the speed" in compute(Snapshot.of(s)).note
+
+
+def test_moment_scaling_difference_is_five_decades_for_dual():
+    s = Scenario(resolution=21, layout="dual", comparison="Moments ×k − original (Fig. 3)", k=10.0,
+                 difference="Signed log-ratio")
+    p = compute(Snapshot.of(s))
+    finite = np.isfinite(p.diff)
+    np.testing.assert_allclose(p.diff[finite], 5.0, atol=1e-8)
+
+
+def test_cache_computes_once_per_scenario(monkeypatch):
+    calls = []
+    import app.compute as compute_module
+    real = compute_module.compute
+    monkeypatch.setattr(compute_module, "compute", lambda snap: calls.append(1) or real(snap))
+    cache = PanelCache(size=2)
+    s = Scenario(resolution=21)
+    for _ in range(3):
+        cache.get(Snapshot.of(s))
+    assert len(calls) == 1
+    s.Ph = 50.0
+    cache.get(Snapshot.of(s))
+    assert len(calls) == 2
+
+
+def test_downloads_carry_data_and_parameters():
+    s = Scenario(resolution=21)
+    p = compute(Snapshot.of(s))
+    params = dict(Snapshot.of(s).items)
+    ds = xr.open_dataset(views.to_netcdf(p, params), engine="h5netcdf")
+    np.testing.assert_array_equal(ds["B"].values, p.b.value)
+    assert ds.attrs["Ph"] == 100.0 and ds["x"].attrs["units"] == "m"
+    text = views.to_csv(p, params).read()
+    assert "# Ph = 100.0" in text
+    rows = [line for line in text.splitlines() if not line.startswith("#")]
+    assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y,x,")
+
+
+def test_views_build_for_every_measure_and_plane():
+    for plane in ("x–y", "x–z"):
+        for measure in Scenario.param.measure.objects:
+            s = Scenario(resolution=21, plane=plane, measure=measure)
+            p = compute(Snapshot.of(s))
+            for which in range(3):
+                overlay = views.map_panel(p, which)
+                img = overlay.get(0)
+                assert img.kdims[1].name == ("y" if plane == "x–y" else "z")
+                assert img.kdims[0].unit == "m"
