@@ -43,6 +43,13 @@ ENV HOME=/home/dipole \
     NUMBA_CACHE_DIR=/home/dipole/.cache/numba \
     BOKEH_ALLOW_WS_ORIGIN=localhost:5006,127.0.0.1:5006
 USER 10001:10001
+# Compile every numba kernel once at build time into NUMBA_CACHE_DIR, so that the first visitor
+# does not wait ~30 s for LLVM.
+RUN python -c "import core; p = core.Plane('xy', (-10, 10), (-10, 10), 120.0, 3); \
+[core.evaluate_map(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20), measure=m, model=f) \
+ for m in core.MEASURES for f in core.MODELS]; core.gamma([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]); \
+core.dipole_field([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]); \
+core.crlb_maps(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20))"
 
 EXPOSE 5006
 HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \

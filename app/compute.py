@@ -14,16 +14,25 @@ import numpy as np
 
 import core
 
-from .scenario import ACCEPTED, COMPARISONS, DIFFERENCES, MEASURE_LABELS, Scenario
+from .scenario import ACCEPTED, COMPARISONS, CRITERIA, DIFFERENCES, MAX_STATIONS, Scenario
 
 #: Numba's fallback threading layer (workqueue) must not be entered from two threads at once,
 #: and one map already keeps both cores busy: kernels run one at a time. A map takes tens of ms,
 #: so no session waits longer than one map for another (issue: server never blocks a session).
 _KERNEL_LOCK = threading.Lock()
 
-#: Values that define the maps; everything else in Scenario is presentation.
-FIELDS = tuple(sorted(set(ACCEPTED) | {"plane", "layout", "comparison", "difference", "measure",
-                                        "model", "state_set"}))
+#: Values that define the comparison maps; everything else in Scenario is presentation or design.
+FIELDS = tuple(sorted(set(ACCEPTED) - {"threshold"} | {"plane", "layout", "comparison", "difference",
+                                                       "measure", "model", "state_set"}))
+#: Values that define the layout-design tab.
+DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure", "layout", "k", "Ph_b",
+                                            "Pv_b", "d_ref"} | {"stations", "criterion", "threshold"}))
+#: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
+SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
+
+
+def _frozen(value):
+    return tuple(tuple(v) for v in value) if isinstance(value, list) else value
 
 
 @dataclass(frozen=True)
@@ -33,12 +42,13 @@ class Snapshot:
     items: tuple
 
     @classmethod
-    def of(cls, scenario: Scenario):
-        return cls(tuple((name, getattr(scenario, name)) for name in FIELDS))
+    def of(cls, scenario: Scenario, fields=FIELDS):
+        return cls(tuple((name, _frozen(getattr(scenario, name))) for name in fields))
 
     def scenario(self):
         """A detached Scenario with these values (for the helpers that build core inputs)."""
-        return Scenario(**dict(self.items))
+        values = {k: [list(v) for v in val] if k == "stations" else val for k, val in self.items}
+        return Scenario(**values)
 
 
 @dataclass(frozen=True)
@@ -152,6 +162,77 @@ def compute(snapshot: Snapshot) -> Panels:
     )
 
 
+def _fisher_options(s: Scenario):
+    opts = s.core_options()
+    opts.pop("measure")
+    return opts
+
+
+def xy_region(s: Scenario, n):
+    """The x–y plane at the target depth (for the design tab, whatever the map plane)."""
+    return core.Plane("xy", (-s.extent, s.extent), (-s.extent, s.extent), s.z, n)
+
+
+@dataclass(frozen=True)
+class Design:
+    """CRLB maps of the custom layout over the x–y plane at the target depth."""
+
+    plane: core.Plane
+    stations: np.ndarray  # (S, 3), m
+    errors: object  # core.CrlbErrors with (n, n) arrays
+
+
+def design(snapshot: Snapshot) -> Design:
+    s = snapshot.scenario()
+    stations = np.array(s.stations, dtype=float)
+    plane = xy_region(s, int(s.resolution))
+    with _KERNEL_LOCK:
+        errors = core.crlb_maps(plane, stations, velocity=s.velocity(), moments=(s.Ph, s.Pv),
+                                **_fisher_options(s))
+    return Design(plane=plane, stations=stations, errors=errors)
+
+
+def error_at(snapshot: Snapshot, x, y):
+    """CRLB errors (core.CrlbErrors of scalars) of a target at (x, y, z) for the custom layout."""
+    s = snapshot.scenario()
+    state = [x, y, s.z, *s.velocity(), s.Ph, s.Pv]
+    try:
+        return core.horizontal_error_ellipse(state, np.array(s.stations, dtype=float),
+                                             **_fisher_options(s))
+    except ValueError:  # the click landed on a station
+        return None
+
+
+@dataclass(frozen=True)
+class Spacing:
+    """The best dual-station spacing over the x–y region, and the maps to compare."""
+
+    result: object  # core.SpacingResult
+    criterion: str
+    label: str
+    best: Design
+    paper: Design  # d = 15 m, the paper's Fig. 5
+
+
+def best_spacing(snapshot: Snapshot) -> Spacing:
+    s = snapshot.scenario()
+    key = CRITERIA[s.criterion]
+    region = xy_region(s, REGION_RESOLUTION)
+    common = dict(velocity=s.velocity(), moments=(s.Ph, s.Pv), **_fisher_options(s))
+    with _KERNEL_LOCK:
+        result = core.best_spacing(region, d_range=SPACING_RANGE, n_curve=SPACING_POINTS, h=s.h,
+                                   criterion=key, threshold=s.threshold, **common)
+
+    def at(d):
+        stations = core.dual_station(s.h, d)
+        plane = xy_region(s, min(int(s.resolution), 150))
+        with _KERNEL_LOCK:
+            return Design(plane, stations, core.crlb_maps(plane, stations, **common))
+
+    return Spacing(result=result, criterion=key, label=core.CRITERIA[key][0], best=at(result.d),
+                   paper=at(15.0))
+
+
 class PanelCache:
     """A few recent :func:`compute` results for one session (freed with the session)."""
 
@@ -160,14 +241,17 @@ class PanelCache:
         self._store = OrderedDict()
         self._lock = threading.Lock()
 
-    def get(self, snapshot: Snapshot) -> Panels:
+    def get(self, snapshot: Snapshot, fn=None):
+        """``fn(snapshot)`` (default :func:`compute`), from the cache when it was asked before."""
+        fn = fn or compute
+        key = (fn.__name__, snapshot)
         with self._lock:
-            if snapshot in self._store:
-                self._store.move_to_end(snapshot)
-                return self._store[snapshot]
-        result = compute(snapshot)
+            if key in self._store:
+                self._store.move_to_end(key)
+                return self._store[key]
+        result = fn(snapshot)
         with self._lock:
-            self._store[snapshot] = result
+            self._store[key] = result
             while len(self._store) > self.size:
                 self._store.popitem(last=False)
         return result
@@ -177,4 +261,5 @@ class PanelCache:
             self._store.clear()
 
 
-__all__ = ["FIELDS", "MEASURE_LABELS", "PanelCache", "Panels", "Snapshot", "compute", "difference"]
+__all__ = ["DESIGN_FIELDS", "FIELDS", "PanelCache", "Panels", "Snapshot", "best_spacing", "compute",
+           "design", "difference", "error_at"]

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import html
-from functools import partial
 
 import holoviews as hv
+import pandas as pd
 import panel as pn
 
 from . import views
-from .compute import FIELDS, PanelCache, Snapshot
+from . import compute, map_figures
+from .compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot
 from .scenario import PRESETS, Scenario
 
 #: Sidebar sections: (title, parameters, collapsed?).
@@ -49,15 +50,72 @@ def _widgets():
     return spec
 
 
-def maps(scenario, cache, plane_kind):
-    """Three linked maps (A, B, difference) that update in place as the scenario changes."""
-    stream = hv.streams.Params(scenario, [f for f in FIELDS if f != "plane"])
+DESIGN_HELP = """
+**Layout design.** Click on the map to add a station (up to 8), drag one to move it, select it
+and press Backspace to delete it; or edit the table. The map is the Cramér–Rao bound on the
+3-D position error (1σ, metres) of a target at depth z with the sensor noise and N instants of
+the Advanced section — the number an analyst reports. Click a point for its horizontal error
+ellipse. *Find best spacing* scans the dual layout's spacing d over this region and refines the
+optimum with scipy.
+"""
 
-    def draw(which, **_):
-        return views.map_panel(cache.get(Snapshot.of(scenario)), which)
 
-    panels = [hv.DynamicMap(partial(draw, i), streams=[stream]) for i in range(3)]
-    return hv.Layout(panels).cols(3).opts(shared_axes=True)
+def design_tab(scenario, cache):
+    """Custom layouts in metres of error, and the best dual-station spacing."""
+    snap = lambda: Snapshot.of(scenario, DESIGN_FIELDS)  # noqa: E731
+    watch = [f for f in DESIGN_FIELDS if f != "stations"]
+    points = hv.DynamicMap(lambda **_: views.station_layer(scenario.stations),
+                           streams=[hv.streams.Params(scenario, ["stations"])])
+    draw = hv.streams.PointDraw(source=points, num_objects=compute.MAX_STATIONS, empty_value=scenario.h)
+
+    def drawn(data):
+        if data is None or not len(data.get("x", [])):
+            return
+        scenario.stations = [[float(x), float(y), float(z)]
+                             for x, y, z in zip(data["x"], data["y"], data["z"])]
+
+    draw.add_subscriber(drawn)
+    errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), compute.design),
+                                                       "Custom layout: CRLB position error"),
+                           streams=[hv.streams.Params(scenario, watch + ["stations"])])
+    tap = hv.streams.Tap(source=errors, x=scenario.extent / 3, y=scenario.extent / 3)
+
+    def ellipse(x, y, **_):
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[0]
+
+    def ellipse_text(x, y, *_):
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[1]
+
+    ell = hv.DynamicMap(ellipse, streams=[tap, hv.streams.Params(scenario, watch + ["stations"])])
+    table = pn.widgets.Tabulator(
+        pn.bind(lambda st: pd.DataFrame(st, columns=["x (m)", "y (m)", "z (m)"]), scenario.param.stations),
+        show_index=False, sizing_mode="stretch_width", height=260, css_classes=["w-station-table"])
+
+    def edited(event):
+        scenario.stations = table.value.astype(float).values.tolist()
+
+    table.on_edit(edited)
+    run = pn.widgets.Button(name="Find best spacing", button_type="primary")
+
+    def spacing(clicks):
+        if not clicks:
+            return pn.pane.Markdown("Press *Find best spacing* (about a second).")
+        sp = cache.get(snap(), compute.best_spacing)
+        best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m") * views.station_layer(sp.best.stations)
+        paper = views.error_map(sp.paper, "Paper: d = 15 m") * views.station_layer(sp.paper.stations)
+        return pn.Column(pn.pane.HoloViews(views.spacing_plot(sp)),
+                         pn.Row(pn.pane.HoloViews(best), pn.pane.HoloViews(paper)))
+
+    criteria = pn.Param(scenario, parameters=["criterion", "threshold"], show_name=False,
+                        widgets=_widgets(), sizing_mode="stretch_width")
+    return pn.Column(
+        pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
+        pn.Row(pn.pane.HoloViews(errors * points * ell),
+               pn.Column(table, pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
+                         width=380)),
+        pn.Row(pn.Column(criteria, run, width=360), pn.panel(pn.bind(spacing, run.param.clicks))),
+        sizing_mode="stretch_width",
+    )
 
 
 def create_app():
@@ -69,7 +127,7 @@ def create_app():
         def url_error(bad):
             names = ", ".join(sorted(bad))[:200]
             scenario.message = f"The link's values for {names} could not be used; kept the defaults."
-        pn.state.location.sync(scenario, list(FIELDS), on_error=url_error)
+        pn.state.location.sync(scenario, sorted(set(FIELDS) | set(DESIGN_FIELDS)), on_error=url_error)
 
     presets = pn.FlexBox(*[
         pn.widgets.Button(name=name, button_type="primary", button_style="outline", width=90,
@@ -107,16 +165,27 @@ def create_app():
         pn.widgets.Button(name="Show CRLB position error (m)", button_type="warning",
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
-    plots = pn.pane.HoloViews(pn.bind(partial(maps, scenario, cache), scenario.param.plane),
-                              sizing_mode="stretch_width", linked_axes=True)
+    figs = map_figures.build()
+
+    def redraw(*_):
+        panels = cache.get(Snapshot.of(scenario))
+        with pn.io.hold():  # one message for all three maps
+            map_figures.fill(figs, panels)
+
+    redraw()
+    scenario.param.watch(redraw, list(FIELDS))
+    plots = pn.pane.Bokeh(figs.layout, sizing_mode="stretch_width")
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario)"), presets,
                  message, *sections,
                  pn.pane.Markdown("**Download the maps** (PNG: the save tool on each plot)"), downloads],
-        main=[pn.Column(plots, pn.bind(note, *[scenario.param[f] for f in FIELDS]), fix_buttons,
-                        pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
-                        sizing_mode="stretch_width")],
+        main=[pn.Tabs(
+            ("Maps", pn.Column(plots, pn.bind(note, *[scenario.param[f] for f in FIELDS]), fix_buttons,
+                               pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
+                               sizing_mode="stretch_width")),
+            ("Layout design", design_tab(scenario, cache)),
+            dynamic=True, sizing_mode="stretch_width")],
         sidebar_width=360,
         header_background="#1f5f8b",
     )

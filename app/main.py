@@ -4,5 +4,5 @@ import panel as pn
 
 from app.dashboard import create_app
 
-pn.extension(throttled=True, loading_indicator=True, notifications=False)
+pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
 create_app().servable(title="Dipole observability explorer")

@@ -36,6 +36,7 @@ ACCEPTED = {
     "z_min": (-5000.0, 5000.0, "m"),
     "z_max": (-5000.0, 5000.0, "m"),
     "resolution": (20, 400, "points per axis"),
+    "threshold": (0.01, 1e5, "m"),
 }
 
 MEASURE_LABELS = {
@@ -50,6 +51,13 @@ COMPARISONS = {
     "Moment split B − A (Fig. 4)": "moment_split",
     "Spacing d − reference d (Fig. 6)": "spacing",
 }
+CRITERIA = {
+    "Mean D-optimal over the region": "mean_dopt",
+    "Worst-case D-optimal over the region": "worst_dopt",
+    "Area with CRLB error under threshold": "area_crlb",
+}
+#: Most stations a custom layout may have.
+MAX_STATIONS = 8
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
 MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
 STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
@@ -118,6 +126,14 @@ class Scenario(param.Parameterized):
     z_max = _num(400.0, (0, 2000), "x–z plane: z to (m)", "Deepest target depth of the x–z plane, m.")
     resolution = param.Integer(200, softbounds=(20, 400), label="Grid points per axis",
                                doc="Map resolution; at most 400 per axis.")
+    # -- layout design
+    stations = param.List([[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]], item_type=list,
+                          label="Stations (x, y, z) (m)",
+                          doc="Custom layout for the design tab: 1 to 8 stations anywhere, m.")
+    criterion = param.Selector(objects=list(CRITERIA), default="Mean D-optimal over the region",
+                               label="Spacing criterion", doc="What the best spacing maximises.")
+    threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
+                     "For 'area within threshold': position error (1σ, m) that counts as good.")
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
 
@@ -125,6 +141,7 @@ class Scenario(param.Parameterized):
         super().__init__(**params)
         self._restoring = False
         self.param.watch(self._check, list(ACCEPTED))
+        self.param.watch(self._check_stations, ["stations"])
 
     def _check(self, *events):
         """Restore the last good value of any parameter set outside ACCEPTED, and say so."""
@@ -142,6 +159,32 @@ class Scenario(param.Parameterized):
         finally:
             self._restoring = False
         self.message = "; ".join(notes) + ". Kept the last good value."
+
+    def _check_stations(self, event):
+        problem = self.stations_problem(event.new)
+        if problem:
+            self._restoring = True
+            try:
+                self.stations = event.old
+            finally:
+                self._restoring = False
+            self.message = problem + ". Kept the last good layout."
+        elif not self._restoring and self.message:
+            self.message = ""
+
+    @staticmethod
+    def stations_problem(value):
+        """None if ``value`` is 1–8 finite (x, y, z) positions within the accepted range, else why."""
+        lo, hi, _ = ACCEPTED["h"]
+        if not 1 <= len(value) <= MAX_STATIONS:
+            return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
+        for i, st in enumerate(value):
+            ok = len(st) == 3 and all(isinstance(c, (int, float)) and not isinstance(c, bool)
+                                      and math.isfinite(c) and lo <= c <= hi for c in st)
+            if not ok:
+                return (f"Station {i + 1} must be three numbers (x, y, z) in {lo:g} … {hi:g} m; "
+                        f"got {str(st)[:60]!r}")
+        return None
 
     @staticmethod
     def problem(name, value):

@@ -1,4 +1,6 @@
-"""Pure view functions: numbers from :mod:`app.compute` in, HoloViews elements out."""
+"""Pure view functions for the layout-design tab (HoloViews elements) and the downloads.
+
+The comparison maps are plain Bokeh figures updated in place: :mod:`app.map_figures`."""
 
 from __future__ import annotations
 
@@ -12,8 +14,7 @@ from .compute import Panels
 
 hv.extension("bokeh", logo=False)
 
-#: Colour maps: sequential for measures, diverging for signed comparisons.
-SEQUENTIAL, DIVERGING, VEIL = "viridis", "RdBu_r", "#7f7f7f"
+VEIL = "#7f7f7f"
 
 
 def axes(plane):
@@ -39,45 +40,6 @@ def veil(observable, plane):
     return hv.Image(np.flipud(mask), bounds=_bounds(plane), kdims=list(axes(plane)),
                     vdims=[hv.Dimension("unobservable", label="structurally unobservable")]).opts(
         cmap=["#ffffff00", VEIL], clim=(0, 1), alpha=0.55, colorbar=False, tools=[])
-
-
-def stations_points(stations, plane):
-    """Station markers; on an x–z plane the stations' depth is drawn."""
-    col = 1 if plane.kind == "xy" else 2
-    x, second = axes(plane)
-    data = {"x": stations[:, 0], second.name: stations[:, col],
-            "station": [f"station {i + 1}" for i in range(len(stations))]}
-    return hv.Points(data, kdims=[x, second], vdims=["station"]).opts(
-        marker="triangle", size=13, color="white", line_color="black", line_width=1.5,
-        tools=["hover"])
-
-
-def map_panel(p: Panels, which):
-    """Overlay for map A (which=0), B (1) or the difference (2)."""
-    if which < 2:
-        res = (p.a, p.b)[which]
-        vdim = hv.Dimension("value", label=p.value_label, unit=p.value_unit)
-        img = map_image(res.value, p.plane, vdim).opts(cmap=SEQUENTIAL, clim=p.clim, clabel=p.value_label)
-        observable, stations = res.observable, p.stations[which]
-        title = p.titles[which]
-        if not observable.any():
-            title += " — round-off only"
-    else:
-        vdim = hv.Dimension("difference", label=p.diff_label)
-        finite = p.diff[np.isfinite(p.diff)]
-        if p.diff_label.startswith("log10(|B|"):
-            lim = (float(np.percentile(finite, 0.5)), float(np.percentile(finite, 99.5))) if finite.size else (0, 1)
-            cmap = SEQUENTIAL
-        else:
-            m = float(np.percentile(np.abs(finite), 99.5)) if finite.size else 1.0
-            lim, cmap = (-m or -1.0, m or 1.0), DIVERGING
-        img = map_image(p.diff, p.plane, vdim).opts(cmap=cmap, clim=lim, clabel=p.diff_label)
-        observable = p.a.observable & p.b.observable
-        stations = np.unique(np.vstack(p.stations), axis=0)
-        title = p.titles[2]
-    img = img.opts(colorbar=True, tools=["hover"], clipping_colors={"NaN": "white"},
-                   frame_width=250, frame_height=250, framewise=True)
-    return (img * veil(observable, p.plane) * stations_points(stations, p.plane)).opts(title=title)
 
 
 def to_dataset(p: Panels, params: dict):
@@ -117,3 +79,53 @@ def to_netcdf(p: Panels, params: dict) -> io.BytesIO:
     to_dataset(p, params).to_netcdf(buf, engine="h5netcdf")
     buf.seek(0)
     return buf
+
+
+# -- layout design tab --------------------------------------------------------------------------
+
+def error_map(d, title):
+    """CRLB position error (m, log colour scale) of a layout over the x–y plane."""
+    err = np.where(np.isfinite(d.errors.position), d.errors.position, np.nan)
+    vdim = hv.Dimension("error", label="CRLB position error (1σ)", unit="m")
+    finite = err[np.isfinite(err)]
+    lim = (float(np.percentile(finite, 1)), float(np.percentile(finite, 99))) if finite.size else (1, 10)
+    img = map_image(err, d.plane, vdim).opts(
+        cmap="viridis_r", logz=True, clim=lim, colorbar=True, clabel="CRLB position error (1σ, m)",
+        tools=["hover"], clipping_colors={"NaN": "white"}, frame_width=320, frame_height=320,
+        framewise=True, title=title)
+    return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane)
+
+
+def station_layer(stations):
+    """Editable station markers (x, y) with their depth z as a value."""
+    data = {"x": [s[0] for s in stations], "y": [s[1] for s in stations], "z": [s[2] for s in stations]}
+    return hv.Points(data, kdims=[hv.Dimension("x", unit="m"), hv.Dimension("y", unit="m")],
+                     vdims=[hv.Dimension("z", unit="m")]).opts(
+        marker="triangle", size=14, color="white", line_color="black", line_width=1.5,
+        tools=["hover"], active_tools=["point_draw"])
+
+
+def error_ellipse(errors, x, y, extent):
+    """The 1-σ horizontal error ellipse at (x, y), drawn ×k so that it is visible; and its text."""
+    if errors is None or not bool(errors.observable):
+        return hv.Ellipse(0, 0, 0).opts(alpha=0), "Click on the map (away from a station) for the error ellipse there."
+    a, b = float(errors.semi_major), float(errors.semi_minor)
+    k = max(1.0, 0.04 * extent / a) if a > 0 else 1.0
+    ell = hv.Ellipse(x, y, (2 * a * k, 2 * b * k), orientation=np.deg2rad(float(errors.orientation)))
+    text = (f"Target at ({x:.0f}, {y:.0f}) m: 1-σ horizontal error ellipse {a:.3g} m × {b:.3g} m "
+            f"at {float(errors.orientation):.0f}° from +x (drawn ×{k:.3g}); depth error "
+            f"{float(errors.sigma_z):.3g} m; speed error {float(errors.sigma_speed):.3g} m/s; "
+            f"3-D position error {float(errors.position):.3g} m.")
+    return ell.opts(color="red", line_width=2), text
+
+
+def spacing_plot(sp):
+    """Criterion vs spacing d for the dual layout, optimum marked, the paper's d = 15 m shown."""
+    r = sp.result
+    curve = hv.Curve((r.d_values, r.curve), hv.Dimension("d", label="station spacing d", unit="m"),
+                     hv.Dimension("criterion", label=sp.label)).opts(tools=["hover"], color="#1f5f8b")
+    best = hv.Scatter([(r.d, r.value)], "d", "criterion").opts(size=12, color="red", marker="star")
+    paper = hv.VLine(15.0).opts(color="grey", line_dash="dashed")
+    edge = " (at the edge of the scanned range)" if r.at_bound else ""
+    return (curve * best * paper).opts(
+        frame_width=380, frame_height=260, title=f"Best d = {r.d:.1f} m{edge}; dashed: paper's d = 15 m")

@@ -175,3 +175,25 @@ def test_screenshots_for_the_readme(page):
     time.sleep(1.0)
     page.screenshot(path=str(DOCS / "screenshot-fig5.png"))
     assert (DOCS / "screenshot-fig5.png").stat().st_size > 50_000
+
+
+def wait_count(locator, n, timeout=30.0):
+    deadline = time.time() + timeout
+    while locator.count() != n:
+        if time.time() > deadline:
+            raise AssertionError(f"expected {n} of {locator}, found {locator.count()}")
+        time.sleep(0.2)
+
+
+def test_layout_design_click_adds_a_station_and_best_spacing_runs(page):
+    page.get_by_text("Layout design").click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)  # the paper's pair
+    canvas = page.locator("canvas").filter(visible=True).first
+    box = canvas.bounding_box()
+    page.mouse.click(box["x"] + box["width"] * 0.25, box["y"] + box["height"] * 0.3)
+    wait_count(rows, 3)  # a click on the map added a station
+    page.get_by_role("button", name="Find best spacing").click()
+    page.wait_for_function(f"() => ({MAPS_JS})().some(([t]) => t.startsWith('Best: d ='))", timeout=60_000)
+    titles = [t for t, _ in maps(page)]
+    assert "Paper: d = 15 m" in titles

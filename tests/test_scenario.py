@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from app import views
+from app import map_figures, views
 from app.compute import PanelCache, Snapshot, compute
 from app.scenario import ACCEPTED, PRESETS, Scenario
 
@@ -118,13 +118,47 @@ def test_downloads_carry_data_and_parameters():
     assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y,x,")
 
 
-def test_views_build_for_every_measure_and_plane():
+def test_maps_for_every_measure_and_plane():
+    figs = map_figures.build()
     for plane in ("x–y", "x–z"):
         for measure in Scenario.param.measure.objects:
             s = Scenario(resolution=21, plane=plane, measure=measure)
             p = compute(Snapshot.of(s))
-            for which in range(3):
-                overlay = views.map_panel(p, which)
-                img = overlay.get(0)
-                assert img.kdims[1].name == ("y" if plane == "x–y" else "z")
-                assert img.kdims[0].unit == "m"
+            maps, (xname, vname), clim, diff_range, _ = map_figures.contents(p)
+            assert len(maps) == 3 and vname == ("y" if plane == "x–y" else "z")
+            assert clim[0] < clim[1] and diff_range[0] < diff_range[1]
+            map_figures.fill(figs, p)
+            assert figs.figures[2].yaxis.axis_label == f"{vname} (m)"
+            assert figs.images[1].data["image"][0].dtype == np.float32
+            np.testing.assert_array_equal(figs.images[1].data["image"][0], p.b.value.astype(np.float32))
+
+
+@pytest.mark.parametrize("bad,why", [
+    ([], "1 to 8 stations"),
+    ([[0.0, 0.0, 100.0]] * 9, "1 to 8 stations"),
+    ([[0.0, float("nan"), 100.0]], "three numbers"),
+    ([[0.0, 0.0]], "three numbers"),
+    ([[0.0, 0.0, 1e9]], "three numbers"),
+])
+def test_custom_layout_is_checked(bad, why):
+    s = Scenario()
+    before = s.stations
+    s.stations = bad
+    assert s.stations == before and why in s.message
+
+
+def test_design_maps_and_best_spacing():
+    from app import compute as c
+    s = Scenario(resolution=31, stations=[[0.0, 0.0, 100.0], [40.0, 20.0, 90.0], [-30.0, 10.0, 100.0]])
+    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    assert d.errors.position.shape == (31, 31) and np.isfinite(d.errors.position).mean() > 0.95
+    e = c.error_at(Snapshot.of(s, c.DESIGN_FIELDS), 100.0, 50.0)
+    assert float(e.semi_major) >= float(e.semi_minor) > 0
+    s.z = 100.0  # target depth = station depth: (0, 0) is on station 1
+    assert c.error_at(Snapshot.of(s, c.DESIGN_FIELDS), 0.0, 0.0) is None
+    s.z = 120.0
+    sp = c.best_spacing(Snapshot.of(s, c.DESIGN_FIELDS))
+    r = sp.result
+    assert c.SPACING_RANGE[0] <= r.d <= c.SPACING_RANGE[1]
+    assert r.value >= np.max(r.curve) - 1e-9  # the refined optimum is at least the scanned best
+    assert sp.paper.stations[1, 0] == 15.0 and sp.best.stations[1, 0] == r.d

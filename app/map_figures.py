@@ -1,0 +1,141 @@
+"""The three comparison maps (A, B, difference) as plain Bokeh figures, updated in place.
+
+HoloViews rebuilt every element on each change and sent each map separately (about a second per
+slider release, measured by bench/bench_browser.py); here the figures are built once and a change
+only replaces the float32 image arrays, colour ranges and titles, in one batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from bokeh.layouts import gridplot
+from bokeh.models import (
+    ColorBar,
+    ColumnDataSource,
+    HoverTool,
+    LinearColorMapper,
+    Range1d,
+)
+from bokeh.palettes import RdBu11, Viridis256
+from bokeh.plotting import figure
+
+from .compute import Panels
+
+VEIL = "#7f7f7f"
+FRAME = 270  # px, each map's plotting area
+
+
+@dataclass
+class MapFigures:
+    """Bokeh models of the three maps; :func:`fill` writes a :class:`Panels` into them."""
+
+    layout: object
+    figures: tuple
+    images: tuple  # ColumnDataSource per map: image, x, y, dw, dh
+    veils: tuple
+    stations: tuple
+    mappers: tuple  # A and B share mappers[0]; the difference has mappers[1]
+    colorbars: tuple
+    hovers: tuple
+    plane: object = None  # the plane last drawn: a new one resets zoom and pan
+
+
+def _figure(x_range, y_range):
+    fig = figure(x_range=x_range, y_range=y_range, frame_width=FRAME, frame_height=FRAME,
+                 tools="pan,wheel_zoom,box_zoom,reset,save",
+                 match_aspect=False, title="")
+    fig.title.text_font_size = "12pt"
+    return fig
+
+
+def build():
+    """Three empty linked maps (one shared x and y range: zoom and pan together)."""
+    x_range, y_range = Range1d(-1, 1), Range1d(-1, 1)
+    value_mapper = LinearColorMapper(palette=Viridis256, nan_color="white")
+    diff_mapper = LinearColorMapper(palette=Viridis256, nan_color="white")
+    veil_mapper = LinearColorMapper(palette=["#ffffff00", VEIL], low=0, high=1)
+    figs, images, veils, stations, bars, hovers = [], [], [], [], [], []
+    for which in range(3):
+        fig = _figure(x_range, y_range)
+        img = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]))
+        veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]))
+        st = ColumnDataSource(dict(x=[], y=[], name=[]))
+        mapper = value_mapper if which < 2 else diff_mapper
+        r = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper,
+                  global_alpha=0.55)
+        s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
+                        line_color="black", line_width=1.5)
+        hover = HoverTool(renderers=[r], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"), ("value", "@image")])
+        fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")]))
+        bar = ColorBar(color_mapper=mapper, title="", width=12, title_text_font_size="9pt")
+        fig.add_layout(bar, "right")
+        figs.append(fig), images.append(img), veils.append(veil), stations.append(st)
+        bars.append(bar), hovers.append(hover)
+    return MapFigures(layout=gridplot([figs], merge_tools=True, toolbar_location="right"), figures=tuple(figs), images=tuple(images), veils=tuple(veils),
+                      stations=tuple(stations), mappers=(value_mapper, diff_mapper),
+                      colorbars=tuple(bars), hovers=tuple(hovers))
+
+
+def _symmetric(values):
+    finite = values[np.isfinite(values)]
+    m = float(np.percentile(np.abs(finite), 99.5)) if finite.size else 1.0
+    return (-m or -1.0, m or 1.0)
+
+
+def _range(values):
+    finite = values[np.isfinite(values)]
+    if not finite.size:
+        return (0.0, 1.0)
+    lo, hi = np.percentile(finite, [0.5, 99.5])
+    return (float(lo), float(hi if hi > lo else lo + 1.0))
+
+
+def contents(p: Panels):
+    """What each map shows: [(values, observable, stations (S, 2), title)], labels and ranges.
+
+    Pure: the numbers :func:`fill` writes, kept separate so they can be tested without Bokeh.
+    """
+    col = 1 if p.plane.kind == "xy" else 2
+    maps = []
+    for which, res in enumerate((p.a, p.b)):
+        title = p.titles[which] + (" — round-off only" if not res.observable.any() else "")
+        maps.append((res.value, res.observable, p.stations[which][:, [0, col]], title))
+    both = np.unique(np.vstack(p.stations), axis=0)
+    maps.append((p.diff, p.a.observable & p.b.observable, both[:, [0, col]], p.titles[2]))
+    paper_diff = p.diff_label.startswith("log10(|B|")
+    diff_range = _range(p.diff) if paper_diff else _symmetric(p.diff)
+    return maps, ("x", "y" if p.plane.kind == "xy" else "z"), p.clim, diff_range, paper_diff
+
+
+def fill(figs: MapFigures, p: Panels):
+    """Write one scenario's maps into the figures, in place."""
+    maps, (xname, vname), clim, diff_range, paper_diff = contents(p)
+    (u0, u1), (v0, v1) = p.plane.u, p.plane.v
+    du, dv = (u1 - u0) / (p.plane.n - 1), (v1 - v0) / (p.plane.n - 1)
+    geometry = dict(x=[u0 - du / 2], y=[v0 - dv / 2], dw=[u1 - u0 + du], dh=[v1 - v0 + dv])
+    value_mapper, diff_mapper = figs.mappers
+    value_mapper.update(low=clim[0], high=clim[1])
+    diff_mapper.update(low=diff_range[0], high=diff_range[1],
+                       palette=Viridis256 if paper_diff else RdBu11[::-1])
+    for which, (values, observable, stations, title) in enumerate(maps):
+        fig = figs.figures[which]
+        figs.images[which].data = dict(image=[values.astype(np.float32)], **geometry)
+        veil = (~observable).astype(np.float32)
+        old = figs.veils[which].data["image"][0]
+        if old.shape != veil.shape or not np.array_equal(old, veil) or figs.veils[which].data["x"] != geometry["x"]:
+            figs.veils[which].data = dict(image=[veil], **geometry)  # sent only when it changes
+        figs.stations[which].data = dict(x=stations[:, 0], y=stations[:, 1],
+                                         name=[f"station {i + 1}" for i in range(len(stations))])
+        fig.title.text = title
+        fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
+        label = p.value_label if which < 2 else p.diff_label
+        unit = f" {p.value_unit}" if which < 2 and p.value_unit == "m" else ""
+        figs.colorbars[which].title = label
+        figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{0.000}" + unit)]
+    if figs.plane != p.plane:  # a new plane resets the view; a new value keeps the zoom
+        figs.figures[0].x_range.update(start=u0 - du / 2, end=u1 + du / 2)
+        figs.figures[0].y_range.update(start=v0 - dv / 2, end=v1 + dv / 2)
+        figs.plane = p.plane
