@@ -153,10 +153,12 @@ def create_app():
                                 filename="observability_maps.nc", label="NetCDF", button_type="light"),
     )
 
-    def note(*_):
-        text = cache.get(Snapshot.of(scenario)).note
-        return pn.pane.Alert(html.escape(text).replace("\n", "<br>"), alert_type="warning",
-                             visible=bool(text), sizing_mode="stretch_width")
+    def note_text(*_):
+        return html.escape(cache.get(Snapshot.of(scenario)).note).replace("\n", "<br>")
+
+    note_deps = [scenario.param[f] for f in FIELDS]
+    note = pn.pane.Alert(pn.bind(note_text, *note_deps), alert_type="warning",  # text updated in place
+                         visible=pn.bind(lambda *a: bool(note_text()), *note_deps), sizing_mode="stretch_width")
 
     fix_buttons = pn.Row(
         pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
@@ -181,7 +183,7 @@ def create_app():
                  message, *sections,
                  pn.pane.Markdown("**Download the maps** (PNG: the save tool on each plot)"), downloads],
         main=[pn.Tabs(
-            ("Maps", pn.Column(plots, pn.bind(note, *[scenario.param[f] for f in FIELDS]), fix_buttons,
+            ("Maps", pn.Column(plots, note, fix_buttons,
                                pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                                sizing_mode="stretch_width")),
             ("Layout design", design_tab(scenario, cache)),

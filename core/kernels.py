@@ -274,10 +274,11 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                 inv_diag[p, i] = acc / 10.0 ** (2.0 * lognorm[i])
 
 
-@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
+@nb.njit(cache=True, nogil=True)
 def grid_states(template, u, v, v_index, out):
-    """States on a plane: out[i, j] = template with x = u[j] and state[v_index] = v[i]."""
-    for i in nb.prange(v.shape[0]):
+    """States on a plane: out[i, j] = template with x = u[j] and state[v_index] = v[i].
+    Serial: it is memory-bound, and a thread team costs more than it saves."""
+    for i in range(v.shape[0]):
         for j in range(u.shape[0]):
             for k in range(7):
                 out[i, j, k] = template[k]
