@@ -2,8 +2,8 @@
 symbolically and lambdified to numpy. Used by the tests (Jacobians to ~1e-10) and by
 bench/ as "the straightforward way" to compute a log10|det Γ| map.
 
-Nothing here imports core's kernels; only the formulas of spec §2 and the paper's eqs.
-(10)–(12) are shared.
+Nothing here imports core: the formulas of spec §2 and the paper's eqs. (10)–(12) come from
+:mod:`paper.symbolic`, written in sympy.
 """
 
 from __future__ import annotations
@@ -13,32 +13,7 @@ import functools
 import numpy as np
 import sympy as sp
 
-X = sp.symbols("x y z vx vy Ph Pv", real=True)
-S = sp.symbols("sx sy sz", real=True)
-SIGMA = sp.Symbol("sigma", positive=True)
-
-
-def field_expressions(model):
-    """(Ex, Ey, Ez) at station S for state X, as sympy expressions."""
-    x, y, z, vx, vy, ph, pv = X
-    theta = sp.atan2(vy, vx)
-    k = 1 / (4 * sp.pi * SIGMA)
-    if model == "exact":
-        # R = station − target; E = (3 (p·R) R / D⁵ − p / D³) / (4πσ)
-        R = sp.Matrix([S[0] - x, S[1] - y, S[2] - z])
-        D = sp.sqrt(R.dot(R))
-        p = sp.Matrix([ph * sp.cos(theta), ph * sp.sin(theta), pv])
-        E = k * (3 * p.dot(R) * R / D**5 - p / D**3)
-        return tuple(E)
-    # The paper's eqs. (10)–(12), x, y relative to the station, (z − h) target minus station.
-    a, b, c = x - S[0], y - S[1], z - S[2]
-    D = sp.sqrt(a**2 + b**2 + c**2)
-    ct, st = sp.cos(theta), sp.sin(theta)
-    ex = k * (ph * ct * (3 * a**2 - D**2) / D**5 - ph * st * 3 * a * b / D**5 + pv * 3 * a * c / D**5)
-    ey = k * (ph * st * (3 * a**2 - D**2) / D**5 + ph * ct * 3 * a * b / D**5 + pv * 3 * b * c / D**5)
-    ez = k * (ph * 3 * a * c / D**5 + pv * (3 * c**2 - D**2) / D**5)
-    return ex, ey, ez
-
+from paper.symbolic import SIGMA, S, X, field_expressions
 
 @functools.lru_cache(maxsize=None)
 def field_functions(model):
