@@ -124,9 +124,19 @@ def create_app():
     pn.state.on_session_destroyed(lambda ctx: cache.clear())
 
     if pn.state.location is not None:
-        def url_error(bad):
-            names = ", ".join(sorted(bad))[:200]
-            scenario.message = f"The link's values for {names} could not be used; kept the defaults."
+        def url_error(values):
+            """Some value in the link is unusable: apply the good ones one by one, report the rest."""
+            refused = []
+            for name, value in values.items():
+                try:
+                    setattr(scenario, name, value)
+                except Exception:  # param's own type/selector checks; range checks keep defaults
+                    refused.append(name)
+                if scenario.message:
+                    refused.append(name)
+            if refused:
+                names = ", ".join(sorted(set(refused)))[:200]
+                scenario.message = f"The link's values for {names} could not be used; kept the defaults."
         pn.state.location.sync(scenario, sorted(set(FIELDS) | set(DESIGN_FIELDS)), on_error=url_error)
 
     presets = pn.FlexBox(*[

@@ -23,7 +23,7 @@ MEASURES = {
     "d_optimal": ("½·log10 det F (D-optimal)", "F in 1/state unit²", False),
     "crlb_position": ("CRLB position error (1σ, m)", "m", False),
 }
-CHUNK_POINTS = 1 << 16
+CHUNK_POINTS = 1 << 18  # 256 Ki points: one kernel launch up to 512 × 512, 15 MB of states
 
 
 @dataclass(frozen=True)

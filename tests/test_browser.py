@@ -197,3 +197,17 @@ def test_layout_design_click_adds_a_station_and_best_spacing_runs(page):
     page.wait_for_function(f"() => ({MAPS_JS})().some(([t]) => t.startsWith('Best: d ='))", timeout=60_000)
     titles = [t for t, _ in maps(page)]
     assert "Paper: d = 15 m" in titles
+
+
+def test_a_pasted_link_reopens_the_view(chromium, server):
+    pg = chromium.new_page(viewport={"width": 1700, "height": 1100})
+    pg.goto(server + "/app?Ph=300.0&plane=x%E2%80%93z&d=40.0")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    wait_maps(pg, lambda drawn: len(drawn) == 3 and drawn[1][0] == "B: dual, d = 40 m")
+    wait_value(pg, "Ph", 300.0)
+    assert pg.locator(".w-plane select").first.input_value() == "x–z"
+    assert pg.evaluate(AXES_JS).count("z (m)") == 3
+    # and changing a value writes it back into the address bar
+    type_value(pg, "Pv", "55")
+    pg.wait_for_function("() => window.location.search.includes('Pv=55')", timeout=15_000)
+    pg.close()
