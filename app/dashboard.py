@@ -8,8 +8,7 @@ import holoviews as hv
 import pandas as pd
 import panel as pn
 
-from . import views
-from . import compute, map_figures
+from . import compute, map_figures, views
 from .compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot
 from .scenario import PRESETS, Scenario
 
@@ -35,13 +34,18 @@ Triangles: stations. Hover for values. All logarithms are base 10.
 """
 
 
+def _alert(text, kind):
+    """Plain text in a Bootstrap alert box: escaped, never interpreted as HTML or Markdown."""
+    return f'<div class="alert alert-{kind}" role="alert">{html.escape(text).replace(chr(10), "<br>")}</div>'
+
+
 def _widgets():
     """Editable sliders (type a value or drag) for every number; a text box for the noise."""
     numeric = {"type": pn.widgets.EditableFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
     integer = {"type": pn.widgets.EditableIntSlider, "sizing_mode": "stretch_width"}
     spec = {name: dict(numeric) for name in ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k",
                                                 "Ph_b", "Pv_b", "d_ref", "T", "sigma", "extent",
-                                                "z_min", "z_max")}
+                                                "z_min", "z_max", "threshold")}
     spec.update(steps=dict(integer), resolution=dict(integer))
     spec["noise"] = {"type": pn.widgets.FloatInput, "format": "0.0e+0", "sizing_mode": "stretch_width"}
     for name in Scenario.param:
@@ -144,8 +148,8 @@ def create_app():
                           on_click=lambda e, n=name: scenario.apply_preset(n))
         for name in PRESETS
     ], sizing_mode="stretch_width")
-    message = pn.pane.Alert(pn.bind(lambda m: html.escape(m), scenario.param.message),
-                            alert_type="danger", visible=scenario.param.message.rx.bool())
+    message = pn.pane.HTML(pn.bind(_alert, scenario.param.message, "danger"), sizing_mode="stretch_width",
+                           visible=scenario.param.message.rx.bool(), css_classes=["w-message"])
     sections = [
         pn.Card(pn.Param(scenario, parameters=names, widgets=_widgets(), show_name=False,
                          sizing_mode="stretch_width"),
@@ -164,11 +168,11 @@ def create_app():
     )
 
     def note_text(*_):
-        return html.escape(cache.get(Snapshot.of(scenario)).note).replace("\n", "<br>")
+        return cache.get(Snapshot.of(scenario)).note
 
     note_deps = [scenario.param[f] for f in FIELDS]
-    note = pn.pane.Alert(pn.bind(note_text, *note_deps), alert_type="warning",  # text updated in place
-                         visible=pn.bind(lambda *a: bool(note_text()), *note_deps), sizing_mode="stretch_width")
+    note = pn.pane.HTML(pn.bind(lambda *a: _alert(note_text(), "warning"), *note_deps),  # updated in place
+                        visible=pn.bind(lambda *a: bool(note_text()), *note_deps), sizing_mode="stretch_width")
 
     fix_buttons = pn.Row(
         pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
