@@ -138,7 +138,12 @@ class Scenario(param.Parameterized):
     message = param.String("", doc="Why the last input was refused (plain text).")
 
     def __init__(self, **params):
+        # Hard limits hold from the start: a bad value given here falls back to the default.
+        notes = [n for n in (self.problem(k, v) for k, v in params.items() if k in ACCEPTED) if n]
+        params = {k: v for k, v in params.items() if k not in ACCEPTED or self.problem(k, v) is None}
         super().__init__(**params)
+        if notes:
+            self.message = "; ".join(notes) + ". Used the default."
         self._restoring = False
         self.param.watch(self._check, list(ACCEPTED))
         self.param.watch(self._check_stations, ["stations"])

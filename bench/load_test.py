@@ -1,0 +1,314 @@
+"""Load test of the served dashboard (issue "Ship it … a server that holds up").
+
+    python -m bench.load_test [--sessions 20] [--duration 60] [--port N]
+
+Loopback only, bounded in count and time. Starts its own ``panel serve app`` (tests.server) with
+``--check-unused-sessions 1000 --unused-session-lifetime 3000`` so closed sessions are destroyed
+within seconds, then:
+
+1. one warm-up session (a few updates), closed; the server's RSS after its cleanup is the baseline;
+2. ``--sessions`` websocket sessions (``bokeh.client.pull_session``, as many threads, each with
+   its own IOLoop) connect, then each changes parameters for ``--duration`` seconds: P_h through
+   the slider's ``value_throttled`` (what a released drag sends) and, every fifth update, the
+   measure; an update is *answered* when all three map images arrive with new data;
+3. meanwhile a probe thread times (a) ``GET /liveness`` (the server's event loop) and (b) on its own
+   session, a refused value (P_h < 0: the server answers with a message, no map computation), i.e.
+   how long a cheap event of one session waits behind the others' computations; the target is
+   the median time of one map computation (measured here, in-process, before the load);
+4. after the sessions close: the server's RSS must come back within 10 % of the baseline.
+
+Prints PASS/FAIL lines and exits 1 if any target is missed. Uses private parts of the Bokeh
+client (``ClientSession._connection``) to wait for server pushes with a timeout: the public
+client has no way to wait for "the next document change".
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import threading
+import time
+import urllib.request
+
+import panel  # noqa: F401  (registers Panel's Bokeh models before a document is pulled)
+import psutil
+from bokeh.client import pull_session
+from bokeh.document.events import MessageSentEvent, ModelChangedEvent
+from bokeh.events import DocumentReady
+from bokeh.models import ColumnDataSource
+
+from app.compute import Snapshot, compute
+from app.scenario import MEASURE_LABELS, Scenario
+from tests.server import served_app
+
+SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "3000")
+ANSWER_TIMEOUT = 60.0  # s an update may take before it counts as unanswered
+MEASURES = list(MEASURE_LABELS)
+
+
+def pct(values, q):
+    """The q-th percentile (nearest rank) of a non-empty list."""
+    s = sorted(values)
+    return s[min(len(s) - 1, max(0, round(q / 100 * len(s) + 0.5) - 1))]
+
+
+class Client:
+    """One browser-like session: a pulled document whose widgets are changed from here."""
+
+    def __init__(self, url):
+        self.session = pull_session(url=url + "/app")
+        self.conn = self.session._connection
+        self.doc = self.session.document
+        self.events = []  # (attr, model id, new) of every server push
+        models = list(self.doc.models)
+        self.images = {m.id for m in models if isinstance(m, ColumnDataSource) and "image" in m.data}
+        self.ph = self._inner("w-Ph", "Slider")
+        self.measure = next(m for m in models if "w-measure" in (getattr(m, "css_classes", None) or []))
+        self.doc.on_change(lambda ev: self.events.append(
+            (getattr(ev, "attr", None), getattr(getattr(ev, "model", None), "id", None), getattr(ev, "new", None))))
+        # A browser announces itself; until then Panel holds threaded updates for the session.
+        self._send(MessageSentEvent(self.doc, "bokeh_event", DocumentReady()))
+
+    def _inner(self, css, kind):
+        outer = next(m for m in self.doc.models if css in (getattr(m, "css_classes", None) or []))
+        return next(m for m in outer.references() if type(m).__name__ == kind)
+
+    def _send(self, event):
+        self.conn._send_patch_document(self.session.id, event)
+
+    def change(self, model, attr, value, done, timeout=ANSWER_TIMEOUT):
+        """Send one change; pump the connection until ``done(events since)`` or timeout.
+
+        Returns the round-trip time in seconds, or None if not answered in time.
+        """
+        start = len(self.events)
+        t0 = time.perf_counter()
+        self._send(ModelChangedEvent(self.doc, model, attr, value))
+        loop = self.conn._loop
+        deadline = t0 + timeout
+        # _loop_until checks its predicate after each message: a server-info request at the
+        # deadline guarantees one more message.
+        wake = loop.call_at(loop.time() + timeout, lambda: loop.add_callback(
+            self.conn.send_message, self.conn._protocol.create("SERVER-INFO-REQ")))
+        self.conn._loop_until(lambda: done(self.events[start:]) or time.perf_counter() > deadline
+                              or not self.conn.connected)
+        loop.remove_timeout(wake)
+        ok = done(self.events[start:])
+        return time.perf_counter() - t0 if ok else None
+
+    def maps_done(self, events):
+        return len({mid for attr, mid, _ in events if attr == "data" and mid in self.images}) == 3
+
+    def close(self):
+        try:
+            self.session.close()
+            self.conn.loop_until_closed()
+        finally:
+            self.conn._loop.close(all_fds=True)
+
+
+def hammer(client, index, stop_at, out):
+    """Change parameters until ``stop_at``; record (sent, answered, latencies)."""
+    sent, latencies, i = 0, [], 0
+    while time.perf_counter() < stop_at and client.conn.connected:
+        i += 1
+        if i % 5 == 0:
+            model, attr, value = client.measure, "value", MEASURES[(i // 5) % len(MEASURES)]
+        else:  # distinct values: every update is a cache miss
+            model, attr, value = client.ph, "value_throttled", round(50.0 + (i * 37 + index * 7) % 900 + index / 100, 2)
+        sent += 1
+        dt = client.change(model, attr, value, client.maps_done)
+        if dt is not None:
+            latencies.append(dt)
+    out[index] = (sent, len(latencies), latencies)
+
+
+class RssMonitor(threading.Thread):
+    def __init__(self, pid, every=0.25):
+        super().__init__(daemon=True)
+        self.proc, self.every, self.peak, self._halt = psutil.Process(pid), every, 0, threading.Event()
+
+    def rss(self):
+        return self.proc.memory_info().rss
+
+    def run(self):
+        while not self._halt.is_set():
+            self.peak = max(self.peak, self.rss())
+            time.sleep(self.every)
+
+    def stop(self):
+        self._halt.set()
+        self.join()
+
+
+class Probe(threading.Thread):
+    """Cheap round trips while the sessions hammer: GET /liveness and a refused value."""
+
+    def __init__(self, url, client):
+        super().__init__(daemon=True)
+        self.url, self.client, self.http, self.event = url, client, [], []
+        self.active = threading.Event()
+        self._halt = threading.Event()
+
+    def run(self):
+        n = 0
+        while not self._halt.is_set():
+            t0 = time.perf_counter()
+            urllib.request.urlopen(self.url + "/liveness", timeout=30).read()
+            if self.active.is_set():
+                self.http.append(time.perf_counter() - t0)
+            n += 1
+            if self.client is not None and self.active.is_set():
+                bad = -(n + 0.5)
+                needle = f"{bad:g}"
+                dt = self.client.change(self.client.ph, "value_throttled", bad, lambda evs, needle=needle: any(
+                    attr == "text" and isinstance(new, str) and needle in new for attr, _, new in evs),
+                    timeout=30)
+                self.event.append(dt if dt is not None else float("inf"))
+            time.sleep(0.2)
+
+    def stop(self):
+        self._halt.set()
+        self.join(60)
+
+
+def map_time(repeat=7):
+    """Median wall time of one default scenario's maps (A and B, 200 × 200), computed here."""
+    s = Scenario()
+    compute(Snapshot.of(s))  # compile / load caches
+    times = []
+    for i in range(repeat):
+        s.Ph = 100.0 + i  # a new scenario each time
+        t0 = time.perf_counter()
+        compute(Snapshot.of(s))
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def wait_cleanup(mon, target, limit):
+    """Poll RSS until it is within ``target`` bytes or ``limit`` seconds have passed."""
+    t0 = time.time()
+    rss = mon.rss()
+    while rss > target and time.time() - t0 < limit:
+        time.sleep(1.0)
+        rss = mon.rss()
+    return rss, time.time() - t0
+
+
+def mb(b):
+    return f"{b / 2**20:.0f} MB"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sessions", type=int, default=20, help="concurrent sessions (1–50)")
+    ap.add_argument("--duration", type=float, default=60.0, help="seconds each session changes parameters (≤ 600)")
+    ap.add_argument("--cleanup", type=float, default=30.0, help="seconds to wait for memory to return")
+    args = ap.parse_args(argv)
+    if not 1 <= args.sessions <= 50 or not 0 < args.duration <= 600:
+        ap.error("--sessions must be 1–50 and --duration 0–600 s")
+
+    one_map = map_time()
+    print(f"one map computation (A and B, 200×200, in-process, idle): median {one_map * 1e3:.0f} ms")
+    os.environ.setdefault("QUIET_SERVER", "1")
+    failures = []
+
+    def verdict(ok, text):
+        print(("PASS  " if ok else "FAIL  ") + text)
+        if not ok:
+            failures.append(text)
+
+    with served_app(*SERVER_ARGS) as (url, proc):
+        mon = RssMonitor(proc.pid)
+        print(f"server pid {proc.pid} at {url}; RSS at start {mb(mon.rss())}")
+        t0 = time.perf_counter()
+        warm = Client(url)
+        print(f"warm-up session connected in {time.perf_counter() - t0:.1f} s")
+        for v in (150.0, 160.0):
+            warm.change(warm.ph, "value_throttled", v, warm.maps_done)
+        warm.change(warm.measure, "value", MEASURES[1], warm.maps_done)
+        warm.close()
+        time.sleep(8)  # lifetime 3 s + check every 1 s + margin
+        baseline = mon.rss()
+        print(f"baseline RSS after one warm-up session and its cleanup: {mb(baseline)}")
+
+        mon.start()
+        t0 = time.perf_counter()
+        clients, errors = [None] * args.sessions, []
+
+        def connect(i):
+            try:
+                clients[i] = Client(url)
+            except Exception as e:  # noqa: BLE001 (reported and counted below)
+                errors.append(repr(e))
+
+        threads = [threading.Thread(target=connect, args=(i,), daemon=True) for i in range(args.sessions + 1)]
+        clients.append(None)  # the probe's own session
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(600)
+        connect_time = time.perf_counter() - t0
+        live = [c for c in clients[:-1] if c is not None]
+        print(f"{len(live)} of {args.sessions} sessions (+1 probe) connected in {connect_time:.1f} s "
+              f"(RSS {mb(mon.rss())}); errors: {errors or 'none'}")
+
+        probe = Probe(url, clients[-1])
+        probe.start()
+        results = {}
+        stop_at = time.perf_counter() + args.duration
+        probe.active.set()
+        workers = [threading.Thread(target=hammer, args=(c, i, stop_at, results), daemon=True)
+                   for i, c in enumerate(live)]
+        for w in workers:
+            w.start()
+        for w in workers:
+            w.join(args.duration + ANSWER_TIMEOUT + 30)
+        probe.active.clear()
+        probe.stop()
+        during = mon.rss()
+        for c in clients:
+            if c is not None:
+                c.close()
+        rss_after, waited = wait_cleanup(mon, baseline * 1.10, args.cleanup)
+        mon.stop()
+        time.sleep(0)
+
+    sent = sum(r[0] for r in results.values())
+    answered = sum(r[1] for r in results.values())
+    lat = [x for r in results.values() for x in r[2]]
+    print()
+    print(f"=== {args.sessions} sessions × {args.duration:g} s, server {url} ===")
+    print(f"updates sent {sent}, answered {answered} ({answered / max(sent, 1):.1%}); "
+          f"throughput {answered / args.duration:.1f} updates/s")
+    if lat:
+        print(f"update latency: median {statistics.median(lat) * 1e3:.0f} ms, p95 {pct(lat, 95) * 1e3:.0f} ms, "
+              f"max {max(lat) * 1e3:.0f} ms")
+    print(f"server RSS: baseline {mb(baseline)}, peak {mb(mon.peak)}, end of load {mb(during)}, "
+          f"after close + {waited:.0f} s {mb(rss_after)} ({rss_after / baseline - 1:+.1%} vs baseline)")
+    if probe.http:
+        print(f"GET /liveness under load: median {statistics.median(probe.http) * 1e3:.0f} ms, "
+              f"p95 {pct(probe.http, 95) * 1e3:.0f} ms (n={len(probe.http)})")
+    if probe.event:
+        print(f"cheap event of another session (refused value -> message) under load: median "
+              f"{statistics.median(probe.event) * 1e3:.0f} ms, p95 {pct(probe.event, 95) * 1e3:.0f} ms "
+              f"(n={len(probe.event)})")
+    print(f"one map computation (idle): {one_map * 1e3:.0f} ms; session connect phase {connect_time:.1f} s")
+    print()
+    verdict(len(live) == args.sessions, f"all sessions connected ({len(live)}/{args.sessions})")
+    verdict(sent > 0 and answered == sent, f"every update answered ({answered}/{sent})")
+    verdict(rss_after <= baseline * 1.10, f"memory back within 10% of baseline after close "
+                                          f"({mb(rss_after)} vs {mb(baseline)})")
+    if probe.http:
+        verdict(pct(probe.http, 95) <= one_map, f"liveness p95 {pct(probe.http, 95) * 1e3:.0f} ms ≤ one map "
+                                                f"{one_map * 1e3:.0f} ms (event loop not blocked)")
+    if probe.event:
+        verdict(pct(probe.event, 95) <= one_map, f"cheap event p95 {pct(probe.event, 95) * 1e3:.0f} ms ≤ one map "
+                                                 f"{one_map * 1e3:.0f} ms (sessions not blocked by others' maps)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
