@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import asyncio
+import gc
 import html
+import json
 
 import holoviews as hv
 import pandas as pd
 import panel as pn
+from panel.links import Callback
 
 from . import compute, map_figures, views
 from .compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot
@@ -34,6 +38,27 @@ Triangles: stations. Hover for values. All logarithms are base 10.
 """
 
 
+class _Typed:
+    """Editable slider without Panel's browser callback that stretches the slider to a typed value.
+
+    That callback is not wanted (a value outside the accepted range is refused and restored, so
+    the stretched slider would stay wrong) and each one cost ~150 ms of Bokeh document scans when
+    a session starts, blocking every other session.
+    """
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        Callback.registry.pop(self._value_edit, None)
+
+
+class TypedFloatSlider(_Typed, pn.widgets.EditableFloatSlider):
+    pass
+
+
+class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
+    pass
+
+
 def _alert(text, kind):
     """Plain text in a Bootstrap alert box: escaped, never interpreted as HTML or Markdown."""
     return f'<div class="alert alert-{kind}" role="alert">{html.escape(text).replace(chr(10), "<br>")}</div>'
@@ -41,8 +66,8 @@ def _alert(text, kind):
 
 def _widgets():
     """Editable sliders (type a value or drag) for every number; a text box for the noise."""
-    numeric = {"type": pn.widgets.EditableFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
-    integer = {"type": pn.widgets.EditableIntSlider, "sizing_mode": "stretch_width"}
+    numeric = {"type": TypedFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
+    integer = {"type": TypedIntSlider, "sizing_mode": "stretch_width"}
     spec = {name: dict(numeric) for name in ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k",
                                                 "Ph_b", "Pv_b", "d_ref", "T", "sigma", "extent",
                                                 "z_min", "z_max", "threshold")}
@@ -122,26 +147,59 @@ def design_tab(scenario, cache):
     )
 
 
+def _link_value(raw):
+    """A query value as Panel writes them: JSON where it parses, else the plain string."""
+    try:
+        return json.loads(raw)
+    except ValueError:
+        return raw
+
+
+def _link_problem(name, value):
+    """None if a link's ``value`` for ``name`` is accepted, else why (tried on a throw-away Scenario)."""
+    trial = Scenario()
+    try:
+        setattr(trial, name, value)
+    except Exception:  # param's own type and selector checks
+        return f"{name}: {trial.param[name].label} does not accept {str(value)[:40]!r}"
+    return f"{name}: {trial.message.removesuffix(' Kept the last good value.').rstrip('.')}" if trial.message else None
+
+
+def _sync_url(scenario, location, args):
+    """The scenario lives in the page URL. A pasted link's values are read here, once, from the
+    request (``args``, as pn.state.session_args); any that would be refused is never set (so no
+    widget shows it) and the page says which and why. Later changes are written back."""
+    names = sorted(set(FIELDS) | set(DESIGN_FIELDS))
+    good, problems = {}, {}
+    for name in names:
+        if name in args:
+            value = _link_value(args[name][0].decode("utf-8", "replace"))
+            problem = _link_problem(name, value)
+            problems.update({name: problem} if problem else {})
+            good.update({} if problem else {name: value})
+    scenario.param.update(good)
+
+    def to_url(*events):
+        location.update_query(**{e.name: json.dumps(e.new) if not isinstance(e.new, str) else e.new
+                                 for e in events})
+
+    scenario.param.watch(to_url, names)
+    if problems:
+        scenario.message = ("Link values refused, defaults kept: " + "; ".join(problems.values()))[:600]
+
+
 def create_app():
     scenario = Scenario()
     cache = PanelCache()
-    pn.state.on_session_destroyed(lambda ctx: cache.clear())
+
+    def session_closed(ctx):
+        cache.clear()
+        gc.collect()  # the maps of a closed session are large, cyclic Bokeh/param graphs
+
+    pn.state.on_session_destroyed(session_closed)
 
     if pn.state.location is not None:
-        def url_error(values):
-            """Some value in the link is unusable: apply the good ones one by one, report the rest."""
-            refused = []
-            for name, value in values.items():
-                try:
-                    setattr(scenario, name, value)
-                except Exception:  # param's own type/selector checks; range checks keep defaults
-                    refused.append(name)
-                if scenario.message:
-                    refused.append(name)
-            if refused:
-                names = ", ".join(sorted(set(refused)))[:200]
-                scenario.message = f"The link's values for {names} could not be used; kept the defaults."
-        pn.state.location.sync(scenario, sorted(set(FIELDS) | set(DESIGN_FIELDS)), on_error=url_error)
+        _sync_url(scenario, pn.state.location, pn.state.session_args or {})
 
     presets = pn.FlexBox(*[
         pn.widgets.Button(name=name, button_type="primary", button_style="outline", width=90,
@@ -182,13 +240,17 @@ def create_app():
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
     figs = map_figures.build()
+    map_figures.fill(figs, cache.get(Snapshot.of(scenario)))
 
-    def redraw(*_):
-        panels = cache.get(Snapshot.of(scenario))
-        with pn.io.hold():  # one message for all three maps
-            map_figures.fill(figs, panels)
+    async def redraw(*_):
+        # Compute on a worker thread (the kernels release the GIL), so that the server's event
+        # loop keeps serving other sessions meanwhile; then write the maps in one batch.
+        snapshot = Snapshot.of(scenario)
+        panels = await asyncio.get_running_loop().run_in_executor(None, cache.get, snapshot)
+        if snapshot == Snapshot.of(scenario):  # a newer change will draw its own maps
+            with pn.io.hold():
+                map_figures.fill(figs, panels)
 
-    redraw()
     scenario.param.watch(redraw, list(FIELDS))
     plots = pn.pane.Bokeh(figs.layout, sizing_mode="stretch_width")
     template = pn.template.BootstrapTemplate(

@@ -109,7 +109,7 @@ LINKS = {  # query -> text the message must contain (None: no message; the value
     "measure=<script>alert(1)</script>": "measure",
     f"Ph={XSS}": "Ph",
     f"message={XSS}": None,
-    "Ph=1e99&resolution=100000&heading=nan&measure=%3Cmarquee%3Ex": "could not be used",
+    "Ph=1e99&resolution=100000&heading=nan&measure=%3Cmarquee%3Ex": "Link values refused",
 }
 
 
@@ -124,10 +124,7 @@ def chromium():
 COMBINED = "Ph=1e99&resolution=100000&heading=nan&measure=%3Cmarquee%3Ex"
 
 
-@pytest.mark.parametrize("query", [q if q != COMBINED else pytest.param(q, marks=pytest.mark.xfail(
-    strict=True, reason="known bug: location.sync's param.update stops at the bad Selector value, "
-    "leaving Ph=1e99 and resolution=100000 set without Scenario's watchers (dashboard.py url_error "
-    "must reset them); compute is safe: Snapshot.scenario() now falls back to defaults")) for q in LINKS])
+@pytest.mark.parametrize("query", list(LINKS))
 @browser_only
 def test_absurd_link_falls_back_to_defaults(chromium, server, query):
     page = chromium.new_page(viewport={"width": 1500, "height": 1000})
@@ -160,12 +157,6 @@ def test_absurd_link_falls_back_to_defaults(chromium, server, query):
         shown = (page.locator(".w-Ph input").first.input_value(),
                  page.locator(".w-resolution input").first.input_value())
         defaults = (("100", "200"), ("100.0", "200"))
-        assert query != COMBINED or shown in defaults, shown  # the strict xfail above
-        if shown not in defaults:
-            # Seen intermittently: Scenario restored the default (maps at 200 × 200 above) but
-            # the widget kept the refused value (event order of the nested restore in
-            # Scenario._check vs. the widget's watcher). The server state is safe; the display
-            # is wrong: to be fixed in the widget wiring.
-            pytest.xfail(f"known bug: widgets show refused link values {shown}")
+        assert shown in defaults, shown  # refused link values are never set, so never shown
     finally:
         page.close()
