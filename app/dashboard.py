@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import gc
 import html
 import json
@@ -57,6 +58,14 @@ class TypedFloatSlider(_Typed, pn.widgets.EditableFloatSlider):
 
 class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
     pass
+
+
+def _release_freed_memory():
+    """Hand memory freed by closed sessions back to the OS (glibc keeps it in its arenas)."""
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc: nothing to do
+        pass
 
 
 def _alert(text, kind):
@@ -195,6 +204,7 @@ def create_app():
     def session_closed(ctx):
         cache.clear()
         gc.collect()  # the maps of a closed session are large, cyclic Bokeh/param graphs
+        _release_freed_memory()
 
     pn.state.on_session_destroyed(session_closed)
 
