@@ -70,7 +70,10 @@ def _release_freed_memory():
 
 def _alert(text, kind):
     """Plain text in a Bootstrap alert box: escaped, never interpreted as HTML or Markdown."""
-    return f'<div class="alert alert-{kind}" role="alert">{html.escape(text).replace(chr(10), "<br>")}</div>'
+    fg, bg = {"danger": ("#842029", "#f8d7da"), "warning": ("#664d03", "#fff3cd")}[kind]
+    style = f"color:{fg};background:{bg};border:1px solid {fg}33;border-radius:6px;padding:10px 14px"
+    return (f'<div class="alert alert-{kind}" role="alert" style="{style}">'
+            f'{html.escape(text).replace(chr(10), "<br>")}</div>')
 
 
 def _widgets():
