@@ -26,7 +26,8 @@ FIELDS = tuple(sorted(set(ACCEPTED) - {"threshold"} | {"plane", "layout", "compa
                                                        "measure", "model", "state_set"}))
 #: Values that define the layout-design tab.
 DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure", "layout", "k", "Ph_b",
-                                            "Pv_b", "d_ref"} | {"stations", "criterion", "threshold"}))
+                                            "Pv_b", "d_ref"} | {"stations", "criterion", "threshold",
+                                                                "layout_kind", "n_stations"}))
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
 SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
 
@@ -231,6 +232,16 @@ def best_spacing(snapshot: Snapshot) -> Spacing:
 
     return Spacing(result=result, criterion=key, label=core.CRITERIA[key][0], best=at(result.d),
                    paper=at(15.0))
+
+
+def optimised_layout(snapshot: Snapshot):
+    """core.optimise_layout for the chosen shape and N over the x–y region: a core.LayoutResult."""
+    s = snapshot.scenario()
+    with _KERNEL_LOCK:
+        return core.optimise_layout(s.layout_kind, int(s.n_stations), xy_region(s, 31), h=s.h,
+                                    velocity=s.velocity(), moments=(s.Ph, s.Pv),
+                                    criterion=CRITERIA[s.criterion], threshold=s.threshold,
+                                    d_range=SPACING_RANGE, **_fisher_options(s))
 
 
 class PanelCache:

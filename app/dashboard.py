@@ -9,6 +9,7 @@ import html
 import json
 
 import holoviews as hv
+from bokeh.models.widgets.tables import NumberFormatter
 import pandas as pd
 import panel as pn
 from panel.links import Callback
@@ -93,11 +94,12 @@ def _widgets():
 
 DESIGN_HELP = """
 **Layout design.** Click on the map to add a station (up to 8), drag one to move it, select it
-and press Backspace to delete it; or edit the table. The map is the Cramér–Rao bound on the
-3-D position error (1σ, metres) of a target at depth z with the sensor noise and N instants of
-the Advanced section — the number an analyst reports. Click a point for its horizontal error
-ellipse. *Find best spacing* scans the dual layout's spacing d over this region and refines the
-optimum with scipy.
+and press Backspace to delete it; or edit the table. The map is the Cramér–Rao bound (1σ) on
+the 3-D position, horizontal, depth or speed error of a target at depth z, with the sensor noise
+and N instants of the Advanced section — the numbers an analyst reports. Click a point for its
+horizontal error ellipse. *Find best spacing* scans the dual layout's spacing d over this region
+and refines the optimum with scipy; *Optimise N-station layout* does the same for a line,
+triangle or square of N stations (or free positions, ~10 s) and makes it the custom layout.
 """
 
 
@@ -117,8 +119,8 @@ def design_tab(scenario, cache):
 
     draw.add_subscriber(drawn)
     errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), compute.design),
-                                                       "Custom layout: CRLB position error"),
-                           streams=[hv.streams.Params(scenario, watch + ["stations"])])
+                                                       "Custom layout: Cramér–Rao error", scenario.error_quantity),
+                           streams=[hv.streams.Params(scenario, watch + ["stations", "error_quantity"])])
     tap = hv.streams.Tap(source=errors, x=scenario.extent / 3, y=scenario.extent / 3)
 
     def ellipse(x, y, **_):
@@ -130,7 +132,8 @@ def design_tab(scenario, cache):
     ell = hv.DynamicMap(ellipse, streams=[tap, hv.streams.Params(scenario, watch + ["stations"])])
     table = pn.widgets.Tabulator(
         pn.bind(lambda st: pd.DataFrame(st, columns=["x (m)", "y (m)", "z (m)"]), scenario.param.stations),
-        show_index=False, sizing_mode="stretch_width", height=260, css_classes=["w-station-table"])
+        show_index=False, sizing_mode="stretch_width", height=260, css_classes=["w-station-table"],
+        formatters={c: NumberFormatter(format="0.0") for c in ("x (m)", "y (m)", "z (m)")})
 
     def edited(event):
         scenario.stations = table.value.astype(float).values.tolist()
@@ -147,14 +150,26 @@ def design_tab(scenario, cache):
         return pn.Column(pn.pane.HoloViews(views.spacing_plot(sp)),
                          pn.Row(pn.pane.HoloViews(best), pn.pane.HoloViews(paper)))
 
-    criteria = pn.Param(scenario, parameters=["criterion", "threshold"], show_name=False,
-                        widgets=_widgets(), sizing_mode="stretch_width")
+    criteria = pn.Param(scenario, parameters=["criterion", "threshold", "layout_kind", "n_stations"],
+                        show_name=False, widgets=_widgets(), sizing_mode="stretch_width")
+    optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
+
+    def optimise_clicked(event):
+        optimise.loading = True
+        try:
+            result = cache.get(snap(), compute.optimised_layout)
+            scenario.stations = [[float(v) for v in st] for st in result.stations]
+        finally:
+            optimise.loading = False
+
+    optimise.on_click(optimise_clicked)
     return pn.Column(
         pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
         pn.Row(pn.pane.HoloViews(errors * points * ell),
-               pn.Column(table, pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
+               pn.Column(pn.Param(scenario, parameters=["error_quantity"], show_name=False, widgets=_widgets()),
+                         table, pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
                          width=380)),
-        pn.Row(pn.Column(criteria, run, width=360), pn.panel(pn.bind(spacing, run.param.clicks))),
+        pn.Row(pn.Column(criteria, run, optimise, width=360), pn.panel(pn.bind(spacing, run.param.clicks))),
         sizing_mode="stretch_width",
     )
 

@@ -56,6 +56,13 @@ CRITERIA = {
     "Worst-case D-optimal over the region": "worst_dopt",
     "Area with CRLB error under threshold": "area_crlb",
 }
+#: Error maps of the design tab: label -> core.CrlbErrors attribute.
+ERROR_QUANTITIES = {
+    "3-D position error (m)": "position",
+    "Horizontal error, semi-major axis (m)": "semi_major",
+    "Depth error σz (m)": "sigma_z",
+    "Speed error σ|v| (m/s)": "sigma_speed",
+}
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
@@ -132,6 +139,13 @@ class Scenario(param.Parameterized):
                           doc="Custom layout for the design tab: 1 to 8 stations anywhere, m.")
     criterion = param.Selector(objects=list(CRITERIA), default="Mean D-optimal over the region",
                                label="Spacing criterion", doc="What the best spacing maximises.")
+    error_quantity = param.Selector(objects=list(ERROR_QUANTITIES), default="3-D position error (m)",
+                                    label="Error map", doc="Which Cramér–Rao error the design map shows.")
+    layout_kind = param.Selector(objects=["line", "triangle", "square", "free"], default="square",
+                                 label="Optimise: layout shape",
+                                 doc="Shape of the N-station layout to optimise ('free': any positions, slow).")
+    n_stations = param.Integer(4, bounds=(1, 8), label="Optimise: stations N",
+                               doc="Number of stations of the layout to optimise, 1 to 8.")
     threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
                      "For 'area within threshold': position error (1σ, m) that counts as good.")
     # -- feedback

@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from .compute import Panels
+from .scenario import ERROR_QUANTITIES
 
 hv.extension("bokeh", logo=False)
 
@@ -83,14 +84,16 @@ def to_netcdf(p: Panels, params: dict) -> io.BytesIO:
 
 # -- layout design tab --------------------------------------------------------------------------
 
-def error_map(d, title):
-    """CRLB position error (m, log colour scale) of a layout over the x–y plane."""
-    err = np.where(np.isfinite(d.errors.position), d.errors.position, np.nan)
-    vdim = hv.Dimension("error", label="CRLB position error (1σ)", unit="m")
+def error_map(d, title, quantity="3-D position error (m)"):
+    """A CRLB error (1σ, log colour scale) of a layout over the x–y plane."""
+    values = getattr(d.errors, ERROR_QUANTITIES[quantity])
+    err = np.where(np.isfinite(values), values, np.nan)
+    label, unit = quantity.rsplit(" (", 1)
+    vdim = hv.Dimension("error", label=label, unit=unit.rstrip(")"))
     finite = err[np.isfinite(err)]
     lim = (float(np.percentile(finite, 1)), float(np.percentile(finite, 99))) if finite.size else (1, 10)
     img = map_image(err, d.plane, vdim).opts(
-        cmap="viridis_r", logz=True, clim=lim, colorbar=True, clabel="CRLB position error (1σ, m)",
+        cmap="viridis_r", logz=True, clim=lim, colorbar=True, clabel=f"CRLB {quantity}",
         tools=["hover"], clipping_colors={"NaN": "white"}, frame_width=320, frame_height=320,
         framewise=True, title=title)
     return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane)

@@ -162,3 +162,14 @@ def test_design_maps_and_best_spacing():
     assert c.SPACING_RANGE[0] <= r.d <= c.SPACING_RANGE[1]
     assert r.value >= np.max(r.curve) - 1e-9  # the refined optimum is at least the scanned best
     assert sp.paper.stations[1, 0] == 15.0 and sp.best.stations[1, 0] == r.d
+
+
+def test_optimised_layout_and_error_quantities():
+    from app import compute as c
+    s = Scenario(resolution=21, layout_kind="triangle", n_stations=3)
+    r = c.optimised_layout(Snapshot.of(s, c.DESIGN_FIELDS))
+    assert r.stations.shape == (3, 3) and c.SPACING_RANGE[0] <= r.d <= c.SPACING_RANGE[1]
+    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    for quantity in Scenario.param.error_quantity.objects:
+        overlay = views.error_map(d, "t", quantity)
+        assert overlay.get(0).vdims[0].unit in ("m", "m/s")
