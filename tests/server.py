@@ -44,6 +44,9 @@ def served_app(*extra, port=None, timeout=120):
                 if time.time() > deadline:
                     raise TimeoutError("the dashboard did not answer /liveness") from None
                 time.sleep(0.3)
+        # The first page builds the app, which compiles the numba kernels on a fresh checkout
+        # (~30–60 s on 2 busy cores); do it here, once, rather than inside a test's timeout.
+        urllib.request.urlopen(url + "/app", timeout=timeout + 180).read()
         yield url, proc
     finally:
         proc.terminate()
