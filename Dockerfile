@@ -38,18 +38,20 @@ RUN pip install --no-deps . \
 # Unprivileged user with a writable home; the installed code stays root-owned and read-only,
 # so numba's on-disk cache (cache=True kernels) goes to NUMBA_CACHE_DIR instead of __pycache__.
 RUN useradd --create-home --home-dir /home/dipole --uid 10001 --user-group --shell /usr/sbin/nologin dipole \
- && install -d -o dipole -g dipole /home/dipole/.cache/numba
+ && install -d -o dipole -g dipole /home/dipole/.cache /home/dipole/.cache/numba
 ENV HOME=/home/dipole \
     NUMBA_CACHE_DIR=/home/dipole/.cache/numba \
     BOKEH_ALLOW_WS_ORIGIN=localhost:5006,127.0.0.1:5006
 USER 10001:10001
-# Compile every numba kernel once at build time into NUMBA_CACHE_DIR, so that the first visitor
-# does not wait ~30 s for LLVM.
+# Compile every numba kernel once at build time into NUMBA_CACHE_DIR, and build the app once
+# (HoloViews' first import makes matplotlib's font cache), so that the first visitor does not wait
+# ~40 s for LLVM and font scans.
 RUN python -c "import core; p = core.Plane('xy', (-10, 10), (-10, 10), 120.0, 3); \
 [core.evaluate_map(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20), measure=m, model=f) \
  for m in core.MEASURES for f in core.MODELS]; core.gamma([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]); \
 core.dipole_field([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]); \
-core.crlb_maps(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20))"
+core.crlb_maps(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20))" \
+ && python -c "import panel as pn; pn.extension('tabulator'); import app.dashboard as d; d.create_app()"
 
 EXPOSE 5006
 HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \
