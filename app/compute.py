@@ -14,7 +14,7 @@ import numpy as np
 
 import core
 
-from .scenario import ACCEPTED, COMPARISONS, CRITERIA, DIFFERENCES, MAX_STATIONS, Scenario
+from .scenario import ACCEPTED, COMPARISONS, CRITERIA, DIFFERENCES, Scenario
 
 #: Numba's fallback threading layer (workqueue) must not be entered from two threads at once,
 #: and one map already keeps both cores busy: kernels run one at a time. A map takes tens of ms,

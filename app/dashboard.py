@@ -9,14 +9,14 @@ import html
 import json
 
 import holoviews as hv
-from bokeh.models.widgets.tables import NumberFormatter
 import pandas as pd
 import panel as pn
+from bokeh.models.widgets.tables import NumberFormatter
 from panel.links import Callback
 
 from . import compute, map_figures, views
 from .compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot
-from .scenario import PRESETS, Scenario
+from .scenario import MAX_STATIONS, PRESETS, Scenario
 
 #: Sidebar sections: (title, parameters, collapsed?).
 SECTIONS = (
@@ -105,11 +105,11 @@ triangle or square of N stations (or free positions, ~10 s) and makes it the cus
 
 def design_tab(scenario, cache):
     """Custom layouts in metres of error, and the best dual-station spacing."""
-    snap = lambda: Snapshot.of(scenario, DESIGN_FIELDS)  # noqa: E731
+    snap = lambda: Snapshot.of(scenario, DESIGN_FIELDS)
     watch = [f for f in DESIGN_FIELDS if f != "stations"]
     points = hv.DynamicMap(lambda **_: views.station_layer(scenario.stations),
                            streams=[hv.streams.Params(scenario, ["stations"])])
-    draw = hv.streams.PointDraw(source=points, num_objects=compute.MAX_STATIONS, empty_value=scenario.h)
+    draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS, empty_value=scenario.h)
 
     def drawn(data):
         if data is None or not len(data.get("x", [])):

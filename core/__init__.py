@@ -4,7 +4,6 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 :func:`observable_rank`; the rest builds on them. No web stack is imported here.
 """
 
-from .fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
 from .design import (
     CRITERIA,
     LAYOUTS,
@@ -22,7 +21,14 @@ from .design import (
     spacing_curve,
     station_layout,
 )
-from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, FisherMeasures, fisher_information, fisher_measures
+from .fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
+from .fisher import (
+    DEFAULT_NOISE,
+    DEFAULT_STEPS,
+    FisherMeasures,
+    fisher_information,
+    fisher_measures,
+)
 from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
 from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
 from .observability import (

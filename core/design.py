@@ -250,7 +250,7 @@ def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEF
 
 def _plane_states(plane, velocity, moments):
     if not isinstance(plane, Plane):  # ValueError for all bad input, as core does
-        raise ValueError(  # noqa: TRY004
+        raise ValueError(
             f"plane must be a core.Plane; got {type(plane).__name__}")
     template, _ = validation.states([0.0, 0.0, 0.0, *_pair("velocity", velocity),
                                      *_pair("moments", moments)])  # checks speed > 0
@@ -425,7 +425,7 @@ def _check_criterion(criterion, threshold):
 
 def _region_states(region, velocity, moments):
     if not isinstance(region, Plane):
-        raise ValueError(  # noqa: TRY004
+        raise ValueError(
             "region must be a core.Plane (an x–y rectangle at a target depth, or an x–z band of "
             f"depths); got {type(region).__name__}"
         )

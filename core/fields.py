@@ -27,7 +27,6 @@ import numba as nb
 import numpy as np
 
 from . import validation
-from .validation import STATE_NAMES
 
 __all__ = ["MODELS", "STATE_UNITS", "dipole_field", "field_jacobian"]
 

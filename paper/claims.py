@@ -215,7 +215,7 @@ def fig4_fractions(model, n, method, pair, z=sc.Z):
     mb, ma = (sc.FIG4_MOMENTS[i] for i in pair)
     vb, va = _maps(plane, model, moments=mb)[method], _maps(plane, model, moments=ma)[method]
     r = sc.horizontal_range(plane)
-    pos = lambda w: 1.0 - blank_fraction(vb, va, w)  # noqa: E731
+    pos = lambda w: 1.0 - blank_fraction(vb, va, w)
     return pos(r <= NEAR_M), pos(r >= FAR_M), blank_fraction(vb, va)
 
 

@@ -44,7 +44,7 @@ def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, com
     # per model: the d scan, the high-precision check, 26 PNG panels, 9 HTML figures
     steps = len(sc.MODELS) * (len(beyond.SCAN_D) + 1 + 26 + (9 if html else 0))
     bar = tqdm(total=steps, desc="paper", unit="step", disable=quiet, file=sys.stderr)
-    tick = lambda: bar.update(1)  # noqa: E731
+    tick = lambda: bar.update(1)
     scan = {"d_m": list(beyond.SCAN_D)}
     claims_by_model, evidence, known, pngs, htmls = {}, {}, {}, {}, {}
     for model in sc.MODELS:

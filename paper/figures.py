@@ -125,7 +125,7 @@ def extra_figures(model, n, scan):
         "panels": [
             ("mean D-optimal ½·log10 det F", {"7 states, map mean": s["d_optimal"]["mean"],
                                               "5 states (moments known), map mean": s["d_optimal_known"]["mean"],
-                                              f"7 states, within 50 m of station 1": s["d_optimal"]["near_mean"]}),
+                                              "7 states, within 50 m of station 1": s["d_optimal"]["near_mean"]}),
             ("median CRLB position error (m)", {"7 states": s["crlb_median"]}),
         ]}))
     return figs

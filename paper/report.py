@@ -142,7 +142,7 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
     for key in ("known_dopt", "known_crlb"):
         w("| " + " | ".join(_img(doc_dir, pngs[(m, key)], key) for m in sc.MODELS) + " |")
     w("")
-    w(f"### Which spacing d maximises dual-station observability over Fig. 5's region\n")
+    w("### Which spacing d maximises dual-station observability over Fig. 5's region\n")
     d = np.asarray(scan["d_m"])
     for model in sc.MODELS:
         s = scan[model]

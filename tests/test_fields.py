@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import core
-from tests.conftest import random_stations, random_states
+from tests.conftest import random_states, random_stations
 from tests.reference import symbolic
 
 
@@ -50,7 +50,7 @@ def test_field_is_linear_in_moments(rng, model):
     a, b = 1.7, -0.6
     mix = s1.copy()
     mix[:, 5:] = a * s1[:, 5:] + b * s2[:, 5:]
-    e = lambda s: core.dipole_field(s, stations, model=model)  # noqa: E731
+    e = lambda s: core.dipole_field(s, stations, model=model)
     np.testing.assert_allclose(e(mix), a * e(s1) + b * e(s2), rtol=1e-12, atol=1e-24)
 
 

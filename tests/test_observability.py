@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import core
-from tests.conftest import PAPER_STATE, random_stations, random_states
+from tests.conftest import PAPER_STATE, random_states, random_stations
 from tests.reference import symbolic
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_logdet.json").read_text())
@@ -145,7 +145,7 @@ def test_tolerances_separate_round_off_from_observability():
         single = core.gamma(states, SINGLE, model=model)
         dual = core.gamma(states, core.dual_station(100, 2), model=model)
         dual_all = core.gamma(states, core.dual_station(100, 2), model=model, steps=3)
-        ratio = lambda g: (lambda s: s[:, -1] / s[:, 0])(  # noqa: E731
+        ratio = lambda g: (lambda s: s[:, -1] / s[:, 0])(
             np.linalg.svd(g / np.linalg.norm(g, axis=1, keepdims=True), compute_uv=False))
         assert ratio(single).max() < core.RANK_RTOL * 1e-4
         assert ratio(dual).min() > core.RANK_RTOL * 100

@@ -136,7 +136,7 @@ def test_fig3_scaling_identity(run, model):
 @pytest.mark.parametrize("model", ["exact", "paper"])
 def test_fig5_and_fig6_blank_fractions_match_core(run, model):
     s = grid()
-    det = lambda st: core.log10_abs_det_gamma(s, st, model=model)  # noqa: E731
+    det = lambda st: core.log10_abs_det_gamma(s, st, model=model)
     single = det(core.single_station(100))
     f2, f15 = blank(det(core.dual_station(100, 2)), single), blank(det(core.dual_station(100, 15)), single)
     c5a, c5b = check(run, model, "C5a", "a"), check(run, model, "C5b", "a")

@@ -1,6 +1,5 @@
 """The dashboard's state and computations, without a browser."""
 
-import io
 import math
 
 import numpy as np

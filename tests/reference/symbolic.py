@@ -15,6 +15,7 @@ import sympy as sp
 
 from paper.symbolic import SIGMA, S, X, field_expressions
 
+
 @functools.lru_cache(maxsize=None)
 def field_functions(model):
     """numpy functions (E, J) of (*X, *S, sigma): E (3,...) and J (3, 7, ...)."""
