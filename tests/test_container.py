@@ -193,9 +193,8 @@ def server(engine, image):
                     f"--- container log ---\n{engine.logs(cid)}"
                 )
             time.sleep(1)
-        # First page: the server process still recompiles two numba kernels (~35 s on 2 cores;
-        # known issue, the build-time cache is not reused by the server process). Load it once
-        # here with room for that, so the tests below see the server as later visitors do.
+        # First page: builds the first session (~6 s; more if the numba cache were cold). Load it
+        # once here with room for that, so the tests below see the server as later visitors do.
         _get(f"{base}/", timeout=300)
         yield engine, cid, base
     finally:
