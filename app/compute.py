@@ -100,11 +100,13 @@ def difference(a, b, measure, mode):
     return core.log10_ratio(b.value, a.value), "log10(B / A) (signed log-ratio)"
 
 
-def _shared_clim(*maps):
-    vals = np.concatenate([m.value[np.isfinite(m.value)] for m in maps])
+def colour_range(*arrays):
+    """(low, high) covering 0.5–99.5 % of the finite values of all ``arrays``: a station's
+    singular neighbourhood must not wash out the rest of a map. (0, 1) if none is finite."""
+    vals = np.concatenate([a[np.isfinite(a)] for a in arrays])
     if vals.size == 0:
         return (0.0, 1.0)
-    lo, hi = np.percentile(vals, [0.5, 99.5])  # a station's singular neighbourhood must not wash out the rest
+    lo, hi = np.percentile(vals, [0.5, 99.5])
     return (float(lo), float(hi if hi > lo else lo + 1.0))
 
 
@@ -159,7 +161,7 @@ def compute(snapshot: Snapshot) -> Panels:
     return Panels(
         plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_label),
         stations=(st_a, st_b), measure=measure, value_label=label, value_unit=unit,
-        diff_label=diff_label, clim=_shared_clim(a, b), note=note,
+        diff_label=diff_label, clim=colour_range(a.value, b.value), note=note,
     )
 
 

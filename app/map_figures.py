@@ -21,7 +21,7 @@ from bokeh.models import (
 from bokeh.palettes import RdBu11, Viridis256
 from bokeh.plotting import figure
 
-from .compute import Panels
+from .compute import Panels, colour_range
 
 VEIL = "#7f7f7f"
 FRAME = 270  # px, each map's plotting area
@@ -85,14 +85,6 @@ def _symmetric(values):
     return (-m or -1.0, m or 1.0)
 
 
-def _range(values):
-    finite = values[np.isfinite(values)]
-    if not finite.size:
-        return (0.0, 1.0)
-    lo, hi = np.percentile(finite, [0.5, 99.5])
-    return (float(lo), float(hi if hi > lo else lo + 1.0))
-
-
 def contents(p: Panels):
     """What each map shows: [(values, observable, stations (S, 2), title)], labels and ranges.
 
@@ -106,7 +98,7 @@ def contents(p: Panels):
     both = np.unique(np.vstack(p.stations), axis=0)
     maps.append((p.diff, p.a.observable & p.b.observable, both[:, [0, col]], p.titles[2]))
     paper_diff = p.diff_label.startswith("log10(|B|")
-    diff_range = _range(p.diff) if paper_diff else _symmetric(p.diff)
+    diff_range = colour_range(p.diff) if paper_diff else _symmetric(p.diff)
     return maps, ("x", "y" if p.plane.kind == "xy" else "z"), p.clim, diff_range, paper_diff
 
 

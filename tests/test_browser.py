@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.server import CHROMIUM, CHROMIUM_ARGS, served_app
+from tests.server import CHROMIUM, chromium_browser, served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 DOCS = Path(__file__).resolve().parents[1] / "docs"
@@ -48,10 +48,8 @@ def server():
 
 @pytest.fixture(scope="module")
 def chromium():
-    with playwright.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
+    with chromium_browser() as browser:
+        yield browser
 
 
 @pytest.fixture

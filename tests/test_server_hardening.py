@@ -16,7 +16,7 @@ from tornado.httpclient import HTTPClientError, HTTPRequest
 from tornado.websocket import websocket_connect
 
 from app.scenario import ACCEPTED, Scenario
-from tests.server import CHROMIUM, CHROMIUM_ARGS, served_app
+from tests.server import CHROMIUM, chromium_browser, served_app
 
 
 @pytest.fixture(scope="module")
@@ -115,13 +115,9 @@ LINKS = {  # query -> text the message must contain (None: no message; the value
 
 @pytest.fixture(scope="module")
 def chromium():
-    with playwright.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
+    with chromium_browser() as browser:
+        yield browser
 
-
-COMBINED = "Ph=1e99&resolution=100000&heading=nan&measure=%3Cmarquee%3Ex"
 
 
 @pytest.mark.parametrize("query", list(LINKS))
