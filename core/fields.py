@@ -41,104 +41,118 @@ STATE_UNITS = ("m", "m", "m", "m/s", "m/s", "A·m", "A·m")
 MODELS = ("exact", "paper")
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _numerator_exact(a, b, c, f, nbuf, dndr, dndf):
-    """Exact dipole: N = 3 (p·r) r − p D², p = f[:3]. Hand-derived partials."""
+#: Compile options of every kernel. ``error_model="numpy"``: a float division by zero gives inf
+#: instead of raising, which keeps loops branch-free so that LLVM can vectorise them.
+JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
+
+
+@nb.njit(inline="always", **JIT)
+def _numerator_exact(a, b, c, f0, f1, f2, f3):
+    """Exact dipole: N = 3 (p·r) r − p D², p = (f0, f1, f2). Hand-derived partials.
+
+    Returns (N (3), ∂N/∂r (3 × 3, row-major), ∂N/∂f (3 × 4, row-major)) as one flat tuple:
+    ∂N_i/∂r_j = 3 p_j r_i − 2 p_i r_j + 3 (p·r) δ_ij and ∂N_i/∂p_j = 3 r_i r_j − δ_ij D²; the
+    bare Ph feature f3 does not enter the exact field.
+    """
     d2 = a * a + b * b + c * c
-    r = (a, b, c)
-    pr = f[0] * a + f[1] * b + f[2] * c
-    for i in range(3):
-        nbuf[i] = 3.0 * pr * r[i] - f[i] * d2
-        for j in range(3):
-            # dN_i/dr_j = 3 p_j r_i + 3 (p·r) δ_ij − 2 p_i r_j
-            dndr[i, j] = 3.0 * f[j] * r[i] - 2.0 * f[i] * r[j]
-            # dN_i/dp_j = 3 r_i r_j − δ_ij D²
-            dndf[i, j] = 3.0 * r[i] * r[j]
-        dndr[i, i] += 3.0 * pr
-        dndf[i, i] -= d2
-        dndf[i, 3] = 0.0  # the bare Ph feature does not enter the exact field
+    t = 3.0 * (f0 * a + f1 * b + f2 * c)  # 3 (p·r)
+    return (t * a - f0 * d2, t * b - f1 * d2, t * c - f2 * d2,
+            f0 * a + t, 3.0 * f1 * a - 2.0 * f0 * b, 3.0 * f2 * a - 2.0 * f0 * c,
+            3.0 * f0 * b - 2.0 * f1 * a, f1 * b + t, 3.0 * f2 * b - 2.0 * f1 * c,
+            3.0 * f0 * c - 2.0 * f2 * a, 3.0 * f1 * c - 2.0 * f2 * b, f2 * c + t,
+            3.0 * a * a - d2, 3.0 * a * b, 3.0 * a * c, 0.0,
+            3.0 * a * b, 3.0 * b * b - d2, 3.0 * b * c, 0.0,
+            3.0 * a * c, 3.0 * b * c, 3.0 * c * c - d2, 0.0)
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _numerator_paper(a, b, c, f, nbuf, dndr, dndf):
+@nb.njit(inline="always", **JIT)
+def _numerator_paper(a, b, c, f0, f1, f2, f3):
     """The paper's eqs. (10)–(12) as printed, with (a, b, c) = (x, y, z − h) of the target
-    relative to the station; f = (Ph cos θ, Ph sin θ, Pv, Ph)."""
+    relative to the station; f = (Ph cos θ, Ph sin θ, Pv, Ph). Same flat tuple as
+    :func:`_numerator_exact`."""
     d2 = a * a + b * b + c * c
     q = 3.0 * a * a - d2  # the printed 3x² − D², used in both Ex and Ey
-    # eq. (10): Ex = Ph cosθ (3a² − D²) − Ph sinθ 3ab + Pv 3ac
-    nbuf[0] = f[0] * q - 3.0 * f[1] * a * b + 3.0 * f[2] * a * c
-    dndr[0, 0] = 4.0 * f[0] * a - 3.0 * f[1] * b + 3.0 * f[2] * c
-    dndr[0, 1] = -2.0 * f[0] * b - 3.0 * f[1] * a
-    dndr[0, 2] = -2.0 * f[0] * c + 3.0 * f[2] * a
-    dndf[0, 0], dndf[0, 1], dndf[0, 2], dndf[0, 3] = q, -3.0 * a * b, 3.0 * a * c, 0.0
-    # eq. (11): Ey = Ph sinθ (3a² − D²) + Ph cosθ 3ab + Pv 3bc
-    nbuf[1] = f[1] * q + 3.0 * f[0] * a * b + 3.0 * f[2] * b * c
-    dndr[1, 0] = 4.0 * f[1] * a + 3.0 * f[0] * b
-    dndr[1, 1] = -2.0 * f[1] * b + 3.0 * f[0] * a + 3.0 * f[2] * c
-    dndr[1, 2] = -2.0 * f[1] * c + 3.0 * f[2] * b
-    dndf[1, 0], dndf[1, 1], dndf[1, 2], dndf[1, 3] = 3.0 * a * b, q, 3.0 * b * c, 0.0
-    # eq. (12): Ez = Ph 3ac + Pv (3c² − D²)   (no heading: the bare Ph, feature 3)
-    nbuf[2] = 3.0 * f[3] * a * c + f[2] * (3.0 * c * c - d2)
-    dndr[2, 0] = 3.0 * f[3] * c - 2.0 * f[2] * a
-    dndr[2, 1] = -2.0 * f[2] * b
-    dndr[2, 2] = 3.0 * f[3] * a + 4.0 * f[2] * c
-    dndf[2, 0], dndf[2, 1], dndf[2, 2], dndf[2, 3] = 0.0, 0.0, 3.0 * c * c - d2, 3.0 * a * c
+    return (
+        # eq. (10): Ex = Ph cosθ (3a² − D²) − Ph sinθ 3ab + Pv 3ac
+        # eq. (11): Ey = Ph sinθ (3a² − D²) + Ph cosθ 3ab + Pv 3bc
+        # eq. (12): Ez = Ph 3ac + Pv (3c² − D²)   (no heading: the bare Ph, feature 3)
+        f0 * q - 3.0 * f1 * a * b + 3.0 * f2 * a * c,
+        f1 * q + 3.0 * f0 * a * b + 3.0 * f2 * b * c,
+        3.0 * f3 * a * c + f2 * (3.0 * c * c - d2),
+        4.0 * f0 * a - 3.0 * f1 * b + 3.0 * f2 * c, -2.0 * f0 * b - 3.0 * f1 * a, -2.0 * f0 * c + 3.0 * f2 * a,
+        4.0 * f1 * a + 3.0 * f0 * b, -2.0 * f1 * b + 3.0 * f0 * a + 3.0 * f2 * c, -2.0 * f1 * c + 3.0 * f2 * b,
+        3.0 * f3 * c - 2.0 * f2 * a, -2.0 * f2 * b, 3.0 * f3 * a + 4.0 * f2 * c,
+        q, -3.0 * a * b, 3.0 * a * c, 0.0,
+        3.0 * a * b, q, 3.0 * b * c, 0.0,
+        0.0, 0.0, 3.0 * c * c - d2, 3.0 * a * c,
+    )
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model, nbuf, dndr, dndf, e, jac):
-    """Field ``e`` (3,) and ∂E/∂X ``jac`` (3, 7) at one target–station offset ``r``.
+@nb.njit(inline="always", **JIT)
+def _jacobian_row(n, r0, r1, r2, q0, q1, q2, q3, a, b, c, d2, inv5, f0, f1, cos, sin, inv_speed):
+    """One field component from its numerator ``n`` and partials: (E_i, ∂E_i/∂X (7)).
 
-    ``model`` is an index into :data:`MODELS`; ``nbuf`` (3,), ``dndr`` (3, 3) and ``dndf``
-    (3, 4) are scratch. Assumes D > 0, speed > 0.
+    Quotient rule ∂E/∂r = K (∂N/∂r − 5 N r / D²) / D⁵ (``inv5`` = K / D⁵); moments through
+    f = (Ph cos θ, Ph sin θ, Pv, Ph) and the heading θ = atan2(vy, vx), with
+    ∂θ/∂vx = −sin θ / |v| and ∂θ/∂vy = cos θ / |v|.
     """
-    speed = math.sqrt(vx * vx + vy * vy)
-    c = vx / speed
-    s = vy / speed
-    f0 = ph * c
-    f1 = ph * s
-    d2 = rx * rx + ry * ry + rz * rz
-    # 1. Numerator N = D⁵ E / K and its partials in r and in the features f.
+    e = n * inv5
+    five = 5.0 * e / d2
+    df0 = q0 * inv5
+    df1 = q1 * inv5
+    de_dtheta = (df1 * f0 - df0 * f1) * inv_speed  # (dE/df0·(−Ph s) + dE/df1·(Ph c)) / |v|
+    return (e, r0 * inv5 - five * a, r1 * inv5 - five * b, r2 * inv5 - five * c,
+            -de_dtheta * sin, de_dtheta * cos, df0 * cos + df1 * sin + q3 * inv5, q2 * inv5)
+
+
+@nb.njit(inline="always", **JIT)
+def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model):
+    """Field and ∂E/∂X at one target–station offset ``r`` (target − station), as three rows
+    (Ex, Ey, Ez), each ``(E_i, ∂E_i/∂x, ∂E_i/∂y, ∂E_i/∂z, ∂E_i/∂vx, ∂E_i/∂vy, ∂E_i/∂Ph,
+    ∂E_i/∂Pv)``. Scalars in, a tuple out: no memory, so loops over points vectorise.
+
+    ``model`` is an index into :data:`MODELS`. Assumes D > 0, speed > 0.
+    """
+    inv_speed = 1.0 / math.sqrt(vx * vx + vy * vy)
+    cos = vx * inv_speed
+    sin = vy * inv_speed
+    f0 = ph * cos
+    f1 = ph * sin
     if model == 0:
-        _numerator_exact(rx, ry, rz, (f0, f1, pv, ph), nbuf, dndr, dndf)
+        t = _numerator_exact(rx, ry, rz, f0, f1, pv, ph)
     else:
-        _numerator_paper(rx, ry, rz, (f0, f1, pv, ph), nbuf, dndr, dndf)
-    # 2. E = K N / D⁵ and the quotient rule: ∂E/∂r = K (∂N/∂r − 5 N rᵀ / D²) / D⁵.
+        t = _numerator_paper(rx, ry, rz, f0, f1, pv, ph)
+    d2 = rx * rx + ry * ry + rz * rz
     inv5 = kappa / (d2 * d2 * math.sqrt(d2))
+    return (
+        _jacobian_row(t[0], t[3], t[4], t[5], t[12], t[13], t[14], t[15],
+                      rx, ry, rz, d2, inv5, f0, f1, cos, sin, inv_speed),
+        _jacobian_row(t[1], t[6], t[7], t[8], t[16], t[17], t[18], t[19],
+                      rx, ry, rz, d2, inv5, f0, f1, cos, sin, inv_speed),
+        _jacobian_row(t[2], t[9], t[10], t[11], t[20], t[21], t[22], t[23],
+                      rx, ry, rz, d2, inv5, f0, f1, cos, sin, inv_speed),
+    )
+
+
+@nb.njit(inline="always", **JIT)
+def _store_rows(rows, e, jac):
+    """Write :func:`_local_jacobian`'s rows into ``e`` (3,) and ``jac`` (3, 7)."""
     for i in range(3):
-        ei = nbuf[i] * inv5
-        e[i] = ei
-        five_e = 5.0 * ei / d2
-        jac[i, 0] = dndr[i, 0] * inv5 - five_e * rx  # dE/dx  (r = target − station)
-        jac[i, 1] = dndr[i, 1] * inv5 - five_e * ry  # dE/dy
-        jac[i, 2] = dndr[i, 2] * inv5 - five_e * rz  # dE/dz
-        # 3. Moments: f = (Ph c, Ph s, Pv, Ph); heading θ = atan2(vy, vx).
-        de_df0 = dndf[i, 0] * inv5
-        de_df1 = dndf[i, 1] * inv5
-        de_dtheta = -de_df0 * f1 + de_df1 * f0  # dE/dθ = dE/df0·(−Ph s) + dE/df1·(Ph c)
-        jac[i, 3] = -de_dtheta * s / speed  # dE/dvx, dθ/dvx = −sin θ / |v|
-        jac[i, 4] = de_dtheta * c / speed  # dE/dvy, dθ/dvy = cos θ / |v|
-        jac[i, 5] = de_df0 * c + de_df1 * s + dndf[i, 3] * inv5  # dE/dPh
-        jac[i, 6] = dndf[i, 2] * inv5  # dE/dPv
+        row = rows[i]
+        e[i] = row[0]
+        jac[i, 0], jac[i, 1], jac[i, 2], jac[i, 3] = row[1], row[2], row[3], row[4]
+        jac[i, 4], jac[i, 5], jac[i, 6] = row[5], row[6], row[7]
 
 
-@nb.njit(cache=True, parallel=True, nogil=True)
+@nb.njit(parallel=True, nogil=True, **JIT)
 def _field_and_jacobian_kernel(states, stations, kappa, model, e_out, j_out):
     # states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7)
-    npts = states.shape[0]
-    nblock = (npts + 255) // 256
-    for b in nb.prange(nblock):
-        nbuf = np.empty(3)
-        dndr = np.empty((3, 3))
-        dndf = np.empty((3, 4))
-        for p in range(b * 256, min(npts, (b + 1) * 256)):
-            x = states[p]
-            for s in range(stations.shape[0]):
-                _local_jacobian(
-                    x[0] - stations[s, 0], x[1] - stations[s, 1], x[2] - stations[s, 2],
-                    x[3], x[4], x[5], x[6], kappa, model,
-                    nbuf, dndr, dndf, e_out[p, s], j_out[p, s],
-                )
+    for p in nb.prange(states.shape[0]):
+        x = states[p]
+        for s in range(stations.shape[0]):
+            rows = _local_jacobian(x[0] - stations[s, 0], x[1] - stations[s, 1], x[2] - stations[s, 2],
+                                   x[3], x[4], x[5], x[6], kappa, model)
+            _store_rows(rows, e_out[p, s], j_out[p, s])
 
 
 def _field_and_jacobian(states, stations, sigma, model):

@@ -19,20 +19,21 @@ import math
 import numba as nb
 import numpy as np
 
-from .fields import FASTMATH, _local_jacobian
+from .fields import JIT, _local_jacobian, _store_rows
 from .validation import ON_STATION
 
 _BLOCK = 256
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf, e, jac, g):
+@nb.njit(**JIT)
+def _gamma_point(x, stations, step, kappa, model, free, n_rows, e, jac, g):
     """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (7,).
     Returns False, with ``g`` incomplete, if the target comes within ON_STATION of a station.
 
     Rows are time-major, then station-major, then component (Ex, Ey, Ez): the paper's order.
     Row block of instant i is ``(∂h/∂X)(Φ^i x) · Φ^i``; Φ^i adds i·T·(∂/∂x, ∂/∂y) to the
-    velocity columns (constant-velocity motion, no vertical speed).
+    velocity columns (constant-velocity motion, no vertical speed). ``e`` (3,) and ``jac``
+    (3, 7) are scratch.
     """
     n_s = stations.shape[0]
     row = 0
@@ -49,10 +50,7 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf
             rz = x[2] - stations[s, 2]
             if rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION:
                 return False
-            _local_jacobian(
-                rx, ry, rz,
-                x[3], x[4], x[5], x[6], kappa, model, nbuf, dndr, dndf, e, jac,
-            )
+            _store_rows(_local_jacobian(rx, ry, rz, x[3], x[4], x[5], x[6], kappa, model), e, jac)
             for comp in range(3):
                 if row >= n_rows:
                     break
@@ -69,23 +67,19 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, nbuf, dndr, dndf
     return True
 
 
-@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
+@nb.njit(parallel=True, nogil=True, **JIT)
 def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
     """Γ for every state: states (P, 7) -> out (P, n_rows, n_free) (NaN on stations)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        nbuf = np.empty(3)
-        dndr = np.empty((3, 3))
-        dndf = np.empty((3, 4))
         e = np.empty(3)
         jac = np.empty((3, 7))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
-                                nbuf, dndr, dndf, e, jac, out[p]):
+            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows, e, jac, out[p]):
                 out[p] = np.nan
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+@nb.njit(inline="always", **JIT)
 def _log10_column_norms(g, lognorm):
     """lognorm[j] = log10 ‖g_j‖ (-inf for a zero column); returns their sum."""
     total = 0.0
@@ -98,89 +92,165 @@ def _log10_column_norms(g, lognorm):
     return total
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _log10_norm_product(g):
-    """Σ_j log10 ‖g_j‖ with one logarithm (the hot path), per column only if the product of
-    squared norms leaves float64's normal range."""
-    prod = 1.0
-    for j in range(g.shape[1]):
-        acc = 0.0
-        for r in range(g.shape[0]):
-            acc += g[r, j] * g[r, j]
-        prod *= acc
-    if 1e-300 < prod < 1e300:
-        return 0.5 * math.log10(prod)
-    total = 0.0
-    for j in range(g.shape[1]):
-        acc = 0.0
-        for r in range(g.shape[0]):
-            acc += g[r, j] * g[r, j]
-        total += 0.5 * math.log10(acc) if acc > 0.0 else -np.inf
-    return total
+#: Points evaluated together by :func:`square_measures`. Each per-point quantity is a row of
+#: ``LANES`` values in one workspace, and every loop over a row compiles to AVX2 vector code:
+#: LLVM fully unrolls shorter loops and then leaves them scalar (numba keeps SLP vectorisation
+#: off), so 128 lanes measured ~2× faster than one point at a time (bench/bench_core.py).
+LANES = 128
+# Workspace rows of square_measures (each LANES wide): states, the current station's rows
+# (E_i, ∂E_i/∂X) × 3, Γ (7 × 7, row-major), squared column norms, pivot row, per-lane scalars.
+_X, _J, _G, _SQ, _T = 0, 7, 31, 80, 87
+_PIV, _BEST, _DET, _INV, _FAC, _BAD, _ROWS = 94, 95, 96, 97, 98, 99, 100
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _lu_abs_det(a):
-    """|det a| of a square matrix (n ≤ 63) by Gaussian elimination with partial pivoting;
-    destroys ``a``.
+@nb.njit(inline="always", **JIT)
+def _put_row(w, r0, lane, row):
+    """w[r0 : r0 + 8, lane] = row (one component's (E_i, ∂E_i/∂X))."""
+    w[r0, lane], w[r0 + 1, lane], w[r0 + 2, lane], w[r0 + 3, lane] = row[0], row[1], row[2], row[3]
+    w[r0 + 4, lane], w[r0 + 5, lane], w[r0 + 6, lane], w[r0 + 7, lane] = row[4], row[5], row[6], row[7]
 
-    Rows are never swapped: a bitmask marks the rows already used as pivots. That keeps the
-    inner loops free of data-dependent row indices, which measured 2–3× faster than swapping
-    for 7 × 7 (bench/). Row pivoting picks the same pivots for ``a`` and for ``a`` with scaled
-    columns, so no column scaling is needed: det Γ_s = det Γ / Π‖Γ_j‖ up to rounding.
+
+@nb.njit(inline="always", **JIT)
+def _assemble_lanes(w, stations, step, kappa, model, free):
+    """Γ (paper rule: the first n_free rows) of the LANES states in w[_X:_X+7] into
+    w[_G + 7 r + q]; w[_BAD] = 1 where a target comes within ON_STATION of a station (its
+    offset is replaced by a harmless one; the caller masks the result)."""
+    n = free.shape[0]
+    row = 0
+    i = 0
+    while row < n:
+        dt = i * step
+        for s in range(stations.shape[0]):
+            if row >= n:
+                break
+            sx, sy, sz = stations[s, 0], stations[s, 1], stations[s, 2]
+            for lane in range(LANES):
+                rx = w[_X, lane] + dt * w[_X + 3, lane] - sx
+                ry = w[_X + 1, lane] + dt * w[_X + 4, lane] - sy
+                rz = w[_X + 2, lane] - sz
+                near = rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION
+                w[_BAD, lane] = 1.0 if near else w[_BAD, lane]
+                rows = _local_jacobian(1.0 if near else rx, ry, rz, w[_X + 3, lane], w[_X + 4, lane],
+                                       w[_X + 5, lane], w[_X + 6, lane], kappa, model)
+                _put_row(w, _J, lane, rows[0])
+                _put_row(w, _J + 8, lane, rows[1])
+                _put_row(w, _J + 16, lane, rows[2])
+            for comp in range(3):
+                if row >= n:
+                    break
+                for q in range(n):
+                    col = free[q]
+                    dst, src = _G + 7 * row + q, _J + 8 * comp + 1 + col
+                    if col == 3 or col == 4:  # Φ^i: ∂(x, y)_{k+i}/∂(vx, vy)_k = i·T
+                        pos = _J + 8 * comp + col - 2
+                        for lane in range(LANES):
+                            w[dst, lane] = w[src, lane] + dt * w[pos, lane]
+                    else:
+                        for lane in range(LANES):
+                            w[dst, lane] = w[src, lane]
+                row += 1
+        i += 1
+
+
+@nb.njit(inline="always", **JIT)
+def _lu_abs_det_lanes(w, n):
+    """w[_DET] = |det| of the n × n matrices in w[_G…] (destroyed), one per lane.
+
+    Gaussian elimination with partial pivoting, branch-free across lanes: each lane's pivot
+    row is gathered into w[_T] by selects, the pivot row's slot receives the old row k, and
+    every remaining row is eliminated against w[_T]. Row pivoting picks the same pivots for a
+    matrix and for it with scaled columns, so no column scaling is needed.
     """
-    n = a.shape[0]
-    det = 1.0
-    used = 0
+    for lane in range(LANES):
+        w[_DET, lane] = 1.0
     for k in range(n):
-        piv = -1
-        big = -1.0
-        for r in range(n):
-            if (used >> r) & 1 == 0:
-                v = abs(a[r, k])
-                if v > big:
-                    big = v
-                    piv = r
-        if big == 0.0:
-            return 0.0
-        used |= 1 << piv
-        det *= big
-        inv = 1.0 / a[piv, k]
-        for r in range(n):
-            if (used >> r) & 1 == 0:
-                f = a[r, k] * inv
-                for c in range(k + 1, n):
-                    a[r, c] -= f * a[piv, c]
-    return det
+        kk = _G + 8 * k
+        for lane in range(LANES):
+            w[_BEST, lane] = abs(w[kk, lane])
+            w[_PIV, lane] = k
+        for r in range(k + 1, n):
+            rk, rf = _G + 7 * r + k, float(r)
+            for lane in range(LANES):
+                v = abs(w[rk, lane])
+                bigger = v > w[_BEST, lane]
+                w[_BEST, lane] = v if bigger else w[_BEST, lane]
+                w[_PIV, lane] = rf if bigger else w[_PIV, lane]
+        for c in range(k, n):
+            for lane in range(LANES):
+                w[_T + c, lane] = w[_G + 7 * k + c, lane]
+            for r in range(k + 1, n):
+                rc, rf = _G + 7 * r + c, float(r)
+                for lane in range(LANES):
+                    candidate, current = w[rc, lane], w[_T + c, lane]
+                    w[_T + c, lane] = candidate if w[_PIV, lane] == rf else current
+        for lane in range(LANES):
+            w[_DET, lane] *= w[_BEST, lane]
+            pivot = w[_T + k, lane]
+            w[_INV, lane] = 1.0 / pivot if pivot != 0.0 else 0.0
+        for r in range(k + 1, n):
+            rk, rf = _G + 7 * r + k, float(r)
+            for lane in range(LANES):
+                top, own = w[kk, lane], w[rk, lane]
+                w[_FAC, lane] = (top if w[_PIV, lane] == rf else own) * w[_INV, lane]
+            for c in range(k + 1, n):
+                rc, kc = _G + 7 * r + c, _G + 7 * k + c
+                for lane in range(LANES):
+                    top, own = w[kc, lane], w[rc, lane]
+                    w[rc, lane] = (top if w[_PIV, lane] == rf else own) - w[_FAC, lane] * w[_T + c, lane]
 
 
-@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
+@nb.njit(**JIT)
+def _square_group(states, p0, stations, step, kappa, model, free, log_det, log_eta):
+    """:func:`square_measures` for the (up to) LANES points from ``p0``. The workspace is
+    allocated here, with a shape known at compile time, so that LLVM sees its row stride."""
+    n = free.shape[0]
+    w = np.empty((_ROWS, LANES))
+    count = min(LANES, states.shape[0] - p0)
+    for lane in range(LANES):  # a short last group repeats its first point
+        p = p0 + lane if lane < count else p0
+        for k in range(7):
+            w[_X + k, lane] = states[p, k]
+        w[_BAD, lane] = 0.0
+    _assemble_lanes(w, stations, step, kappa, model, free)
+    for j in range(n):
+        for lane in range(LANES):
+            w[_SQ + j, lane] = 0.0
+        for r in range(n):
+            rj = _G + 7 * r + j
+            for lane in range(LANES):
+                w[_SQ + j, lane] += w[rj, lane] * w[rj, lane]
+    _lu_abs_det_lanes(w, n)
+    for lane in range(count):
+        p = p0 + lane
+        if w[_BAD, lane] != 0.0:
+            log_det[p] = np.nan
+            log_eta[p] = np.nan
+            continue
+        prod = 1.0
+        for j in range(n):
+            prod *= w[_SQ + j, lane]
+        if 1e-300 < prod < 1e300:  # one logarithm on the hot path
+            norms = 0.5 * math.log10(prod)
+        else:
+            norms = 0.0
+            for j in range(n):
+                sq = w[_SQ + j, lane]
+                norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
+        det = w[_DET, lane]
+        ld = math.log10(det) if det > 0.0 else -np.inf
+        log_det[p] = ld
+        log_eta[p] = ld - norms
+
+
+@nb.njit(parallel=True, nogil=True, **JIT)
 def square_measures(states, stations, step, kappa, model, free, log_det, log_eta):
     """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point (NaN on
-    stations)."""
-    npts = states.shape[0]
-    n = free.shape[0]
-    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        nbuf = np.empty(3)
-        dndr = np.empty((3, 3))
-        dndf = np.empty((3, 4))
-        e = np.empty(3)
-        jac = np.empty((3, 7))
-        g = np.empty((n, n))
-        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            if not _gamma_point(states[p], stations, step, kappa, model, free, n,
-                                nbuf, dndr, dndf, e, jac, g):
-                log_det[p] = np.nan
-                log_eta[p] = np.nan
-                continue
-            norms = _log10_norm_product(g)
-            det = _lu_abs_det(g)
-            ld = math.log10(det) if det > 0.0 else -np.inf
-            log_det[p] = ld
-            log_eta[p] = ld - norms
+    stations), LANES points at a time."""
+    for group in nb.prange((states.shape[0] + LANES - 1) // LANES):
+        _square_group(states, group * LANES, stations, step, kappa, model, free, log_det, log_eta)
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+@nb.njit(inline="always", **JIT)
 def _householder_r(g, rdiag):
     """Householder QR of g (m × n, m ≥ n) in place: R's strict upper part stays in g, its
     diagonal goes to ``rdiag``. Q is not kept. Backward stable, unlike forming ΓᵀΓ, so an
@@ -208,7 +278,7 @@ def _householder_r(g, rdiag):
                 g[r, j] -= t * g[r, k]
 
 
-@nb.njit(cache=True, parallel=True, nogil=True, fastmath=FASTMATH)
+@nb.njit(parallel=True, nogil=True, **JIT)
 def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                     log_eta, log_norm_sum, inv_diag):
     """All-rows Γ (n_rows × n_free) reduced through its QR factorisation.
@@ -221,9 +291,6 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
     npts = states.shape[0]
     n = free.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        nbuf = np.empty(3)
-        dndr = np.empty((3, 3))
-        dndf = np.empty((3, 4))
         e = np.empty(3)
         jac = np.empty((3, 7))
         g = np.empty((n_rows, n))
@@ -231,8 +298,7 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
         rdiag = np.empty(n)
         rinv = np.empty((n, n))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows,
-                                nbuf, dndr, dndf, e, jac, g):
+            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows, e, jac, g):
                 log_eta[p] = np.nan
                 log_norm_sum[p] = np.nan
                 inv_diag[p] = np.nan
