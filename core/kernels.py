@@ -1,8 +1,10 @@
 """Compiled kernels that build Γ point by point and reduce it to scalar measures.
 
 Private: they assume validated float64 input (see :mod:`core.validation`) and never allocate
-per point. Work is split into blocks of ``_BLOCK`` points run in parallel (``prange``); each
-block owns its scratch buffers, so a 1000 × 1000 map needs no more memory than its outputs.
+per point. Work is split into blocks of ``_BLOCK`` points (``LANES`` for the square-Γ kernel,
+the hot path, which computes its points side by side in vector registers) run in parallel
+(``prange``); each block owns its scratch buffers, so a 1000 × 1000 map needs no more memory
+than its outputs.
 
 Column scaling is used throughout: with ``Γ_s = Γ / ‖Γ_j‖`` (unit columns),
 
