@@ -1,8 +1,8 @@
 """Compiled kernels that build Γ point by point and reduce it to scalar measures.
 
 Private: they assume validated float64 input (see :mod:`core.validation`) and never allocate
-per point. Work is split into blocks of ``_BLOCK`` points (``LANES`` for the square-Γ kernel,
-the hot path, which computes its points side by side in vector registers) run in parallel
+per point. Work is split into blocks of ``_BLOCK`` points (``LANES`` for the map kernels,
+the hot paths, which compute their points side by side in vector registers) run in parallel
 (``prange``); each block owns its scratch buffers, so a 1000 × 1000 map needs no more memory
 than its outputs.
 
@@ -81,19 +81,6 @@ def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
                 out[p] = np.nan
 
 
-@nb.njit(inline="always", **JIT)
-def _log10_column_norms(g, lognorm):
-    """lognorm[j] = log10 ‖g_j‖ (-inf for a zero column); returns their sum."""
-    total = 0.0
-    for j in range(g.shape[1]):
-        acc = 0.0
-        for r in range(g.shape[0]):
-            acc += g[r, j] * g[r, j]
-        lognorm[j] = 0.5 * math.log10(acc) if acc > 0.0 else -np.inf
-        total += lognorm[j]
-    return total
-
-
 #: Points evaluated together by :func:`square_measures`. Each per-point quantity is a row of
 #: ``LANES`` values in one workspace, and every loop over a row compiles to AVX2 vector code:
 #: LLVM fully unrolls shorter loops and then leaves them scalar (numba keeps SLP vectorisation
@@ -113,43 +100,69 @@ def _put_row(w, r0, lane, row):
 
 
 @nb.njit(inline="always", **JIT)
+def _jacobian_lanes(w, dt, stations, s, kappa, model):
+    """Rows (E_i, ∂E_i/∂X) of station ``s`` at time offset ``dt`` for the LANES states in
+    w[_X:_X+7], into w[_J:_J+24]. w[_BAD] = 1 where a target comes within ON_STATION of the
+    station (its offset is replaced by a harmless one; the caller masks the result)."""
+    sx, sy, sz = stations[s, 0], stations[s, 1], stations[s, 2]
+    for lane in range(LANES):
+        rx = w[_X, lane] + dt * w[_X + 3, lane] - sx
+        ry = w[_X + 1, lane] + dt * w[_X + 4, lane] - sy
+        rz = w[_X + 2, lane] - sz
+        near = rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION
+        w[_BAD, lane] = 1.0 if near else w[_BAD, lane]
+        rows = _local_jacobian(1.0 if near else rx, ry, rz, w[_X + 3, lane], w[_X + 4, lane],
+                               w[_X + 5, lane], w[_X + 6, lane], kappa, model)
+        _put_row(w, _J, lane, rows[0])
+        _put_row(w, _J + 8, lane, rows[1])
+        _put_row(w, _J + 16, lane, rows[2])
+
+
+@nb.njit(inline="always", **JIT)
+def _gamma_row_lanes(w, dst, comp, dt, free):
+    """One row of Γ, component ``comp`` of w[_J…] at time offset ``dt``, into w[dst + q] for the
+    free columns q. Φ^i adds i·T·(∂/∂x, ∂/∂y) to the velocity columns."""
+    for q in range(free.shape[0]):
+        col = free[q]
+        src = _J + 8 * comp + 1 + col
+        if col == 3 or col == 4:  # Φ^i: ∂(x, y)_{k+i}/∂(vx, vy)_k = i·T
+            pos = _J + 8 * comp + col - 2
+            for lane in range(LANES):
+                w[dst + q, lane] = w[src, lane] + dt * w[pos, lane]
+        else:
+            for lane in range(LANES):
+                w[dst + q, lane] = w[src, lane]
+
+
+@nb.njit(inline="always", **JIT)
+def _load_lanes(w, states, p0):
+    """States p0 … p0 + LANES − 1 into w[_X:_X+7] (a short last group repeats its first point);
+    clears w[_BAD]. Returns the number of real points."""
+    count = min(LANES, states.shape[0] - p0)
+    for lane in range(LANES):
+        p = p0 + lane if lane < count else p0
+        for k in range(7):
+            w[_X + k, lane] = states[p, k]
+        w[_BAD, lane] = 0.0
+    return count
+
+
+@nb.njit(inline="always", **JIT)
 def _assemble_lanes(w, stations, step, kappa, model, free):
-    """Γ (paper rule: the first n_free rows) of the LANES states in w[_X:_X+7] into
-    w[_G + 7 r + q]; w[_BAD] = 1 where a target comes within ON_STATION of a station (its
-    offset is replaced by a harmless one; the caller masks the result)."""
+    """Γ (paper rule: the first n_free rows, time-major, then station, then component) of the
+    LANES states into w[_G + 7 r + q]."""
     n = free.shape[0]
     row = 0
     i = 0
     while row < n:
-        dt = i * step
         for s in range(stations.shape[0]):
             if row >= n:
                 break
-            sx, sy, sz = stations[s, 0], stations[s, 1], stations[s, 2]
-            for lane in range(LANES):
-                rx = w[_X, lane] + dt * w[_X + 3, lane] - sx
-                ry = w[_X + 1, lane] + dt * w[_X + 4, lane] - sy
-                rz = w[_X + 2, lane] - sz
-                near = rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION
-                w[_BAD, lane] = 1.0 if near else w[_BAD, lane]
-                rows = _local_jacobian(1.0 if near else rx, ry, rz, w[_X + 3, lane], w[_X + 4, lane],
-                                       w[_X + 5, lane], w[_X + 6, lane], kappa, model)
-                _put_row(w, _J, lane, rows[0])
-                _put_row(w, _J + 8, lane, rows[1])
-                _put_row(w, _J + 16, lane, rows[2])
+            _jacobian_lanes(w, i * step, stations, s, kappa, model)
             for comp in range(3):
                 if row >= n:
                     break
-                for q in range(n):
-                    col = free[q]
-                    dst, src = _G + 7 * row + q, _J + 8 * comp + 1 + col
-                    if col == 3 or col == 4:  # Φ^i: ∂(x, y)_{k+i}/∂(vx, vy)_k = i·T
-                        pos = _J + 8 * comp + col - 2
-                        for lane in range(LANES):
-                            w[dst, lane] = w[src, lane] + dt * w[pos, lane]
-                    else:
-                        for lane in range(LANES):
-                            w[dst, lane] = w[src, lane]
+                _gamma_row_lanes(w, _G + 7 * row, comp, i * step, free)
                 row += 1
         i += 1
 
@@ -207,12 +220,7 @@ def _square_group(states, p0, stations, step, kappa, model, free, log_det, log_e
     allocated here, with a shape known at compile time, so that LLVM sees its row stride."""
     n = free.shape[0]
     w = np.empty((_ROWS, LANES))
-    count = min(LANES, states.shape[0] - p0)
-    for lane in range(LANES):  # a short last group repeats its first point
-        p = p0 + lane if lane < count else p0
-        for k in range(7):
-            w[_X + k, lane] = states[p, k]
-        w[_BAD, lane] = 0.0
+    count = _load_lanes(w, states, p0)
     _assemble_lanes(w, stations, step, kappa, model, free)
     for j in range(n):
         for lane in range(LANES):
@@ -252,94 +260,115 @@ def square_measures(states, stations, step, kappa, model, free, log_det, log_eta
         _square_group(states, group * LANES, stations, step, kappa, model, free, log_det, log_eta)
 
 
+# Workspace rows of fisher_measures beyond the shared ones: R (7 × 7 at _G), the incoming row
+# of Γ (at _T), Givens cosines/sines, R⁻¹ (7 × 7).
+_COS, _SIN, _RINV, _FISHER_ROWS = 100, 101, 102, 151
+
+
 @nb.njit(inline="always", **JIT)
-def _householder_r(g, rdiag):
-    """Householder QR of g (m × n, m ≥ n) in place: R's strict upper part stays in g, its
-    diagonal goes to ``rdiag``. Q is not kept. Backward stable, unlike forming ΓᵀΓ, so an
-    exactly singular Γ gives |R_nn| at round-off level (~1e-16), not its square root."""
-    m, n = g.shape
+def _givens_update(w, n):
+    """Fold the row w[_T:_T+n] into the upper-triangular R (w[_G + 7 j + k]) by Givens
+    rotations: R ← the R of QR([R; row]), R_jj ≥ 0. Backward stable (forming ΓᵀΓ is not: it
+    would square the round-off of an exactly singular Γ)."""
+    for j in range(n):
+        jj, tj = _G + 8 * j, _T + j
+        for lane in range(LANES):
+            a, b = w[jj, lane], w[tj, lane]
+            r = math.sqrt(a * a + b * b)
+            nonzero = r > 0.0
+            w[_COS, lane] = a / r if nonzero else 1.0
+            w[_SIN, lane] = b / r if nonzero else 0.0
+            w[jj, lane] = r
+        for k in range(j + 1, n):
+            jk, tk = _G + 7 * j + k, _T + k
+            for lane in range(LANES):
+                rk, xk, c, s = w[jk, lane], w[tk, lane], w[_COS, lane], w[_SIN, lane]
+                w[jk, lane] = c * rk + s * xk
+                w[tk, lane] = c * xk - s * rk
+
+
+@nb.njit(inline="always", **JIT)
+def _inverse_lanes(w, n):
+    """R⁻¹ (upper triangular) into w[_RINV + 7 i + k] by back substitution; inf/NaN where an
+    R_jj is 0 (the caller masks those lanes)."""
     for k in range(n):
-        norm2 = 0.0
-        for r in range(k, m):
-            norm2 += g[r, k] * g[r, k]
-        if norm2 == 0.0:
-            rdiag[k] = 0.0
+        for i in range(k, -1, -1):
+            ik = _RINV + 7 * i + k
+            for lane in range(LANES):
+                w[ik, lane] = 1.0 if i == k else 0.0
+            for j in range(i + 1, k + 1):
+                ij, jk = _G + 7 * i + j, _RINV + 7 * j + k
+                for lane in range(LANES):
+                    w[ik, lane] -= w[ij, lane] * w[jk, lane]
+            ii = _G + 8 * i
+            for lane in range(LANES):
+                w[ik, lane] /= w[ii, lane]
+
+
+@nb.njit(**JIT)
+def _fisher_group(states, p0, stations, step, kappa, model, free, n_rows, log_eta, log_norm_sum,
+                  inv_diag):
+    """:func:`fisher_measures` for the (up to) LANES points from ``p0``."""
+    n = free.shape[0]
+    w = np.empty((_FISHER_ROWS, LANES))
+    count = _load_lanes(w, states, p0)
+    for r in range(_G, _G + 49):
+        w[r] = 0.0
+    for j in range(n):
+        w[_SQ + j] = 0.0
+    for i in range(n_rows // (3 * stations.shape[0])):
+        for s in range(stations.shape[0]):
+            _jacobian_lanes(w, i * step, stations, s, kappa, model)
+            for comp in range(3):
+                _gamma_row_lanes(w, _T, comp, i * step, free)
+                for j in range(n):
+                    for lane in range(LANES):
+                        w[_SQ + j, lane] += w[_T + j, lane] * w[_T + j, lane]
+                _givens_update(w, n)
+    _inverse_lanes(w, n)
+    for lane in range(count):
+        p = p0 + lane
+        if w[_BAD, lane] != 0.0:
+            log_eta[p] = np.nan
+            log_norm_sum[p] = np.nan
+            inv_diag[p] = np.nan
             continue
-        alpha = -math.sqrt(norm2) if g[k, k] >= 0.0 else math.sqrt(norm2)
-        g[k, k] -= alpha  # v = x − α e₁ stored in column k
-        vnorm2 = norm2 - 2.0 * alpha * (g[k, k] + alpha) + alpha * alpha
-        rdiag[k] = alpha
-        if vnorm2 == 0.0:
-            continue
-        for j in range(k + 1, n):
-            dot = 0.0
-            for r in range(k, m):
-                dot += g[r, k] * g[r, j]
-            t = 2.0 * dot / vnorm2
-            for r in range(k, m):
-                g[r, j] -= t * g[r, k]
+        norms = 0.0
+        log_r = 0.0
+        singular = False
+        for j in range(n):
+            sq, rjj = w[_SQ + j, lane], w[_G + 8 * j, lane]
+            norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
+            if rjj > 0.0:
+                log_r += math.log10(rjj)
+            else:
+                singular = True
+        log_norm_sum[p] = norms
+        # η = Π R_jj / Π ‖Γ_j‖ (the R of the unit-column Γ_s is R with unit-scaled columns)
+        log_eta[p] = -np.inf if singular else log_r - norms
+        for i in range(n):
+            acc = 0.0
+            for k in range(i, n):
+                v = w[_RINV + 7 * i + k, lane]
+                acc += v * v
+            # (ΓᵀΓ)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)²
+            inv_diag[p, i] = np.inf if singular else acc
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
 def fisher_measures(states, stations, step, kappa, model, free, n_rows,
                     log_eta, log_norm_sum, inv_diag):
-    """All-rows Γ (n_rows × n_free) reduced through its QR factorisation.
+    """All-rows Γ (n_rows × n_free, N = n_rows / 3S instants) reduced through its QR
+    factorisation, LANES points at a time, without storing Γ.
 
     Per point: ``log_eta`` = log10 η, η = sqrt(det Γ_sᵀΓ_s) = Π|R_jj| of the unit-column Γ_s;
     ``log_norm_sum`` = Σ log10 ‖Γ_j‖; ``inv_diag`` (P, n_free) = diag((ΓᵀΓ)⁻¹) (times the
     noise variance, the CRLB variances). The caller decides observability from η. NaN on
     stations.
     """
-    npts = states.shape[0]
-    n = free.shape[0]
-    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        e = np.empty(3)
-        jac = np.empty((3, 7))
-        g = np.empty((n_rows, n))
-        lognorm = np.empty(n)
-        rdiag = np.empty(n)
-        rinv = np.empty((n, n))
-        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows, e, jac, g):
-                log_eta[p] = np.nan
-                log_norm_sum[p] = np.nan
-                inv_diag[p] = np.nan
-                continue
-            log_norm_sum[p] = _log10_column_norms(g, lognorm)
-            for j in range(n):  # unit columns: Γ_s = Γ / ‖Γ_j‖
-                scale = 10.0 ** -lognorm[j] if lognorm[j] > -np.inf else 0.0
-                for r in range(n_rows):
-                    g[r, j] *= scale
-            # 1. η = Π |R_jj| of Γ_s = QR.
-            _householder_r(g, rdiag)
-            le = 0.0
-            singular = False
-            for j in range(n):
-                if rdiag[j] == 0.0:
-                    singular = True
-                else:
-                    le += math.log10(abs(rdiag[j]))
-            log_eta[p] = -np.inf if singular else le
-            if singular:
-                for j in range(n):
-                    inv_diag[p, j] = np.inf
-                continue
-            # 2. (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)². Back substitution.
-            for k in range(n):
-                for i in range(n - 1, -1, -1):
-                    if i > k:
-                        rinv[i, k] = 0.0
-                        continue
-                    acc = 1.0 if i == k else 0.0
-                    for j in range(i + 1, k + 1):
-                        acc -= g[i, j] * rinv[j, k]
-                    rinv[i, k] = acc / rdiag[i]
-            for i in range(n):
-                acc = 0.0
-                for k in range(i, n):
-                    acc += rinv[i, k] * rinv[i, k]
-                # undo the column scaling: (ΓᵀΓ)⁻¹_ii = (Γ_sᵀΓ_s)⁻¹_ii / ‖Γ_i‖²
-                inv_diag[p, i] = acc / 10.0 ** (2.0 * lognorm[i])
+    for group in nb.prange((states.shape[0] + LANES - 1) // LANES):
+        _fisher_group(states, group * LANES, stations, step, kappa, model, free, n_rows,
+                      log_eta, log_norm_sum, inv_diag)
 
 
 @nb.njit(cache=True, nogil=True)
