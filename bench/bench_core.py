@@ -12,6 +12,7 @@ ratio, the largest difference between them, the CRLB map, and the peak memory of
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 import tracemalloc
@@ -50,7 +51,8 @@ def main(argv=None):
     def straightforward():
         return symbolic.log10_abs_det_gamma(states, STATIONS)
 
-    print(f"machine: {numba.config.NUMBA_NUM_THREADS} numba threads ({numba.threading_layer() if False else 'default layer'}), numpy {np.__version__}")
+    print(f"machine: {os.cpu_count()} CPUs, {numba.config.NUMBA_NUM_THREADS} numba threads, numba {numba.__version__}, "
+          f"numpy {np.__version__}")
     print(f"grid {args.n} x {args.n}, dual stations d = 15 m, exact model, paper rule; median of {args.repeat}")
     t_ours, t_ours_min = median_time(ours, args.repeat)
     numba.set_num_threads(1)
