@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import ctypes
 import gc
 import html
 import json
+from functools import partial
 
 import holoviews as hv
 import pandas as pd
@@ -53,12 +55,28 @@ class _Typed:
         Callback.registry.pop(self._value_edit, None)
 
 
+class _PromptFloatSlider(pn.widgets.FloatSlider):
+    """The release (``value_throttled``) is handled at once, not after Panel's 50 ms debounce of
+    browser changes. The drag's own values are too (they are dropped at once: throttled): else
+    the release would wait for the last of them, which is still being debounced."""
+
+    _priority_changes = ["value", "value_throttled"]
+
+
+class _PromptIntSlider(pn.widgets.IntSlider):
+    _priority_changes = ["value", "value_throttled"]
+
+
 class TypedFloatSlider(_Typed, pn.widgets.EditableFloatSlider):
-    pass
+    _slider_widget = _PromptFloatSlider
 
 
 class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
-    pass
+    _slider_widget = _PromptIntSlider
+
+
+#: Computes the maps of every session, off the event loop (core serialises the kernels anyway).
+_COMPUTE = concurrent.futures.ThreadPoolExecutor(max_workers=4, thread_name_prefix="maps")
 
 
 def _release_freed_memory():
@@ -253,12 +271,10 @@ def create_app():
                                 filename="observability_maps.nc", label="NetCDF", button_type="light"),
     )
 
-    def note_text(*_):
-        return cache.get(Snapshot.of(scenario)).note
-
-    note_deps = [scenario.param[f] for f in FIELDS]
-    note = pn.pane.HTML(pn.bind(lambda *a: _alert(note_text(), "warning"), *note_deps),  # updated in place
-                        visible=pn.bind(lambda *a: bool(note_text()), *note_deps), sizing_mode="stretch_width")
+    first = cache.get(Snapshot.of(scenario))
+    # Written by redraw together with the maps (not bound to the scenario: a binding would compute
+    # the maps once more, synchronously, before redraw could start).
+    note = pn.pane.HTML(_alert(first.note, "warning"), visible=bool(first.note), sizing_mode="stretch_width")
 
     fix_buttons = pn.Row(
         pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
@@ -268,16 +284,35 @@ def create_app():
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
     figs = map_figures.build()
-    map_figures.fill(figs, cache.get(Snapshot.of(scenario)))
+    map_figures.fill(figs, first)
+    #: Spins from a change until its maps are sent. In the header, a Bokeh root of its own: its
+    #: CSS class changes re-lay out only itself, not the maps (which would then all be repainted).
+    #: throttle=0: it stops with the maps' own patch, not half a second later.
+    busy = pn.indicators.LoadingSpinner(value=False, width=24, height=24, css_classes=["w-busy"],
+                                        margin=(0, 10), align="center", throttle=0)
 
-    async def redraw(*_):
-        # Compute on a worker thread (the kernels release the GIL), so that the server's event
-        # loop keeps serving other sessions meanwhile; then write the maps in one batch.
+    def redraw(*_):
+        # Start computing at once, on a worker thread (the kernels release the GIL): the server's
+        # event loop keeps serving other sessions meanwhile, and the compute does not wait for
+        # the widget updates already queued on the loop. Then draw, on the loop.
         snapshot = Snapshot.of(scenario)
-        panels = await asyncio.get_running_loop().run_in_executor(None, cache.get, snapshot)
-        if snapshot == Snapshot.of(scenario):  # a newer change will draw its own maps
-            with pn.io.hold():
-                map_figures.fill(figs, panels)
+        pn.state.execute(partial(draw, snapshot, _COMPUTE.submit(cache.get, snapshot)))
+
+    async def draw(snapshot, computing):
+        busy.value = True  # sent while the maps are computed
+        try:
+            panels = await asyncio.wrap_future(computing)
+        except BaseException:
+            busy.value = False
+            raise
+        if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
+            return
+        with pn.io.hold():  # first, alone: the browser has the new colour ranges before the images
+            map_figures.set_ranges(figs, panels)
+        with pn.io.hold():
+            map_figures.set_maps(figs, panels)
+            note.param.update(object=_alert(panels.note, "warning"), visible=bool(panels.note))
+            busy.value = False
 
     scenario.param.watch(redraw, list(FIELDS))
     plots = pn.pane.Bokeh(figs.layout, sizing_mode="stretch_width")
@@ -294,6 +329,10 @@ def create_app():
             dynamic=True, sizing_mode="stretch_width")],
         sidebar_width=360,
         header_background="#1f5f8b",
+        header=[busy],
+        # Panel's own busy indicator follows a process-wide flag: every event of any session
+        # would restyle the spinner of every open session (Python work on the server for each).
+        busy_indicator=None,
     )
     template.scenario = scenario  # for tests and the load benchmark
     return template

@@ -2,7 +2,15 @@
 
 HoloViews rebuilt every element on each change and sent each map separately (about a second per
 slider release, measured by bench/bench_browser.py); here the figures are built once and a change
-only replaces the float32 image arrays, colour ranges and titles, in one batch.
+only replaces the float32 image arrays, colour ranges and titles.
+
+Colour ranges. BokehJS colour-maps an image again on *every* change event of its mapper, twice
+(the mapper re-emits ``change`` after rescanning), and with the old image when the range comes
+before the data: 17 maps of 200 × 200 per slider change for 3 images. So the images' mappers
+never get change events from the server. A change first sends the new ranges alone, to two
+mappers that nothing draws (:func:`set_ranges`; no repaint): the browser copies them into the
+images' mappers silently (:data:`_COPY_RANGE_JS`). The next patch (:func:`set_maps`) brings the
+images, mapped once each with the new range, and the colour bars' own mappers: 3 maps per change.
 """
 
 from __future__ import annotations
@@ -14,6 +22,7 @@ from bokeh.layouts import gridplot
 from bokeh.models import (
     ColorBar,
     ColumnDataSource,
+    CustomJS,
     HoverTool,
     LinearColorMapper,
     Range1d,
@@ -36,7 +45,9 @@ class MapFigures:
     images: tuple  # ColumnDataSource per map: image, x, y, dw, dh
     veils: tuple
     stations: tuple
-    mappers: tuple  # A and B share mappers[0]; the difference has mappers[1]
+    mappers: tuple  # of the images: A and B share mappers[0]; the difference has mappers[1]
+    ranges: tuple  # drawn by nothing, same sharing; the browser copies them into mappers
+    bar_mappers: tuple  # of the colour bars, same sharing
     colorbars: tuple
     hovers: tuple
     plane: object = None  # the plane last drawn: a new one resets zoom and pan
@@ -50,11 +61,34 @@ def _figure(x_range, y_range):
     return fig
 
 
+#: Copies a range carrier into the images' mapper without a change signal (which would colour-map
+#: the old images again), and refreshes the scan the mapper caches on such a signal. Without those
+#: BokehJS internals (another version), a plain assignment: still correct, one map more.
+_COPY_RANGE_JS = """
+const range = {low: src.low, high: src.high, palette: src.palette};
+if (typeof img.scan === "function" && "_scan_data" in img) {
+  img.setv(range, {silent: true});
+  img._scan_data = img.scan([], img.palette.length);
+} else {
+  img.setv(range);
+}
+"""
+
+
+def _mappers():
+    """(images' mapper, range carrier, colour bar's mapper); the carrier's range is copied into
+    the images' mapper in the browser."""
+    img, src, bar = (LinearColorMapper(palette=Viridis256, nan_color="white") for _ in range(3))
+    copy = CustomJS(args=dict(img=img, src=src), code=_COPY_RANGE_JS)
+    for attr in ("low", "high", "palette"):
+        src.js_on_change(attr, copy)
+    return img, src, bar
+
+
 def build():
     """Three empty linked maps (one shared x and y range: zoom and pan together)."""
     x_range, y_range = Range1d(-1, 1), Range1d(-1, 1)
-    value_mapper = LinearColorMapper(palette=Viridis256, nan_color="white")
-    diff_mapper = LinearColorMapper(palette=Viridis256, nan_color="white")
+    (value_mapper, value_src, value_bar), (diff_mapper, diff_src, diff_bar) = _mappers(), _mappers()
     veil_mapper = LinearColorMapper(palette=["#ffffff00", VEIL], low=0, high=1)
     figs, images, veils, stations, bars, hovers = [], [], [], [], [], []
     for which in range(3):
@@ -62,7 +96,7 @@ def build():
         img = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]))
         veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]))
         st = ColumnDataSource(dict(x=[], y=[], name=[]))
-        mapper = value_mapper if which < 2 else diff_mapper
+        mapper, bar_mapper = (value_mapper, value_bar) if which < 2 else (diff_mapper, diff_bar)
         r = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
         fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper,
                   global_alpha=0.55)
@@ -70,12 +104,14 @@ def build():
                         line_color="black", line_width=1.5)
         hover = HoverTool(renderers=[r], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"), ("value", "@image")])
         fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")]))
-        bar = ColorBar(color_mapper=mapper, title="", width=12, title_text_font_size="9pt")
+        bar = ColorBar(color_mapper=bar_mapper, title="", width=12, title_text_font_size="9pt")
         fig.add_layout(bar, "right")
+        fig.tags = [value_src if which < 2 else diff_src]  # keeps the range carrier in the document
         figs.append(fig), images.append(img), veils.append(veil), stations.append(st)
         bars.append(bar), hovers.append(hover)
     return MapFigures(layout=gridplot([figs], merge_tools=True, toolbar_location="right"), figures=tuple(figs), images=tuple(images), veils=tuple(veils),
                       stations=tuple(stations), mappers=(value_mapper, diff_mapper),
+                      ranges=(value_src, diff_src), bar_mappers=(value_bar, diff_bar),
                       colorbars=tuple(bars), hovers=tuple(hovers))
 
 
@@ -85,33 +121,71 @@ def _symmetric(values):
     return (-m or -1.0, m or 1.0)
 
 
-def contents(p: Panels):
-    """What each map shows: [(values, observable, stations (S, 2), title)], labels and ranges.
+def contents(p: Panels, maps=True):
+    """What each map shows: [(values, observable, stations (S, 2), title)], labels and ranges
+    (``maps=False``: ranges only, the list empty).
 
     Pure: the numbers :func:`fill` writes, kept separate so they can be tested without Bokeh.
     """
     col = 1 if p.plane.kind == "xy" else 2
+    paper_diff = p.diff_label.startswith("log10(|B|")
+    diff_range = colour_range(p.diff) if paper_diff else _symmetric(p.diff)
+    axes = ("x", "y" if p.plane.kind == "xy" else "z")
+    if not maps:
+        return [], axes, p.clim, diff_range, paper_diff
     maps = []
     for which, res in enumerate((p.a, p.b)):
         title = p.titles[which] + (" — round-off only" if not res.observable.any() else "")
         maps.append((res.value, res.observable, p.stations[which][:, [0, col]], title))
     both = np.unique(np.vstack(p.stations), axis=0)
     maps.append((p.diff, p.a.observable & p.b.observable, both[:, [0, col]], p.titles[2]))
-    paper_diff = p.diff_label.startswith("log10(|B|")
-    diff_range = colour_range(p.diff) if paper_diff else _symmetric(p.diff)
-    return maps, ("x", "y" if p.plane.kind == "xy" else "z"), p.clim, diff_range, paper_diff
+    return maps, axes, p.clim, diff_range, paper_diff
+
+
+def _changed(model, values):
+    """The items of ``values`` that differ from ``model``'s (validating a palette costs time)."""
+    return {k: v for k, v in values.items() if getattr(model, k) != v}
+
+
+def _set_quietly(model, **values):
+    """Set a Python-side Bokeh model's properties without a change event (nothing is sent: the
+    browser sets its copy itself). Kept current so that a re-rendered page gets these values."""
+    for name, value in values.items():
+        model.lookup(name).property.validate(value)
+    model._property_values.update(values)
+
+
+def _ranges(p: Panels):
+    _, _, clim, diff_range, paper_diff = contents(p, maps=False)
+    return (dict(low=clim[0], high=clim[1], palette=Viridis256),
+            dict(low=diff_range[0], high=diff_range[1], palette=Viridis256 if paper_diff else RdBu11[::-1]))
+
+
+def set_ranges(figs: MapFigures, p: Panels):
+    """The colour ranges, to the carriers (sent; nothing redrawn) and the images' mappers (set in
+    the browser from the carriers; see the module docstring). Send before :func:`set_maps`, in a
+    patch of its own."""
+    for img, src, values in zip(figs.mappers, figs.ranges, _ranges(p)):
+        src.update(**_changed(src, values))
+        _set_quietly(img, **_changed(img, values))
 
 
 def fill(figs: MapFigures, p: Panels):
-    """Write one scenario's maps into the figures, in place."""
-    maps, (xname, vname), clim, diff_range, paper_diff = contents(p)
+    """Write one scenario's maps into the figures, in place (ranges and maps in one go).
+    :func:`set_maps` alone draws the ranges last given to :func:`set_ranges`."""
+    set_ranges(figs, p)
+    set_maps(figs, p)
+
+
+def set_maps(figs: MapFigures, p: Panels):
+    """Everything but the images' colour ranges: images, veils, stations, titles, labels,
+    tooltips, colour bars."""
+    maps, (xname, vname), *_ = contents(p)
+    for bar, src in zip(figs.bar_mappers, figs.ranges):  # as set_ranges set them
+        bar.update(**_changed(bar, dict(low=src.low, high=src.high, palette=src.palette)))
     (u0, u1), (v0, v1) = p.plane.u, p.plane.v
     du, dv = (u1 - u0) / (p.plane.n - 1), (v1 - v0) / (p.plane.n - 1)
     geometry = dict(x=[u0 - du / 2], y=[v0 - dv / 2], dw=[u1 - u0 + du], dh=[v1 - v0 + dv])
-    value_mapper, diff_mapper = figs.mappers
-    value_mapper.update(low=clim[0], high=clim[1])
-    diff_mapper.update(low=diff_range[0], high=diff_range[1],
-                       palette=Viridis256 if paper_diff else RdBu11[::-1])
     for which, (values, observable, stations, title) in enumerate(maps):
         fig = figs.figures[which]
         figs.images[which].data = dict(image=[values.astype(np.float32)], **geometry)
@@ -119,8 +193,11 @@ def fill(figs: MapFigures, p: Panels):
         old = figs.veils[which].data["image"][0]
         if old.shape != veil.shape or not np.array_equal(old, veil) or figs.veils[which].data["x"] != geometry["x"]:
             figs.veils[which].data = dict(image=[veil], **geometry)  # sent only when it changes
-        figs.stations[which].data = dict(x=stations[:, 0], y=stations[:, 1],
-                                         name=[f"station {i + 1}" for i in range(len(stations))])
+        st = figs.stations[which].data
+        if len(st["x"]) != len(stations) or not (np.array_equal(st["x"], stations[:, 0])
+                                                 and np.array_equal(st["y"], stations[:, 1])):
+            figs.stations[which].data = dict(x=stations[:, 0], y=stations[:, 1],
+                                             name=[f"station {i + 1}" for i in range(len(stations))])
         fig.title.text = title
         fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
         label = p.value_label if which < 2 else p.diff_label

@@ -32,6 +32,24 @@ MAPS_JS = """() => {
       for (let i = 0; i < a.length; i++) if (!isNaN(a[i])) s += a[i];
       return s; })]);
 }"""
+#: Per plot: [RGBA bytes of the map layer as drawn, how many differ from the image mapped through
+#: the plot's colour bar mapper, the colour bar's low, the image mapper's low].
+COLOURS_JS = """() => {
+  const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(pv => {
+    const r = pv.model.renderers.find(r => r.data_source && r.data_source.data.image);
+    const canvas = pv.renderer_views.get(r).glyph.image_data[0];
+    const px = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
+    const bar = pv.model.right.find(m => m.color_mapper).color_mapper;
+    const want = bar.rgba_mapper.v_compute(r.data_source.data.image[0]);
+    let bad = 0; for (let i = 0; i < want.length; i++) if (want[i] !== px[i]) bad++;
+    return [px.length, bad, bar.low, r.glyph.color_mapper.low];
+  });
+}"""
 AXES_JS = """() => {
   const out = [];
   for (const m of Bokeh.documents[0].all_models)
@@ -134,6 +152,13 @@ def test_dragging_the_ph_slider_changes_the_maps(page):
     page.mouse.up()
     wait_maps(page, changed(before))
     assert float(value_of(page, "Ph")) > 100.0
+    # each image is coloured with its colour bar's range (the browser copies the range into the
+    # images' mapper: app/map_figures.py), pixel for pixel, and the spinner has stopped
+    for n_pixels, bad, bar_low, img_low in page.evaluate(COLOURS_JS):
+        assert n_pixels == 4 * 200 * 200 and bad == 0 and bar_low == img_low
+    page.wait_for_function("""() => { const s = Array.from(Bokeh.documents[0].all_models)
+        .filter(m => (m.css_classes || []).includes('loader'));
+        return s.length === 1 && !s[0].css_classes.includes('spin'); }""", timeout=5_000)
 
 
 def test_preset_click_changes_parameters_and_maps(page):
