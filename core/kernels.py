@@ -81,15 +81,17 @@ def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
                 out[p] = np.nan
 
 
-#: Points evaluated together by :func:`square_measures`. Each per-point quantity is a row of
-#: ``LANES`` values in one workspace, and every loop over a row compiles to AVX2 vector code:
-#: LLVM fully unrolls shorter loops and then leaves them scalar (numba keeps SLP vectorisation
-#: off), so 128 lanes measured ~2× faster than one point at a time (bench/bench_core.py).
+#: Points evaluated together by the map kernels. Each per-point quantity is a row of ``LANES``
+#: values in one workspace, and every loop over a row compiles to AVX2 vector code: LLVM fully
+#: unrolls shorter loops and then leaves them scalar (numba keeps SLP vectorisation off). With
+#: a Householder QR instead of a pivoting LU (data-dependent row choices do not vectorise) the
+#: square kernel measured ~2.8× faster than one point at a time (bench/bench_core.py).
 LANES = 128
-# Workspace rows of square_measures (each LANES wide): states, the current station's rows
-# (E_i, ∂E_i/∂X) × 3, Γ (7 × 7, row-major), squared column norms, pivot row, per-lane scalars.
+# Workspace rows (each LANES wide): states, the current station's rows (E_i, ∂E_i/∂X) × 3,
+# Γ (7 × 7, row-major; R in the Fisher kernel), squared column norms, a row of Γ (Fisher),
+# per-lane scalars.
 _X, _J, _G, _SQ, _T = 0, 7, 31, 80, 87
-_PIV, _BEST, _DET, _INV, _FAC, _BAD, _ROWS = 94, 95, 96, 97, 98, 99, 100
+_NORM2, _DET, _BETA, _DOT, _BAD, _ROWS = 95, 96, 97, 98, 99, 100
 
 
 @nb.njit(inline="always", **JIT)
@@ -168,50 +170,41 @@ def _assemble_lanes(w, stations, step, kappa, model, free):
 
 
 @nb.njit(inline="always", **JIT)
-def _lu_abs_det_lanes(w, n):
-    """w[_DET] = |det| of the n × n matrices in w[_G…] (destroyed), one per lane.
-
-    Gaussian elimination with partial pivoting, branch-free across lanes: each lane's pivot
-    row is gathered into w[_T] by selects, the pivot row's slot receives the old row k, and
-    every remaining row is eliminated against w[_T]. Row pivoting picks the same pivots for a
-    matrix and for it with scaled columns, so no column scaling is needed.
-    """
+def _qr_abs_det_lanes(w, n):
+    """w[_DET] = |det| of the n × n matrices in w[_G…] (destroyed), one per lane: the product
+    of |R_kk| of a Householder QR. Branch-free across lanes (unlike pivoting), and backward
+    stable; column scaling commutes with it, so none is needed."""
     for lane in range(LANES):
         w[_DET, lane] = 1.0
     for k in range(n):
         kk = _G + 8 * k
         for lane in range(LANES):
-            w[_BEST, lane] = abs(w[kk, lane])
-            w[_PIV, lane] = k
-        for r in range(k + 1, n):
-            rk, rf = _G + 7 * r + k, float(r)
+            w[_NORM2, lane] = 0.0  # ‖column k below the diagonal‖²
+        for r in range(k, n):
+            rk = _G + 7 * r + k
             for lane in range(LANES):
-                v = abs(w[rk, lane])
-                bigger = v > w[_BEST, lane]
-                w[_BEST, lane] = v if bigger else w[_BEST, lane]
-                w[_PIV, lane] = rf if bigger else w[_PIV, lane]
-        for c in range(k, n):
-            for lane in range(LANES):
-                w[_T + c, lane] = w[_G + 7 * k + c, lane]
-            for r in range(k + 1, n):
-                rc, rf = _G + 7 * r + c, float(r)
-                for lane in range(LANES):
-                    candidate, current = w[rc, lane], w[_T + c, lane]
-                    w[_T + c, lane] = candidate if w[_PIV, lane] == rf else current
+                w[_NORM2, lane] += w[rk, lane] * w[rk, lane]
         for lane in range(LANES):
-            w[_DET, lane] *= w[_BEST, lane]
-            pivot = w[_T + k, lane]
-            w[_INV, lane] = 1.0 / pivot if pivot != 0.0 else 0.0
-        for r in range(k + 1, n):
-            rk, rf = _G + 7 * r + k, float(r)
+            norm2, top = w[_NORM2, lane], w[kk, lane]
+            alpha = -math.sqrt(norm2) if top >= 0.0 else math.sqrt(norm2)
+            v0 = top - alpha  # Householder vector v = x − α e₁, stored over column k
+            vnorm2 = norm2 - top * top + v0 * v0
+            w[kk, lane] = v0
+            w[_BETA, lane] = 2.0 / vnorm2 if vnorm2 > 0.0 else 0.0
+            w[_DET, lane] *= abs(alpha)
+        for c in range(k + 1, n):
             for lane in range(LANES):
-                top, own = w[kk, lane], w[rk, lane]
-                w[_FAC, lane] = (top if w[_PIV, lane] == rf else own) * w[_INV, lane]
-            for c in range(k + 1, n):
-                rc, kc = _G + 7 * r + c, _G + 7 * k + c
+                w[_DOT, lane] = 0.0
+            for r in range(k, n):
+                rk, rc = _G + 7 * r + k, _G + 7 * r + c
                 for lane in range(LANES):
-                    top, own = w[kc, lane], w[rc, lane]
-                    w[rc, lane] = (top if w[_PIV, lane] == rf else own) - w[_FAC, lane] * w[_T + c, lane]
+                    w[_DOT, lane] += w[rk, lane] * w[rc, lane]
+            for lane in range(LANES):
+                w[_DOT, lane] *= w[_BETA, lane]
+            for r in range(k, n):
+                rk, rc = _G + 7 * r + k, _G + 7 * r + c
+                for lane in range(LANES):
+                    w[rc, lane] -= w[_DOT, lane] * w[rk, lane]
 
 
 @nb.njit(**JIT)
@@ -229,7 +222,7 @@ def _square_group(states, p0, stations, step, kappa, model, free, log_det, log_e
             rj = _G + 7 * r + j
             for lane in range(LANES):
                 w[_SQ + j, lane] += w[rj, lane] * w[rj, lane]
-    _lu_abs_det_lanes(w, n)
+    _qr_abs_det_lanes(w, n)
     for lane in range(count):
         p = p0 + lane
         if w[_BAD, lane] != 0.0:
