@@ -87,6 +87,9 @@ def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
 #: a Householder QR instead of a pivoting LU (data-dependent row choices do not vectorise) the
 #: square kernel measured ~2.8× faster than one point at a time (bench/bench_core.py).
 LANES = 128
+#: Work items of a map kernel's parallel loop, each a run of groups with one workspace: enough
+#: for the scheduler to balance any likely thread count.
+_CHUNKS = 64
 # Workspace rows (each LANES wide): states, the current station's rows (E_i, ∂E_i/∂X) × 3,
 # Γ (7 × 7, row-major; R in the Fisher kernel), squared column norms, a row of Γ (Fisher),
 # per-lane scalars.
@@ -208,49 +211,56 @@ def _qr_abs_det_lanes(w, n):
 
 
 @nb.njit(**JIT)
-def _square_group(states, p0, stations, step, kappa, model, free, log_det, log_eta):
-    """:func:`square_measures` for the (up to) LANES points from ``p0``. The workspace is
-    allocated here, with a shape known at compile time, so that LLVM sees its row stride."""
+def _square_groups(states, first, last, stations, step, kappa, model, free, log_det, log_eta):
+    """:func:`square_measures` for the groups of LANES points ``first`` … ``last − 1``. The
+    workspace is allocated here once, with a shape known at compile time so that LLVM sees its
+    row stride (and not per group: freeing it each time let malloc hand the pages back to the
+    OS and fault them in again: a 40k-point map took 20–48 ms inside the server, 5–16 ms now)."""
     n = free.shape[0]
     w = np.empty((_ROWS, LANES))
-    count = _load_lanes(w, states, p0)
-    _assemble_lanes(w, stations, step, kappa, model, free)
-    for j in range(n):
-        for lane in range(LANES):
-            w[_SQ + j, lane] = 0.0
-        for r in range(n):
-            rj = _G + 7 * r + j
-            for lane in range(LANES):
-                w[_SQ + j, lane] += w[rj, lane] * w[rj, lane]
-    _qr_abs_det_lanes(w, n)
-    for lane in range(count):
-        p = p0 + lane
-        if w[_BAD, lane] != 0.0:
-            log_det[p] = np.nan
-            log_eta[p] = np.nan
-            continue
-        prod = 1.0
+    for group in range(first, last):
+        p0 = group * LANES
+        count = _load_lanes(w, states, p0)
+        _assemble_lanes(w, stations, step, kappa, model, free)
         for j in range(n):
-            prod *= w[_SQ + j, lane]
-        if 1e-300 < prod < 1e300:  # one logarithm on the hot path
-            norms = 0.5 * math.log10(prod)
-        else:
-            norms = 0.0
+            for lane in range(LANES):
+                w[_SQ + j, lane] = 0.0
+            for r in range(n):
+                rj = _G + 7 * r + j
+                for lane in range(LANES):
+                    w[_SQ + j, lane] += w[rj, lane] * w[rj, lane]
+        _qr_abs_det_lanes(w, n)
+        for lane in range(count):
+            p = p0 + lane
+            if w[_BAD, lane] != 0.0:
+                log_det[p] = np.nan
+                log_eta[p] = np.nan
+                continue
+            prod = 1.0
             for j in range(n):
-                sq = w[_SQ + j, lane]
-                norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
-        det = w[_DET, lane]
-        ld = math.log10(det) if det > 0.0 else -np.inf
-        log_det[p] = ld
-        log_eta[p] = ld - norms
+                prod *= w[_SQ + j, lane]
+            if 1e-300 < prod < 1e300:  # one logarithm on the hot path
+                norms = 0.5 * math.log10(prod)
+            else:
+                norms = 0.0
+                for j in range(n):
+                    sq = w[_SQ + j, lane]
+                    norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
+            det = w[_DET, lane]
+            ld = math.log10(det) if det > 0.0 else -np.inf
+            log_det[p] = ld
+            log_eta[p] = ld - norms
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
 def square_measures(states, stations, step, kappa, model, free, log_det, log_eta):
     """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point (NaN on
     stations), LANES points at a time."""
-    for group in nb.prange((states.shape[0] + LANES - 1) // LANES):
-        _square_group(states, group * LANES, stations, step, kappa, model, free, log_det, log_eta)
+    groups = (states.shape[0] + LANES - 1) // LANES
+    chunks = min(groups, _CHUNKS)
+    for c in nb.prange(chunks):
+        _square_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step, kappa,
+                       model, free, log_det, log_eta)
 
 
 # Workspace rows of fisher_measures beyond the shared ones: R (7 × 7 at _G), the incoming row
@@ -299,53 +309,55 @@ def _inverse_lanes(w, n):
 
 
 @nb.njit(**JIT)
-def _fisher_group(states, p0, stations, step, kappa, model, free, n_rows, log_eta, log_norm_sum,
-                  inv_diag):
-    """:func:`fisher_measures` for the (up to) LANES points from ``p0``."""
+def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_rows, log_eta,
+                   log_norm_sum, inv_diag):
+    """:func:`fisher_measures` for the groups ``first`` … ``last − 1`` (see :func:`_square_groups`)."""
     n = free.shape[0]
     w = np.empty((_FISHER_ROWS, LANES))
-    count = _load_lanes(w, states, p0)
-    for r in range(_G, _G + 49):
-        w[r] = 0.0
-    for j in range(n):
-        w[_SQ + j] = 0.0
-    for i in range(n_rows // (3 * stations.shape[0])):
-        for s in range(stations.shape[0]):
-            _jacobian_lanes(w, i * step, stations, s, kappa, model)
-            for comp in range(3):
-                _gamma_row_lanes(w, _T, comp, i * step, free)
-                for j in range(n):
-                    for lane in range(LANES):
-                        w[_SQ + j, lane] += w[_T + j, lane] * w[_T + j, lane]
-                _givens_update(w, n)
-    _inverse_lanes(w, n)
-    for lane in range(count):
-        p = p0 + lane
-        if w[_BAD, lane] != 0.0:
-            log_eta[p] = np.nan
-            log_norm_sum[p] = np.nan
-            inv_diag[p] = np.nan
-            continue
-        norms = 0.0
-        log_r = 0.0
-        singular = False
+    for group in range(first, last):
+        p0 = group * LANES
+        count = _load_lanes(w, states, p0)
+        for r in range(_G, _G + 49):
+            w[r] = 0.0
         for j in range(n):
-            sq, rjj = w[_SQ + j, lane], w[_G + 8 * j, lane]
-            norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
-            if rjj > 0.0:
-                log_r += math.log10(rjj)
-            else:
-                singular = True
-        log_norm_sum[p] = norms
-        # η = Π R_jj / Π ‖Γ_j‖ (the R of the unit-column Γ_s is R with unit-scaled columns)
-        log_eta[p] = -np.inf if singular else log_r - norms
-        for i in range(n):
-            acc = 0.0
-            for k in range(i, n):
-                v = w[_RINV + 7 * i + k, lane]
-                acc += v * v
-            # (ΓᵀΓ)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)²
-            inv_diag[p, i] = np.inf if singular else acc
+            w[_SQ + j] = 0.0
+        for i in range(n_rows // (3 * stations.shape[0])):
+            for s in range(stations.shape[0]):
+                _jacobian_lanes(w, i * step, stations, s, kappa, model)
+                for comp in range(3):
+                    _gamma_row_lanes(w, _T, comp, i * step, free)
+                    for j in range(n):
+                        for lane in range(LANES):
+                            w[_SQ + j, lane] += w[_T + j, lane] * w[_T + j, lane]
+                    _givens_update(w, n)
+        _inverse_lanes(w, n)
+        for lane in range(count):
+            p = p0 + lane
+            if w[_BAD, lane] != 0.0:
+                log_eta[p] = np.nan
+                log_norm_sum[p] = np.nan
+                inv_diag[p] = np.nan
+                continue
+            norms = 0.0
+            log_r = 0.0
+            singular = False
+            for j in range(n):
+                sq, rjj = w[_SQ + j, lane], w[_G + 8 * j, lane]
+                norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
+                if rjj > 0.0:
+                    log_r += math.log10(rjj)
+                else:
+                    singular = True
+            log_norm_sum[p] = norms
+            # η = Π R_jj / Π ‖Γ_j‖ (the R of the unit-column Γ_s is R with unit-scaled columns)
+            log_eta[p] = -np.inf if singular else log_r - norms
+            for i in range(n):
+                acc = 0.0
+                for k in range(i, n):
+                    v = w[_RINV + 7 * i + k, lane]
+                    acc += v * v
+                # (ΓᵀΓ)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)²
+                inv_diag[p, i] = np.inf if singular else acc
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
@@ -359,9 +371,11 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
     noise variance, the CRLB variances). The caller decides observability from η. NaN on
     stations.
     """
-    for group in nb.prange((states.shape[0] + LANES - 1) // LANES):
-        _fisher_group(states, group * LANES, stations, step, kappa, model, free, n_rows,
-                      log_eta, log_norm_sum, inv_diag)
+    groups = (states.shape[0] + LANES - 1) // LANES
+    chunks = min(groups, _CHUNKS)
+    for c in nb.prange(chunks):
+        _fisher_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step, kappa,
+                       model, free, n_rows, log_eta, log_norm_sum, inv_diag)
 
 
 @nb.njit(cache=True, nogil=True)
