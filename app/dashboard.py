@@ -75,6 +75,9 @@ class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
     _slider_widget = _PromptIntSlider
 
 
+#: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
+BUSY_AFTER = 0.1
+
 #: Computes the maps of every session, off the event loop (core serialises the kernels anyway).
 _COMPUTE = concurrent.futures.ThreadPoolExecutor(max_workers=4, thread_name_prefix="maps")
 
@@ -228,7 +231,7 @@ def _sync_url(scenario, location, args):
         location.update_query(**{e.name: json.dumps(e.new) if not isinstance(e.new, str) else e.new
                                  for e in events})
 
-    scenario.param.watch(to_url, names)
+    scenario.param.watch(to_url, names, precedence=1)  # after redraw: the maps start first
     if problems:
         scenario.message = ("Link values refused, defaults kept: " + "; ".join(problems.values()))[:600]
 
@@ -299,12 +302,15 @@ def create_app():
         pn.state.execute(partial(draw, snapshot, _COMPUTE.submit(cache.get, snapshot)))
 
     async def draw(snapshot, computing):
-        busy.value = True  # sent while the maps are computed
-        try:
-            panels = await asyncio.wrap_future(computing)
-        except BaseException:
-            busy.value = False
-            raise
+        maps = asyncio.wrap_future(computing)
+        try:  # the spinner only for a slow change: for a fast one it costs more than it says
+            panels = await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
+        except asyncio.TimeoutError:
+            busy.value = True
+            try:
+                panels = await maps
+            finally:
+                busy.value = False
         if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
             return
         with pn.io.hold():  # first, alone: the browser has the new colour ranges before the images
@@ -312,7 +318,6 @@ def create_app():
         with pn.io.hold():
             map_figures.set_maps(figs, panels)
             note.param.update(object=_alert(panels.note, "warning"), visible=bool(panels.note))
-            busy.value = False
 
     scenario.param.watch(redraw, list(FIELDS))
     plots = pn.pane.Bokeh(figs.layout, sizing_mode="stretch_width")

@@ -85,7 +85,7 @@ INSTALL_JS = r"""() => {
     return r ? B.tag(r.data_source.data.image[0]) : 0;
   };
   B.hook = () => {
-    const vs = B.views();
+    const vs = B.plots = B.views();  // walked once: a walk every frame would load the page itself
     for (const v of vs) {
       if (v.__bench) continue;
       const orig = v._actual_paint;
@@ -102,12 +102,13 @@ INSTALL_JS = r"""() => {
   const loop = () => {
     const t = performance.now();
     B.frames.push(t);
-    for (const v of B.hook()) {
+    for (const v of B.plots) {
       const tg = B.mapTag(v);
       if (B.last[v.model.id] !== tg) { B.last[v.model.id] = tg; B.seen.push([t, v.model.id, tg]); }
     }
     requestAnimationFrame(loop);
   };
+  B.hook();
   requestAnimationFrame(loop);
 }"""
 
@@ -121,7 +122,7 @@ COLLECT_JS = """() => { const B = window.__bench;
 
 STATE_JS = """() => { const B = window.__bench; const ws = window.__ws;
   let lastIn = null; for (const m of ws) if (m[1] === 'in') lastIn = m[0];
-  const ids = B.views().map(v => v.model.id);
+  const ids = B.plots.map(v => v.model.id);
   const painted = ids.every(id => B.paints.some(p => p[2] === id && p[3] === B.last[id]));
   return {now: performance.now(), lastIn, last: Object.assign({}, B.last), ids, painted}; }"""
 
@@ -208,19 +209,27 @@ def drag_to(page, fraction):
 
 
 def wait_settled(page, before_tags, before_text, quiet_ms, timeout=60.0):
-    """Wait until the text box changed, every plot has a new image that has been painted, and the
-    websocket has been quiet for ``quiet_ms`` (so no later image is still on its way)."""
+    """Wait until every plot has a new image that has been painted and the websocket has been
+    quiet for ``quiet_ms`` (so no later image is still on its way); then check that the text
+    box changed and that the plot views are still the ones hooked. Polls only the page's own
+    log in the meantime: DOM queries (Playwright's locators pierce every shadow root, ~10 ms on
+    this page) would run on the page's main thread inside the interval being measured."""
     deadline = time.time() + timeout
     while True:
         st = page.evaluate(STATE_JS)
-        text = page.locator(".w-Ph input").first.input_value()
         new_images = all(st["last"].get(i) != before_tags.get(i) for i in st["ids"])
         quiet = st["lastIn"] is not None and st["now"] - st["lastIn"] >= quiet_ms
-        if text != before_text and new_images and st["painted"] and quiet:
-            return text
+        if new_images and st["painted"] and quiet:
+            break
         if time.time() > deadline:
-            raise TimeoutError(f"change did not settle: text {before_text!r} -> {text!r}, state {st}")
+            raise TimeoutError(f"change did not settle: state {st}")
         time.sleep(0.05)
+    text = page.locator(".w-Ph input").first.input_value()
+    if text == before_text:
+        raise RuntimeError(f"maps were redrawn but the P_h text box still shows {text!r}")
+    if page.evaluate("() => window.__bench.views().map(v => v.model.id)") != st["ids"]:
+        raise RuntimeError("the plot views were replaced during the change; the hooks missed them")
+    return text
 
 
 def analyse(log):

@@ -3,6 +3,7 @@
 import os
 import time
 from pathlib import Path
+from urllib.parse import urlencode
 
 import pytest
 
@@ -176,6 +177,28 @@ def test_switching_plane_and_measure(page):
     select(page, "measure", "CRLB position error (m)")
     wait_maps(page, changed(before))
     assert page.evaluate(AXES_JS).count("z (m)") == 3
+
+
+SPINNING_JS = """() => Array.from(Bokeh.documents[0].all_models).some(
+  m => (m.css_classes || []).includes('loader') && m.css_classes.includes('spin'))"""
+
+
+def test_slow_change_shows_the_busy_spinner_until_its_maps_are_drawn(chromium, server):
+    # CRLB maps of 10 instants at 400 × 400 take several tenths of a second (fast changes do not
+    # flash the spinner: app/dashboard.py BUSY_AFTER)
+    query = urlencode({"measure": "CRLB position error (m)", "steps": 10, "resolution": 400})
+    pg = chromium.new_page(viewport={"width": 1700, "height": 1100})
+    try:
+        pg.goto(f"{server}/app?{query}")
+        pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+        before = wait_maps(pg, lambda drawn: len(drawn) == 3)
+        assert pg.locator(".w-measure select").first.input_value() == "CRLB position error (m)"
+        type_value(pg, "Ph", 150)
+        pg.wait_for_function(SPINNING_JS, polling="raf", timeout=15_000)
+        wait_maps(pg, lambda drawn: values(drawn)[1] != values(before)[1])  # A: single, all +inf
+        pg.wait_for_function(f"() => !({SPINNING_JS})()", timeout=15_000)
+    finally:
+        pg.close()
 
 
 def test_out_of_range_value_shows_message_and_keeps_maps(page):
