@@ -14,6 +14,7 @@ import holoviews as hv
 import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
+from panel.io.state import set_curdoc
 from panel.links import Callback
 
 from . import compute, map_figures, views
@@ -286,6 +287,7 @@ def create_app():
         pn.widgets.Button(name="Show CRLB position error (m)", button_type="warning",
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
+    doc = pn.state.curdoc  # the session document this app is built for
     figs = map_figures.build()
     map_figures.fill(figs, first)
     #: Spins from a change until its maps are sent. In the header, a Bokeh root of its own: its
@@ -299,7 +301,9 @@ def create_app():
         # event loop keeps serving other sessions meanwhile, and the compute does not wait for
         # the widget updates already queued on the loop. Then draw, on the loop.
         snapshot = Snapshot.of(scenario)
-        pn.state.execute(partial(draw, snapshot, _COMPUTE.submit(cache.get, snapshot)))
+        computing = _COMPUTE.submit(cache.get, snapshot)
+        with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
+            pn.state.execute(partial(draw, snapshot, computing))
 
     async def draw(snapshot, computing):
         maps = asyncio.wrap_future(computing)

@@ -111,7 +111,7 @@ class Client:
 
 def hammer(client, index, stop_at, out):
     """Change parameters until ``stop_at``; record (sent, answered, latencies)."""
-    sent, latencies, i = 0, [], 0
+    sent, latencies, i, lost = 0, [], 0, []
     while time.perf_counter() < stop_at and client.conn.connected:
         i += 1
         if i % 5 == 0:
@@ -122,7 +122,9 @@ def hammer(client, index, stop_at, out):
         dt = client.change(model, attr, value, client.maps_done)
         if dt is not None:
             latencies.append(dt)
-    out[index] = (sent, len(latencies), latencies)
+        else:
+            lost.append(f"session {index} update {i}: {attr} = {value!r}")
+    out[index] = (sent, len(latencies), latencies, lost)
 
 
 class RssMonitor(threading.Thread):
@@ -279,10 +281,13 @@ def main(argv=None):
     sent = sum(r[0] for r in results.values())
     answered = sum(r[1] for r in results.values())
     lat = [x for r in results.values() for x in r[2]]
+    lost = [x for r in results.values() for x in r[3]]
     print()
     print(f"=== {args.sessions} sessions × {args.duration:g} s, server {url} ===")
     print(f"updates sent {sent}, answered {answered} ({answered / max(sent, 1):.1%}); "
           f"throughput {answered / args.duration:.1f} updates/s")
+    for text in lost:
+        print(f"unanswered: {text}")
     if lat:
         print(f"update latency: median {statistics.median(lat) * 1e3:.0f} ms, p95 {pct(lat, 95) * 1e3:.0f} ms, "
               f"max {max(lat) * 1e3:.0f} ms")
