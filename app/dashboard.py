@@ -290,9 +290,9 @@ def create_app():
     doc = pn.state.curdoc  # the session document this app is built for
     figs = map_figures.build()
     map_figures.fill(figs, first)
-    #: Spins from a change until its maps are sent. In the header, a Bokeh root of its own: its
-    #: CSS class changes re-lay out only itself, not the maps (which would then all be repainted).
-    #: throttle=0: it stops with the maps' own patch, not half a second later.
+    #: Spins while a change slower than BUSY_AFTER computes. In the header, a Bokeh root of its own:
+    #: its CSS class changes re-lay out only itself, not the maps (which would then all be
+    #: repainted). throttle=0: it stops when the maps are ready, not half a second later.
     busy = pn.indicators.LoadingSpinner(value=False, width=24, height=24, css_classes=["w-busy"],
                                         margin=(0, 10), align="center", throttle=0)
 
