@@ -121,24 +121,32 @@ def _symmetric(values):
     return (-m or -1.0, m or 1.0)
 
 
-def contents(p: Panels, maps=True):
-    """What each map shows: [(values, observable, stations (S, 2), title)], labels and ranges
-    (``maps=False``: ranges only, the list empty).
-
-    Pure: the numbers :func:`fill` writes, kept separate so they can be tested without Bokeh.
-    """
-    col = 1 if p.plane.kind == "xy" else 2
+def _diff_colours(p: Panels):
+    """The difference map's colour range, and whether it is the paper's log10(|B| − |A|)
+    (sequential palette) rather than the signed log-ratio (diverging, symmetric range)."""
     paper_diff = p.diff_label.startswith("log10(|B|")
-    diff_range = colour_range(p.diff) if paper_diff else _symmetric(p.diff)
-    axes = ("x", "y" if p.plane.kind == "xy" else "z")
-    if not maps:
-        return [], axes, p.clim, diff_range, paper_diff
+    return (colour_range(p.diff) if paper_diff else _symmetric(p.diff)), paper_diff
+
+
+def _maps(p: Panels):
+    """[(values, observable, stations (S, 2), title)] of the three maps, and the axis names."""
+    col = 1 if p.plane.kind == "xy" else 2
     maps = []
     for which, res in enumerate((p.a, p.b)):
         title = p.titles[which] + (" — round-off only" if not res.observable.any() else "")
         maps.append((res.value, res.observable, p.stations[which][:, [0, col]], title))
     both = np.unique(np.vstack(p.stations), axis=0)
     maps.append((p.diff, p.a.observable & p.b.observable, both[:, [0, col]], p.titles[2]))
+    return maps, ("x", "y" if p.plane.kind == "xy" else "z")
+
+
+def contents(p: Panels):
+    """What each map shows: [(values, observable, stations (S, 2), title)], labels and ranges.
+
+    Pure: the numbers :func:`fill` writes, kept separate so they can be tested without Bokeh.
+    """
+    maps, axes = _maps(p)
+    diff_range, paper_diff = _diff_colours(p)
     return maps, axes, p.clim, diff_range, paper_diff
 
 
@@ -156,8 +164,8 @@ def _set_quietly(model, **values):
 
 
 def _ranges(p: Panels):
-    _, _, clim, diff_range, paper_diff = contents(p, maps=False)
-    return (dict(low=clim[0], high=clim[1], palette=Viridis256),
+    diff_range, paper_diff = _diff_colours(p)
+    return (dict(low=p.clim[0], high=p.clim[1], palette=Viridis256),
             dict(low=diff_range[0], high=diff_range[1], palette=Viridis256 if paper_diff else RdBu11[::-1]))
 
 
@@ -180,7 +188,7 @@ def fill(figs: MapFigures, p: Panels):
 def set_maps(figs: MapFigures, p: Panels):
     """Everything but the images' colour ranges: images, veils, stations, titles, labels,
     tooltips, colour bars."""
-    maps, (xname, vname), *_ = contents(p)
+    maps, (xname, vname) = _maps(p)
     for bar, src in zip(figs.bar_mappers, figs.ranges):  # as set_ranges set them
         bar.update(**_changed(bar, dict(low=src.low, high=src.high, palette=src.palette)))
     (u0, u1), (v0, v1) = p.plane.u, p.plane.v
