@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import functools
 import sys
-import threading
 
 import panel as pn
 
@@ -14,31 +12,26 @@ import panel as pn
 #: server). 0.5 ms lets it resume promptly.
 SWITCH_INTERVAL = 0.0005
 
-_BUSY_LOCK = threading.RLock()
+
+def _not_counted(self, *args, **kwargs):
+    """Stands in for Panel's busy counting (see :func:`drop_process_wide_busy_flag`)."""
 
 
-def serialise_busy_counter():
-    """Panel counts busy events in its process-wide state from every worker thread
-    (``--num-threads``), each time lifting the read-only flags of *all* its parameters and
-    restoring them afterwards; two threads interleaving there restore "read-only" under each
-    other, and the event being processed fails with "Read-only parameter 'busy' cannot be
-    modified" (seen in the load test: an update never answered). One lock around the three
-    methods that do it."""
+def drop_process_wide_busy_flag():
+    """Panel counts every event of every session into ``pn.state.busy``, one flag for the whole
+    process that only a template's busy indicator reads (``pn.state.sync_busy``); this app has
+    none (``busy_indicator=None``: each session has its own spinner). Counting cost ~5 ms of
+    Python per browser event (each add or remove lifts and restores the read-only flag of every
+    parameter of ``pn.state``; a P_h release with its last drag step took 22 ms of Panel's Python
+    with it, 10-15 ms without), and it was not thread-safe: two worker threads
+    (``--num-threads``) interleaving there restored "read-only" under each other and the event
+    being processed failed with "Read-only parameter 'busy' cannot be modified" (seen in the
+    load test: an update never answered). So the events are not counted."""
     cls = type(pn.state)
     for name in ("_add_busy_event", "_remove_busy_event", "_cleanup_busy_counter"):
-        method = getattr(cls, name)
-        if getattr(method, "_serialised", False):
-            continue
-
-        @functools.wraps(method)
-        def locked(self, *args, _method=method, **kwargs):
-            with _BUSY_LOCK:
-                return _method(self, *args, **kwargs)
-
-        locked._serialised = True
-        setattr(cls, name, locked)
+        setattr(cls, name, _not_counted)
 
 
 def configure():
     sys.setswitchinterval(SWITCH_INTERVAL)
-    serialise_busy_counter()
+    drop_process_wide_busy_flag()
