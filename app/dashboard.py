@@ -13,6 +13,7 @@ from functools import partial
 import holoviews as hv
 import pandas as pd
 import panel as pn
+from bokeh.models import CustomJS
 from bokeh.models.widgets.tables import NumberFormatter
 from panel.io.state import set_curdoc
 from panel.links import Callback
@@ -75,6 +76,23 @@ class TypedFloatSlider(_Typed, pn.widgets.EditableFloatSlider):
 class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
     _slider_widget = _PromptIntSlider
 
+
+#: BokehJS rewrites a <style> element of every renderer (its position) on every paint, even when
+#: the text is unchanged; each rewrite makes the browser re-collect the page's style sheets at the
+#: next colour lookup (several per renderer: BokehJS reads CSS variables for them), ~1 ms each,
+#: about a third of the time the three maps took to paint. Identical text is not written again.
+SKIP_UNCHANGED_STYLES_JS = """
+const dom = Bokeh.require("core/dom");
+const proto = dom.InlineStyleSheet.prototype;
+if (!proto.__skips_unchanged) {
+  const update = proto._update;
+  proto._update = function (css) {
+    if (this.el.textContent !== css)
+      update.call(this, css);
+  };
+  proto.__skips_unchanged = true;
+}
+"""
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
@@ -288,6 +306,8 @@ def create_app():
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
     doc = pn.state.curdoc  # the session document this app is built for
+    if doc is not None:
+        doc.js_on_event("document_ready", CustomJS(code=SKIP_UNCHANGED_STYLES_JS))
     figs = map_figures.build()
     map_figures.fill(figs, first)
     #: Spins while a change slower than BUSY_AFTER computes. In the header, a Bokeh root of its own:
