@@ -222,7 +222,9 @@ def wait_settled(page, before_tags, before_text, quiet_ms, timeout=60.0):
         if new_images and st["painted"] and quiet:
             break
         if time.time() > deadline:
-            raise TimeoutError(f"change did not settle: state {st}")
+            recent = page.evaluate("() => window.__ws.slice(-12).map(m => [Math.round(m[0]), m[1], m[2], m[3].slice(0, 120)])")
+            raise TimeoutError(f"change did not settle: state {st}; last websocket messages (ms, dir, bytes,"
+                               f" text): " + "".join(f"\n  {m}" for m in recent))
         time.sleep(0.05)
     text = page.locator(".w-Ph input").first.input_value()
     if text == before_text:
