@@ -57,8 +57,8 @@ def pct(values, q):
 class Client:
     """One browser-like session: a pulled document whose widgets are changed from here."""
 
-    def __init__(self, url):
-        self.session = pull_session(url=url + "/app")
+    def __init__(self, url, arguments=None):
+        self.session = pull_session(url=url + "/app", arguments=arguments)
         self.conn = self.session._connection
         self.doc = self.session.document
         self.events = []  # (attr, model id, new) of every server push

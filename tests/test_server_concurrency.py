@@ -1,0 +1,80 @@
+"""One session's map computation does not hold up another session's events (issues 3 and 4).
+
+Two websocket sessions on one server (``bokeh.client``, as the load test's clients): session A
+asks for a slow map (CRLB, 400 × 400, 10 instants: ~0.4 s in-process, longer in the server);
+while it computes, session B sends a refused value, which Panel answers with a message and no
+computation. B's answer must come back while A's maps are still being computed, and in less
+than a third of A's round trip: were the computation on the event loop or holding the GIL,
+B's event would wait for it.
+"""
+
+import asyncio
+import os
+import threading
+import time
+
+import pytest
+
+from bench.load_test import Client
+from tests.server import served_app
+
+SLOW = {"measure": "CRLB position error (m)", "resolution": "400", "steps": "10"}  # as URL arguments
+
+
+@pytest.fixture(scope="module")
+def server():
+    os.environ.setdefault("QUIET_SERVER", "1")
+    with served_app() as (url, _):
+        yield url
+
+
+def _message_shows(value):
+    needle = f"{value:g}"
+    return lambda events: any(attr == "text" and isinstance(new, str) and needle in new for attr, _, new in events)
+
+
+def _on_thread(fn, *args):
+    """``fn(*args)`` on a thread of its own: a client made there has an event loop of its own
+    (as the load test's)."""
+    out = []
+    t = threading.Thread(target=lambda: out.append(fn(*args)))
+    t.start()
+    t.join(120)
+    return out[0] if out else None
+
+
+def _close(client):
+    asyncio.set_event_loop(client.conn._loop.asyncio_loop)  # the client's own, for its last writes
+    client.close()
+
+
+def test_a_slow_map_does_not_hold_up_another_sessions_events(server):
+    slow, other = _on_thread(Client, server, SLOW), _on_thread(Client, server)
+    try:
+        assert slow.change(slow.ph, "value_throttled", 111.0, slow.maps_done) is not None  # warm
+        for attempt in range(3):  # the machine may be busy: the claim must hold in one clean try
+            done = {}
+
+            def slow_change(value=120.0 + attempt):
+                t0 = time.perf_counter()
+                rtt = slow.change(slow.ph, "value_throttled", value, slow.maps_done)
+                done["slow"] = (rtt, t0 + (rtt or 0))
+
+            worker = threading.Thread(target=slow_change)
+            worker.start()
+            time.sleep(0.05)  # A's change is in the server and computing
+            bad = -(attempt + 1.5)
+            t0 = time.perf_counter()
+            quick = other.change(other.ph, "value_throttled", bad, _message_shows(bad), timeout=30)
+            quick_end = t0 + (quick or 0)
+            worker.join(60)
+            slow_rtt, slow_end = done["slow"]
+            assert slow_rtt is not None and quick is not None, "an update was not answered"
+            if quick_end < slow_end and quick < slow_rtt / 3:
+                break
+        else:
+            pytest.fail(f"B's cheap event took {quick * 1e3:.0f} ms, A's slow map {slow_rtt * 1e3:.0f} ms "
+                        f"(B answered {'before' if quick_end < slow_end else 'after'} A's maps arrived)")
+    finally:
+        _on_thread(_close, slow)
+        _on_thread(_close, other)
