@@ -285,7 +285,7 @@ def create_app():
 
     pn.state.on_session_destroyed(session_closed)
 
-    flush_url = lambda: None  # noqa: E731
+    flush_url = None  # no page URL outside a served page
     if pn.state.location is not None:
         flush_url = _sync_url(scenario, pn.state.location, pn.state.session_args or {})
 
@@ -349,8 +349,9 @@ def create_app():
         try:
             await show_maps(snapshot, computing)
         finally:
-            await asyncio.sleep(URL_AFTER)  # the browser paints the maps first
-            flush_url()
+            if flush_url is not None:
+                await asyncio.sleep(URL_AFTER)  # the browser paints the maps first
+                flush_url()
 
     async def show_maps(snapshot, computing):
         maps = asyncio.wrap_future(computing)
