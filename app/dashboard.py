@@ -83,9 +83,11 @@ class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
 #: next colour lookup (several per renderer: BokehJS reads CSS variables for them), ~1 ms each,
 #: about a third of the time the three maps took to paint. Identical text is not written again.
 SKIP_UNCHANGED_STYLES_JS = """
-const dom = Bokeh.require("core/dom");
-const proto = dom.InlineStyleSheet.prototype;
-if (!proto.__skips_unchanged) {
+let proto = null;
+try {  // BokehJS internals: another Bokeh version without them is left alone
+  proto = Bokeh.require("core/dom").InlineStyleSheet.prototype;
+} catch (e) {}
+if (proto && typeof proto._update === "function" && !proto.__skips_unchanged) {
   const update = proto._update;
   proto._update = function (css) {
     if (this.el.textContent !== css)
