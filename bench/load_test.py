@@ -98,6 +98,13 @@ class Client:
         ok = done(self.events[start:])
         return time.perf_counter() - t0 if ok else None
 
+    @staticmethod
+    def message_shows(value):
+        """A ``done`` predicate: the page's message names the refused ``value``."""
+        needle = f"{value:g}"
+        return lambda events: any(attr == "text" and isinstance(new, str) and needle in new
+                                  for attr, _, new in events)
+
     def maps_done(self, events):
         return len({mid for attr, mid, _ in events if attr == "data" and mid in self.images}) == 3
 
@@ -164,10 +171,8 @@ class Probe(threading.Thread):
             n += 1
             if self.client is not None and self.active.is_set():
                 bad = -(n + 0.5)
-                needle = f"{bad:g}"
-                dt = self.client.change(self.client.ph, "value_throttled", bad, lambda evs, needle=needle: any(
-                    attr == "text" and isinstance(new, str) and needle in new for attr, _, new in evs),
-                    timeout=30)
+                dt = self.client.change(self.client.ph, "value_throttled", bad, Client.message_shows(bad),
+                                        timeout=30)
                 self.event.append(dt if dt is not None else float("inf"))
             time.sleep(0.2)
 

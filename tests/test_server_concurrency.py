@@ -28,11 +28,6 @@ def server():
         yield url
 
 
-def _message_shows(value):
-    needle = f"{value:g}"
-    return lambda events: any(attr == "text" and isinstance(new, str) and needle in new for attr, _, new in events)
-
-
 def _on_thread(fn, *args):
     """``fn(*args)`` on a thread of its own: a client made there has an event loop of its own
     (as the load test's)."""
@@ -65,7 +60,7 @@ def test_a_slow_map_does_not_hold_up_another_sessions_events(server):
             time.sleep(0.05)  # A's change is in the server and computing
             bad = -(attempt + 1.5)
             t0 = time.perf_counter()
-            quick = other.change(other.ph, "value_throttled", bad, _message_shows(bad), timeout=30)
+            quick = other.change(other.ph, "value_throttled", bad, Client.message_shows(bad), timeout=30)
             quick_end = t0 + (quick or 0)
             worker.join(60)
             slow_rtt, slow_end = done["slow"]
