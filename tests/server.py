@@ -13,6 +13,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = "/usr/bin/chromium"
+#: The server's environment as in the container (Dockerfile ENV): see the note there.
+SERVER_ENV = {"PYTHONMALLOC": "malloc"}
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
@@ -30,7 +32,7 @@ def served_app(*extra, port=None, timeout=120):
     cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address", "127.0.0.1",
            "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness", "--num-threads", "4", *extra]
     quiet = subprocess.DEVNULL if os.environ.get("QUIET_SERVER") else None
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=quiet, stderr=quiet)
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=quiet, stderr=quiet, env={**os.environ, **SERVER_ENV})
     url = f"http://127.0.0.1:{port}"
     try:
         deadline = time.time() + timeout

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.server import SERVER_ENV
+
 pytestmark = pytest.mark.container
 
 REPO = Path(__file__).resolve().parents[1]
@@ -227,6 +229,8 @@ def test_image_runs_production_command_as_non_root(image):
     origins = env.get("BOKEH_ALLOW_WS_ORIGIN", "")
     assert origins and "*" not in origins, f"BOKEH_ALLOW_WS_ORIGIN={origins!r}"
     assert env.get("NUMBA_CACHE_DIR", "").startswith("/home/"), env
+    for name, value in SERVER_ENV.items():  # what the load test measured memory with
+        assert env.get(name) == value, f"{name}={env.get(name)!r} in the image, {value!r} expected"
 
     health = cfg.get("Healthcheck") or image.get("Healthcheck")
     assert health, "image has no HEALTHCHECK"
