@@ -116,8 +116,9 @@ class Client:
             self.conn._loop.close(all_fds=True)
 
 
-def hammer(client, index, stop_at, out):
-    """Change parameters until ``stop_at``; record (sent, answered, latencies)."""
+def hammer(client, index, stop_at, out, think=0.0):
+    """Change parameters until ``stop_at``, ``think`` seconds apart after each answer; record
+    (sent, answered, latencies, unanswered)."""
     sent, latencies, i, lost = 0, [], 0, []
     while time.perf_counter() < stop_at and client.conn.connected:
         i += 1
@@ -131,6 +132,7 @@ def hammer(client, index, stop_at, out):
             latencies.append(dt)
         else:
             lost.append(f"session {index} update {i}: {attr} = {value!r}")
+        time.sleep(think)
     out[index] = (sent, len(latencies), latencies, lost)
 
 
@@ -194,6 +196,13 @@ def map_time(repeat=7):
     return statistics.median(times)
 
 
+def cpu_per_second(procs, since):
+    """CPU seconds per wall second used by each of ``procs`` since ``since`` = (cpu times, t0)."""
+    times, t0 = since
+    wall = time.perf_counter() - t0
+    return [(sum(p.cpu_times()[:2]) - sum(t[:2])) / wall for p, t in zip(procs, times)]
+
+
 def wait_cleanup(mon, target, limit):
     """Poll RSS until it is within ``target`` bytes or ``limit`` seconds have passed."""
     t0 = time.time()
@@ -212,10 +221,12 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sessions", type=int, default=20, help="concurrent sessions (1–50)")
     ap.add_argument("--duration", type=float, default=60.0, help="seconds each session changes parameters (≤ 600)")
+    ap.add_argument("--think", type=float, default=0.0,
+                    help="seconds a session waits after each answer before its next change (0: back to back)")
     ap.add_argument("--cleanup", type=float, default=30.0, help="seconds to wait for memory to return")
     args = ap.parse_args(argv)
-    if not 1 <= args.sessions <= 50 or not 0 < args.duration <= 600:
-        ap.error("--sessions must be 1–50 and --duration 0–600 s")
+    if not 1 <= args.sessions <= 50 or not 0 < args.duration <= 600 or not 0 <= args.think <= 60:
+        ap.error("--sessions must be 1–50, --duration 0–600 s and --think 0–60 s")
 
     one_map = map_time()
     print(f"one map computation (A and B, 200×200, in-process, idle): median {one_map * 1e3:.0f} ms")
@@ -264,16 +275,19 @@ def main(argv=None):
 
         probe = Probe(url, clients[-1])
         probe.start()
+        procs = (mon.proc, psutil.Process())  # the server, this load generator
+        since = ([p.cpu_times() for p in procs], time.perf_counter())
         results = {}
         stop_at = time.perf_counter() + args.duration
         probe.active.set()
-        workers = [threading.Thread(target=hammer, args=(c, i, stop_at, results), daemon=True)
+        workers = [threading.Thread(target=hammer, args=(c, i, stop_at, results, args.think), daemon=True)
                    for i, c in enumerate(live)]
         for w in workers:
             w.start()
         for w in workers:
             w.join(args.duration + ANSWER_TIMEOUT + 30)
         probe.active.clear()
+        cpu_server, cpu_clients = cpu_per_second(procs, since)
         probe.stop()
         during = mon.rss()
         for c in clients:
@@ -288,7 +302,8 @@ def main(argv=None):
     lat = [x for r in results.values() for x in r[2]]
     lost = [x for r in results.values() for x in r[3]]
     print()
-    print(f"=== {args.sessions} sessions × {args.duration:g} s, server {url} ===")
+    pace = f"{args.think:g} s between a session's changes" if args.think else "back to back"
+    print(f"=== {args.sessions} sessions × {args.duration:g} s, {pace}, server {url} ===")
     print(f"updates sent {sent}, answered {answered} ({answered / max(sent, 1):.1%}); "
           f"throughput {answered / args.duration:.1f} updates/s")
     for text in lost:
@@ -296,6 +311,8 @@ def main(argv=None):
     if lat:
         print(f"update latency: median {statistics.median(lat) * 1e3:.0f} ms, p95 {pct(lat, 95) * 1e3:.0f} ms, "
               f"max {max(lat) * 1e3:.0f} ms")
+    print(f"CPU under load (cores busy): server {cpu_server:.2f}, this load generator {cpu_clients:.2f} "
+          f"(of {psutil.cpu_count()})")
     print(f"server RSS: baseline {mb(baseline)}, peak {mb(mon.peak)}, end of load {mb(during)}, "
           f"after close + {waited:.0f} s {mb(rss_after)} ({rss_after / baseline - 1:+.1%} vs baseline)")
     if probe.http:

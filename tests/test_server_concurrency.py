@@ -73,3 +73,21 @@ def test_a_slow_map_does_not_hold_up_another_sessions_events(server):
     finally:
         _on_thread(_close, slow)
         _on_thread(_close, other)
+
+
+def test_a_refused_value_sends_no_maps(server):
+    """A refused value is restored at once: the maps still show the restored scenario, so none
+    are computed or sent again (they were: 0.5 MB and ~100 ms before the message showed)."""
+    client = _on_thread(Client, server)
+    try:
+        start = len(client.events)
+        bad = -7.5
+        assert client.change(client.ph, "value_throttled", bad, Client.message_shows(bad), timeout=30) is not None
+        # Maps would arrive within ~0.2 s of the value (idle server); listen for 2 s.
+        assert client.change(client.ph, "value_throttled", -8.5, client.maps_done, timeout=2.0) is None
+        events = client.events[start:]
+        assert Client.message_shows(-8.5)(events), "the second refused value was not answered"
+        sent = [mid for attr, mid, _ in events if attr == "data" and mid in client.images]
+        assert not sent, f"{len(sent)} map images sent again for refused values"
+    finally:
+        _on_thread(_close, client)
