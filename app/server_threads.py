@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 import panel as pn
+from bokeh.server.views.ws import WSHandler
 
 #: A map is computed on a worker thread while Panel's Python runs on others; the worker gives up
 #: the GIL in every numpy/numba call and, with Python's default 5 ms switch interval, may wait
@@ -32,6 +33,25 @@ def drop_process_wide_busy_flag():
         setattr(cls, name, _not_counted)
 
 
+#: Bokeh's own ``WSHandler.open`` (see :func:`send_without_delay`).
+_BOKEH_OPEN = WSHandler.open
+
+
+def _open_without_delay(self):
+    self.set_nodelay(True)
+    return _BOKEH_OPEN(self)
+
+
+def send_without_delay():
+    """Bokeh writes every message as several websocket frames (header, metadata, content, one per
+    binary buffer) and leaves Nagle's algorithm on: a frame after the first waited for the
+    browser's delayed ACK, 40 ms, before it left the server (seen as a 41.7 ms gap between the
+    frames of each message). Each session's socket sends at once instead (TCP_NODELAY), as the
+    browser's end already does."""
+    WSHandler.open = _open_without_delay
+
+
 def configure():
     sys.setswitchinterval(SWITCH_INTERVAL)
     drop_process_wide_busy_flag()
+    send_without_delay()

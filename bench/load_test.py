@@ -60,6 +60,7 @@ class Client:
     def __init__(self, url, arguments=None):
         self.session = pull_session(url=url + "/app", arguments=arguments)
         self.conn = self.session._connection
+        self.conn._socket._socket.protocol.set_nodelay(True)  # as a browser's socket: no Nagle delay
         self.doc = self.session.document
         self.events = []  # (attr, model id, new) of every server push
         models = list(self.doc.models)

@@ -41,3 +41,22 @@ def test_switch_interval_is_short():
         assert sys.getswitchinterval() == server_threads.SWITCH_INTERVAL <= 0.001
     finally:
         sys.setswitchinterval(before)
+
+
+def test_websockets_send_without_nagle_delay(monkeypatch):
+    # Each Bokeh message is several frames; with Nagle on, every frame after the first waited
+    # ~40 ms for the peer's delayed ACK. After configure() a session's socket is set to
+    # TCP_NODELAY when it opens, before Bokeh's own open runs.
+    from bokeh.server.views.ws import WSHandler
+
+    calls = []
+
+    class Handler:
+        def set_nodelay(self, value):
+            calls.append(("nodelay", value))
+
+    monkeypatch.setattr(server_threads, "_BOKEH_OPEN", lambda self: calls.append(("bokeh open", self)))
+    server_threads.configure()
+    handler = Handler()
+    WSHandler.open(handler)
+    assert calls == [("nodelay", True), ("bokeh open", handler)]
