@@ -1,6 +1,6 @@
 """Load test of the served dashboard (issue "Ship it … a server that holds up").
 
-    python -m bench.load_test [--sessions 20] [--duration 60] [--port N]
+    python -m bench.load_test [--sessions 20] [--duration 60] [--think 0] [--cleanup 30]
 
 Loopback only, bounded in count and time. Starts its own ``panel serve app`` (tests.server) with
 ``--check-unused-sessions 1000 --unused-session-lifetime 3000`` so closed sessions are destroyed
