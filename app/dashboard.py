@@ -265,8 +265,11 @@ def _sync_url(scenario, location, args):
             location.update_query(**query)
 
     def to_url(*events):
+        # The value the scenario holds, not the event's: a refused value's event arrives after the
+        # restore of the last good one.
+        now = {e.name: getattr(scenario, e.name) for e in events}
         with lock:
-            pending.update({e.name: json.dumps(e.new) if not isinstance(e.new, str) else e.new for e in events})
+            pending.update({name: v if isinstance(v, str) else json.dumps(v) for name, v in now.items()})
         if not any(e.name in FIELDS for e in events):  # no maps to wait for
             flush()
 

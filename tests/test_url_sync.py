@@ -38,3 +38,15 @@ def test_a_link_value_that_would_be_refused_is_not_set_and_is_reported():
     assert scenario.h == Scenario().h and scenario.d == Scenario().d
     assert "h:" in scenario.message and "d:" in scenario.message
     assert location.updates == []
+
+
+def test_a_refused_value_never_reaches_the_url():
+    # Scenario restores the last good value from inside the change's own event; the URL must hold
+    # what the scenario holds (it took the refused -0.5, so a copied link reopened with an error).
+    scenario, location = Scenario(), FakeLocation()
+    flush = _sync_url(scenario, location, {})
+    scenario.Ph = -0.5
+    assert scenario.Ph == Scenario().Ph and "P_h" in scenario.message
+    scenario.z = 150.0
+    flush()
+    assert location.updates == [{"Ph": f"{Scenario().Ph!r}", "z": "150.0"}]
