@@ -1,10 +1,13 @@
 """Process-wide serving settings (app/server_threads.py)."""
 
+import json
 import sys
 import threading
 import uuid
 
+import numpy as np
 import panel as pn
+from bokeh.document import Document
 
 from app import server_threads
 
@@ -60,3 +63,96 @@ def test_websockets_send_without_nagle_delay(monkeypatch):
     handler = Handler()
     WSHandler.open(handler)
     assert calls == [("nodelay", True), ("bokeh open", handler)]
+
+
+def _patch_events(doc, change):
+    """The document events of ``change()`` on a document whose models the browser already has."""
+    doc.models.flush_synced()
+    events = []
+    doc.on_change(events.append)
+    change()
+    doc.remove_on_change(events.append)
+    return events
+
+
+def _message(create, doc, events):
+    """A PATCH-DOC message as comparable data (buffer ids, drawn from a global counter, replaced
+    by their position) and the models it leaves as not yet synced; the document's state is put
+    back afterwards."""
+    new = set(doc.models._new_models)
+    msg = create(server_threads.patch_doc, events)
+    text = json.dumps(json.loads(msg.content_json), sort_keys=True)
+    for i, buffer in enumerate(msg.buffers):
+        text = text.replace(buffer.id, f"buffer-{i}")
+    left_new = set(doc.models._new_models)
+    doc.models._new_models = new
+    return text, [bytes(b.to_bytes()) for b in msg.buffers], left_new
+
+
+def _document():
+    from bokeh.models import Column, ColumnDataSource, Div, Slider
+
+    sliders = [Slider(start=0, end=10, value=1, title=f"s{i}") for i in range(300)]
+    source = ColumnDataSource(dict(image=[np.zeros((3, 3), np.float32)]))
+    column = Column(children=[*sliders, Div(text="a")], tags=[source])
+    doc = Document()
+    doc.add_root(column)
+    return doc, sliders, source, column
+
+
+def test_patch_messages_are_bokehs_own_with_references_looked_up():
+    # Bokeh builds a reference for every model of the document before each message; the
+    # replacement looks them up when met. The messages must be the same: a plain value, an
+    # array (binary buffer), a model the browser already has, and a new model (sent in full,
+    # then counted as synced).
+    from bokeh.models import Div
+
+    doc, sliders, source, column = _document()
+
+    def change():
+        sliders[0].value = 5
+        source.data = dict(image=[np.arange(9, dtype=np.float32).reshape(3, 3)])
+        column.children = [*column.children[:-1], Div(text="new"), sliders[1]]
+
+    events = _patch_events(doc, change)
+    assert doc.models._new_models  # the new Div
+    ours, bokehs = _message(server_threads._create_patch, doc, events), \
+        _message(server_threads._BOKEH_PATCH_CREATE, doc, events)
+    assert ours == bokehs
+    assert ours[2] == set()  # the new Div was sent in full: synced from now on
+    assert '"text": "new"' in ours[0] and len(ours[1]) == 1
+
+
+def test_a_patch_message_does_not_build_a_reference_for_every_model(monkeypatch):
+    from bokeh.model import Model
+
+    doc, sliders, _, _ = _document()
+    events = _patch_events(doc, lambda: setattr(sliders[7], "value", 3))
+    built = []
+    bokeh_ref = Model.ref
+    monkeypatch.setattr(Model, "ref", property(lambda self: built.append(self) or bokeh_ref.fget(self)))
+    server_threads._create_patch(server_threads.patch_doc, events)
+    assert len(built) <= 2  # the changed slider's, in the event (Bokeh's own: all ~300)
+    built.clear()
+    server_threads._BOKEH_PATCH_CREATE(server_threads.patch_doc, events)
+    assert len(built) > 300  # what the test guards against
+
+
+def test_a_widget_update_works_out_the_design_only_for_stylesheets(monkeypatch):
+    from panel.theme import Bootstrap
+
+    widget = pn.widgets.FloatSlider(design=Bootstrap)
+    events = []
+    widget.param.watch(lambda *e: events.extend(e), ["value", "stylesheets"])
+    widget.value = 0.5
+    widget.stylesheets = [":host {color: red}"]
+    doc = Document()
+    sheets = lambda update: [getattr(s, "url", s) for s in update(widget, events[1], doc=doc)["stylesheets"]]
+    assert sheets(server_threads._update_properties) == sheets(server_threads._PANEL_UPDATE_PROPERTIES)
+    assert len(sheets(server_threads._update_properties)) > 2  # the theme's sheets, and the widget's
+    worked_out = []
+    monkeypatch.setattr(Bootstrap, "params", lambda *a, **k: worked_out.append(a) or ({}, None))
+    assert server_threads._update_properties(widget, events[0], doc=doc) == {"value": 0.5}
+    assert worked_out == []
+    server_threads._PANEL_UPDATE_PROPERTIES(widget, events[0], doc=doc)
+    assert worked_out  # Panel's own: for a value alone
