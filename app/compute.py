@@ -14,7 +14,7 @@ import numpy as np
 
 import core
 
-from .scenario import ACCEPTED, COMPARISONS, CRITERIA, DIFFERENCES, Scenario
+from .scenario import ACCEPTED, COMPARISONS, CRITERIA, DIFFERENCES, Scenario, ScenarioValues
 
 #: Numba's fallback threading layer (workqueue) must not be entered from two threads at once,
 #: and one map already keeps both cores busy: kernels run one at a time. A map takes tens of ms,
@@ -47,9 +47,9 @@ class Snapshot:
         return cls(tuple((name, _frozen(getattr(scenario, name))) for name in fields))
 
     def scenario(self):
-        """A detached Scenario with these values (for the helpers that build core inputs)."""
-        values = {k: [list(v) for v in val] if k == "stations" else val for k, val in self.items}
-        return Scenario(**values)
+        """These values, with the methods that build core's inputs (not a live Scenario)."""
+        return ScenarioValues.of({k: [list(v) for v in val] if k == "stations" else val
+                                  for k, val in self.items})
 
 
 @dataclass(frozen=True)

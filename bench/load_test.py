@@ -168,7 +168,8 @@ class Probe(threading.Thread):
         n = 0
         while not self._halt.is_set():
             t0 = time.perf_counter()
-            urllib.request.urlopen(self.url + "/liveness", timeout=30).read()
+            with urllib.request.urlopen(self.url + "/liveness", timeout=30) as reply:
+                reply.read()
             if self.active.is_set():
                 self.http.append(time.perf_counter() - t0)
             n += 1

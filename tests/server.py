@@ -40,15 +40,16 @@ def served_app(*extra, port=None, timeout=120):
             if proc.poll() is not None:
                 raise RuntimeError(f"panel serve exited with {proc.returncode}")
             try:
-                urllib.request.urlopen(url + "/liveness", timeout=2)
-                break
+                with urllib.request.urlopen(url + "/liveness", timeout=2):  # closed: no socket left
+                    break  # for a later test's garbage collection to warn about
             except OSError:
                 if time.time() > deadline:
                     raise TimeoutError("the dashboard did not answer /liveness") from None
                 time.sleep(0.3)
         # The first page builds the app, which compiles the numba kernels on a fresh checkout
         # (~30–60 s on 2 busy cores); do it here, once, rather than inside a test's timeout.
-        urllib.request.urlopen(url + "/app", timeout=timeout + 180).read()
+        with urllib.request.urlopen(url + "/app", timeout=timeout + 180) as page:
+            page.read()
         yield url, proc
     finally:
         proc.terminate()

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from app import map_figures, views
-from app.compute import PanelCache, Snapshot, compute
+from app.compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot, compute
 from app.scenario import ACCEPTED, PRESETS, Scenario
 
 
@@ -172,3 +172,15 @@ def test_optimised_layout_and_error_quantities():
     for quantity in Scenario.param.error_quantity.objects:
         overlay = views.error_map(d, "t", quantity)
         assert overlay.get(0).vdims[0].unit in ("m", "m/s")
+
+
+@pytest.mark.parametrize("preset", list(PRESETS))
+def test_a_snapshots_values_build_the_same_core_inputs_as_the_scenario(preset):
+    # The maps are computed from plain values (building a Scenario per map cost ms under the GIL).
+    s = Scenario()
+    s.apply_preset(preset)
+    s.param.update(plane="x–z", stations=[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    for fields in (FIELDS, DESIGN_FIELDS):
+        v = Snapshot.of(s, fields).scenario()
+        assert (v.core_plane(), v.velocity(), v.core_options()) == (s.core_plane(), s.velocity(), s.core_options())
+        assert all(getattr(v, name) == getattr(s, name) for name in fields)
