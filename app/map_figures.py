@@ -93,8 +93,11 @@ def build():
     figs, images, veils, stations, bars, hovers = [], [], [], [], [], []
     for which in range(3):
         fig = _figure(x_range, y_range)
-        img = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]))
-        veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]))
+        # Named for clients that wait for new maps (bench/load_test.py): a veil is sent only when it changes.
+        img = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]),
+                               name="map-image")
+        veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]),
+                                name="map-veil")
         st = ColumnDataSource(dict(x=[], y=[], name=[]))
         mapper, bar_mapper = (value_mapper, value_bar) if which < 2 else (diff_mapper, diff_bar)
         r = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)

@@ -64,7 +64,9 @@ class Client:
         self.doc = self.session.document
         self.events = []  # (attr, model id, new) of every server push
         models = list(self.doc.models)
-        self.images = {m.id for m in models if isinstance(m, ColumnDataSource) and "image" in m.data}
+        # The three maps' images (not their veils, which are sent only when they change).
+        self.images = {m.id for m in models if isinstance(m, ColumnDataSource) and m.name == "map-image"}
+        assert len(self.images) == 3, f"expected the three maps' images, found {len(self.images)}"
         self.ph = self._inner("w-Ph", "Slider")
         self.measure = next(m for m in models if "w-measure" in (getattr(m, "css_classes", None) or []))
         self.doc.on_change(lambda ev: self.events.append(
