@@ -1,15 +1,23 @@
-"""Process-wide settings for serving many sessions from threads (imported by app/main.py)."""
+"""Process-wide settings for serving many sessions from threads, and patches of Bokeh's and Panel's
+internals that each removed a measured cost (``configure`` is called by app/main.py). Each patch
+keeps the library's own function and tests/test_server_threads.py checks it against it."""
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import sys
+import threading
 
+import bokeh.io.doc
 import panel as pn
 from bokeh.core.serialization import Serializer
-from bokeh.model import Model
 from bokeh.document.json import PatchJson
+from bokeh.model import Model
 from bokeh.protocol.messages.patch_doc import patch_doc
 from bokeh.server.views.ws import WSHandler
+from panel.io.application import Application
+from panel.io.state import set_curdoc
 from panel.reactive import Reactive
 
 #: A map is computed on a worker thread while Panel's Python runs on others; the worker gives up
@@ -121,9 +129,76 @@ def design_only_for_stylesheets():
     Reactive._update_properties = _update_properties
 
 
+class _PerThreadStack(threading.local):
+    """Bokeh's stack of patched ``curdoc()`` documents, one per thread (see :func:`build_pages_off_loop`)."""
+
+    def __init__(self):
+        self.items = []
+
+    def append(self, item):
+        self.items.append(item)
+
+    def pop(self):
+        return self.items.pop()
+
+    def __len__(self):
+        return len(self.items)
+
+    def __getitem__(self, index):
+        return self.items[index]
+
+
+#: Builds new sessions' pages, one at a time, off the event loop.
+_BUILDER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="page-build")
+#: Panel's own ``Application`` methods (see :func:`build_pages_off_loop`).
+_PANEL_SESSION_CREATED = Application.on_session_created
+_PANEL_INITIALIZE = Application.initialize_document
+
+
+async def _on_session_created(self, session_context):
+    await _PANEL_SESSION_CREATED(self, session_context)
+    doc, loop_thread = session_context._document, threading.get_ident()
+
+    def build():
+        with set_curdoc(doc):
+            _PANEL_INITIALIZE(self, doc)
+        pn.state._thread_id_[doc] = loop_thread  # served from the event loop from now on, as usual
+
+    try:
+        await asyncio.wrap_future(_BUILDER.submit(build))
+    except Exception:
+        doc.clear()  # Bokeh logs the error and builds the page on the loop, as it always did
+        raise
+    doc._built_off_loop = True
+
+
+def _initialize_document(self, doc):
+    if not getattr(doc, "_built_off_loop", False):
+        _PANEL_INITIALIZE(self, doc)
+
+
+def build_pages_off_loop():
+    """Bokeh builds a new session's page (this app's ~360 models: ~2 s of Panel's Python) on the
+    event loop, between awaiting the application's ``on_session_created`` and serving the page:
+    every open session froze for that long whenever someone opened the dashboard. The page is now
+    built on a thread of its own, during ``on_session_created``, which the loop awaits while it
+    goes on serving the other sessions (sharing the GIL with the build). Two things that assumed
+    the loop's thread are made to hold on another: ``curdoc()``'s stack of patched documents,
+    which Bokeh keeps in one list for the process (now one per thread, so a build and the loop's
+    callbacks never see each other's document), and the thread Panel records as the document's,
+    set back to the loop's once the page is built."""
+    if not isinstance(bokeh.io.doc._PATCHED_CURDOCS, _PerThreadStack):
+        stack = _PerThreadStack()
+        stack.items.extend(bokeh.io.doc._PATCHED_CURDOCS)  # this thread's: called while the app builds
+        bokeh.io.doc._PATCHED_CURDOCS = stack
+    Application.on_session_created = _on_session_created
+    Application.initialize_document = _initialize_document
+
+
 def configure():
     sys.setswitchinterval(SWITCH_INTERVAL)
     drop_process_wide_busy_flag()
     send_without_delay()
     serialize_only_what_changed()
     design_only_for_stylesheets()
+    build_pages_off_loop()

@@ -8,7 +8,8 @@ within seconds, then:
 
 1. one warm-up session (a few updates), closed; the server's RSS after its cleanup is the baseline;
 2. ``--sessions`` websocket sessions (``bokeh.client.pull_session``, as many threads, each with
-   its own IOLoop) connect, then each changes parameters for ``--duration`` seconds: P_h through
+   its own IOLoop) connect, all at once (meanwhile ``GET /liveness`` is timed: how long the event
+   loop is held up while their pages are built), then each changes parameters for ``--duration`` seconds: P_h through
    the slider's ``value_throttled`` (what a released drag sends) and, every fifth update, the
    measure; an update is *answered* when all three map images arrive with new data;
 3. meanwhile a probe thread times (a) ``GET /liveness`` (the server's event loop) and (b) on its own
@@ -187,6 +188,16 @@ class Probe(threading.Thread):
         self.join(60)
 
 
+def poll_liveness(url, stop, out, every=0.05):
+    """Append the round-trip time of ``GET /liveness`` to ``out`` until ``stop`` is set."""
+    while not stop.is_set():
+        t0 = time.perf_counter()
+        with urllib.request.urlopen(url + "/liveness", timeout=60) as reply:
+            reply.read()
+        out.append(time.perf_counter() - t0)
+        time.sleep(every)
+
+
 def map_time(repeat=7):
     """Median wall time of one default scenario's maps (A and B, 200 × 200), computed here."""
     s = Scenario()
@@ -268,11 +279,16 @@ def main(argv=None):
 
         threads = [threading.Thread(target=connect, args=(i,), daemon=True) for i in range(args.sessions + 1)]
         clients.append(None)  # the probe's own session
+        building, connected = [], threading.Event()  # /liveness while the pages are built
+        poller = threading.Thread(target=poll_liveness, args=(url, connected, building), daemon=True)
+        poller.start()
         for t in threads:
             t.start()
         for t in threads:
             t.join(600)
         connect_time = time.perf_counter() - t0
+        connected.set()
+        poller.join(60)
         live = [c for c in clients[:-1] if c is not None]
         print(f"{len(live)} of {args.sessions} sessions (+1 probe) connected in {connect_time:.1f} s "
               f"(RSS {mb(mon.rss())}); errors: {errors or 'none'}")
@@ -308,6 +324,10 @@ def main(argv=None):
     print()
     pace = f"{args.think:g} s between a session's changes" if args.think else "back to back"
     print(f"=== {args.sessions} sessions × {args.duration:g} s, {pace}, server {url} ===")
+    if building:
+        print(f"GET /liveness while the {args.sessions + 1} pages were built: median "
+              f"{statistics.median(building) * 1e3:.0f} ms, p95 {pct(building, 95) * 1e3:.0f} ms, "
+              f"max {max(building) * 1e3:.0f} ms (n={len(building)})")
     print(f"updates sent {sent}, answered {answered} ({answered / max(sent, 1):.1%}); "
           f"throughput {answered / args.duration:.1f} updates/s")
     for text in lost:

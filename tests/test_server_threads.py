@@ -156,3 +156,27 @@ def test_a_widget_update_works_out_the_design_only_for_stylesheets(monkeypatch):
     assert worked_out == []
     server_threads._PANEL_UPDATE_PROPERTIES(widget, events[0], doc=doc)
     assert worked_out  # Panel's own: for a value alone
+
+
+def test_curdoc_patches_of_two_threads_do_not_see_each_other():
+    # A page is built on a thread of its own while the loop runs other sessions' callbacks, each
+    # under Bokeh's patch_curdoc: with one stack for the process, either could get the other's
+    # document. After build_pages_off_loop() each thread has its own.
+    from bokeh.io.doc import curdoc, patch_curdoc
+
+    server_threads.build_pages_off_loop()
+    docs, seen = [Document(), Document()], {}
+    inside = threading.Barrier(2)
+
+    def use(i):
+        with patch_curdoc(docs[i]):
+            inside.wait(10)  # both patched at once
+            seen[i] = curdoc()
+            inside.wait(10)
+
+    workers = [threading.Thread(target=use, args=(i,)) for i in range(2)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    assert seen[0] is docs[0] and seen[1] is docs[1]
