@@ -1,13 +1,16 @@
 """Process-wide serving settings (app/server_threads.py)."""
 
+import asyncio
 import json
 import sys
+import types
 import threading
 import uuid
 
 import numpy as np
 import panel as pn
 from bokeh.document import Document
+from tornado.locks import Lock
 
 from app import server_threads
 
@@ -76,17 +79,22 @@ def _patch_events(doc, change):
 
 
 def _message(create, doc, events):
-    """A PATCH-DOC message as comparable data (buffer ids, drawn from a global counter, replaced
-    by their position) and the models it leaves as not yet synced; the document's state is put
-    back afterwards."""
+    """A PATCH-DOC message as comparable data (:func:`_comparable`) and the models it leaves as not
+    yet synced; the document's state is put back afterwards."""
     new = set(doc.models._new_models)
     msg = create(server_threads.patch_doc, events)
+    left_new = set(doc.models._new_models)
+    doc.models._new_models = new
+    return (*_comparable(msg), left_new)
+
+
+def _comparable(msg):
+    """A message's content with its buffers' ids (drawn from a global counter) replaced by their
+    position, and the buffers' bytes."""
     text = json.dumps(json.loads(msg.content_json), sort_keys=True)
     for i, buffer in enumerate(msg.buffers):
         text = text.replace(buffer.id, f"buffer-{i}")
-    left_new = set(doc.models._new_models)
-    doc.models._new_models = new
-    return text, [bytes(b.to_bytes()) for b in msg.buffers], left_new
+    return text, [bytes(b.to_bytes()) for b in msg.buffers]
 
 
 def _document():
@@ -180,3 +188,24 @@ def test_curdoc_patches_of_two_threads_do_not_see_each_other():
     for w in workers:
         w.join()
     assert seen[0] is docs[0] and seen[1] is docs[1]
+
+
+def test_a_pulled_document_is_bokehs_own_reply_encoded_on_the_page_thread(monkeypatch):
+    # A browser's first request (PULL-DOC) is answered with the whole document, encoded on the
+    # page-building thread (send_pages_off_loop) rather than on the event loop.
+    from bokeh.protocol import Protocol
+
+    doc, _, _, _ = _document()
+    threads = []
+    protocol = Protocol()
+    create = protocol.create
+    monkeypatch.setattr(protocol, "create", lambda *a: threads.append(threading.current_thread().name) or create(*a))
+    connection = types.SimpleNamespace(protocol=protocol)
+    session = types.SimpleNamespace(document=doc, destroyed=False, _pending_writes=None,
+                                    _lock=Lock(),
+                                    block_expiration=lambda: None, unblock_expiration=lambda: None)
+    request = types.SimpleNamespace(header={"msgid": "42"})
+    reply = asyncio.run(server_threads._handle_pull(session, request, connection))
+    assert threads and threads[0].startswith("page-build")
+    assert _comparable(reply) == _comparable(create("PULL-DOC-REPLY", "42", doc))
+    assert reply.header["reqid"] == "42"
