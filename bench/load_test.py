@@ -120,10 +120,11 @@ class Client:
             self.conn._loop.close(all_fds=True)
 
 
-def hammer(client, index, stop_at, out, think=0.0):
-    """Change parameters until ``stop_at``, ``think`` seconds apart after each answer; record
-    (sent, answered, latencies, unanswered)."""
+def hammer(client, index, stop_at, out, think=0.0, start=0.0):
+    """After ``start`` seconds, change parameters until ``stop_at``, ``think`` seconds apart after
+    each answer; record (sent, answered, latencies, unanswered)."""
     sent, latencies, i, lost = 0, [], 0, []
+    time.sleep(start)
     while time.perf_counter() < stop_at and client.conn.connected:
         i += 1
         if i % 5 == 0:
@@ -300,7 +301,9 @@ def main(argv=None):
         results = {}
         stop_at = time.perf_counter() + args.duration
         probe.active.set()
-        workers = [threading.Thread(target=hammer, args=(c, i, stop_at, results, args.think), daemon=True)
+        # Paced sessions start spread over one pause, as people do, not all in the same instant.
+        workers = [threading.Thread(target=hammer, daemon=True,
+                                    args=(c, i, stop_at, results, args.think, args.think * i / len(live)))
                    for i, c in enumerate(live)]
         for w in workers:
             w.start()
