@@ -196,6 +196,11 @@ def build_pages_off_loop():
     Application.initialize_document = _initialize_document
 
 
+#: Encodes the documents browsers ask for, off the event loop; a thread of its own, so that a
+#: built page is sent without waiting for the pages queued for building after it.
+_ENCODER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="page-send")
+
+
 def _document_reply(connection, request_id, document):
     """Bokeh's ``PULL-DOC-REPLY``, encoded to JSON here (the loop then only writes it)."""
     msg = connection.protocol.create("PULL-DOC-REPLY", request_id, document)
@@ -205,15 +210,15 @@ def _document_reply(connection, request_id, document):
 
 @_needs_document_lock
 async def _handle_pull(self, message, connection):
-    return await asyncio.wrap_future(_BUILDER.submit(_document_reply, connection, message.header["msgid"],
+    return await asyncio.wrap_future(_ENCODER.submit(_document_reply, connection, message.header["msgid"],
                                                      self.document))
 
 
 def send_pages_off_loop():
     """A browser's first websocket message asks for its whole document, which Bokeh encoded on
     the event loop (~360 models; 0.7-0.8 s each in an asyncio debug trace of 12 sessions opening
-    at once, every other session waiting). It is encoded on the page-building thread instead,
-    with the session's document lock held as in Bokeh's own handler."""
+    at once, every other session waiting). It is encoded on a thread of its own instead, with the
+    session's document lock held as in Bokeh's own handler."""
     ServerSession._handle_pull = _handle_pull
 
 

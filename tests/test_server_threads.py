@@ -190,9 +190,9 @@ def test_curdoc_patches_of_two_threads_do_not_see_each_other():
     assert seen[0] is docs[0] and seen[1] is docs[1]
 
 
-def test_a_pulled_document_is_bokehs_own_reply_encoded_on_the_page_thread(monkeypatch):
-    # A browser's first request (PULL-DOC) is answered with the whole document, encoded on the
-    # page-building thread (send_pages_off_loop) rather than on the event loop.
+def test_a_pulled_document_is_bokehs_own_reply_encoded_off_the_event_loop(monkeypatch):
+    # A browser's first request (PULL-DOC) is answered with the whole document, encoded on a
+    # thread of its own (send_pages_off_loop) rather than on the event loop.
     from bokeh.protocol import Protocol
 
     doc, _, _, _ = _document()
@@ -206,6 +206,6 @@ def test_a_pulled_document_is_bokehs_own_reply_encoded_on_the_page_thread(monkey
                                     block_expiration=lambda: None, unblock_expiration=lambda: None)
     request = types.SimpleNamespace(header={"msgid": "42"})
     reply = asyncio.run(server_threads._handle_pull(session, request, connection))
-    assert threads and threads[0].startswith("page-build")
+    assert threads and threads[0].startswith("page-send")
     assert _comparable(reply) == _comparable(create("PULL-DOC-REPLY", "42", doc))
     assert reply.header["reqid"] == "42"
