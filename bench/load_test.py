@@ -9,8 +9,9 @@ within seconds, then:
 1. one warm-up session (a few updates), closed; the server's RSS after its cleanup is the baseline;
 2. ``--sessions`` websocket sessions (``bokeh.client.pull_session``, as many threads, each with
    its own IOLoop) connect, all at once (meanwhile ``GET /liveness`` is timed: how long the event
-   loop is held up while their pages are built), then each changes parameters for ``--duration`` seconds: P_h through
-   the slider's ``value_throttled`` (what a released drag sends) and, every fifth update, the
+   loop is held up while their pages are built), then each changes parameters for
+   ``--duration`` seconds (``--think`` apart, starts spread over one pause): P_h through the
+   slider's ``value_throttled`` (what a released drag sends) and, every fifth update, the
    measure; an update is *answered* when all three map images arrive with new data;
 3. meanwhile a probe thread times (a) ``GET /liveness`` (the server's event loop) and (b) on its own
    session, a refused value (P_h < 0: the server answers with a message, no map computation), i.e.
@@ -171,11 +172,9 @@ class Probe(threading.Thread):
     def run(self):
         n = 0
         while not self._halt.is_set():
-            t0 = time.perf_counter()
-            with urllib.request.urlopen(self.url + "/liveness", timeout=30) as reply:
-                reply.read()
+            rtt = liveness_rtt(self.url)
             if self.active.is_set():
-                self.http.append(time.perf_counter() - t0)
+                self.http.append(rtt)
             n += 1
             if self.client is not None and self.active.is_set():
                 bad = -(n + 0.5)
@@ -189,13 +188,18 @@ class Probe(threading.Thread):
         self.join(60)
 
 
+def liveness_rtt(url):
+    """Seconds for one ``GET /liveness`` (answered by the server's event loop)."""
+    t0 = time.perf_counter()
+    with urllib.request.urlopen(url + "/liveness", timeout=60) as reply:
+        reply.read()
+    return time.perf_counter() - t0
+
+
 def poll_liveness(url, stop, out, every=0.05):
-    """Append the round-trip time of ``GET /liveness`` to ``out`` until ``stop`` is set."""
+    """Append :func:`liveness_rtt` to ``out`` until ``stop`` is set."""
     while not stop.is_set():
-        t0 = time.perf_counter()
-        with urllib.request.urlopen(url + "/liveness", timeout=60) as reply:
-            reply.read()
-        out.append(time.perf_counter() - t0)
+        out.append(liveness_rtt(url))
         time.sleep(every)
 
 

@@ -3,8 +3,8 @@
 import asyncio
 import json
 import sys
-import types
 import threading
+import types
 import uuid
 
 import numpy as np
