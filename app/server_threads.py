@@ -12,7 +12,6 @@ import threading
 import bokeh.io.doc
 import panel as pn
 from bokeh.core.serialization import Serializer
-from bokeh.document.json import PatchJson
 from bokeh.model import Model
 from bokeh.protocol.messages.patch_doc import patch_doc
 from bokeh.server.session import ServerSession, _needs_document_lock
@@ -67,50 +66,30 @@ def send_without_delay():
 
 
 class _SyncedSerializer(Serializer):
-    """Bokeh's serializer, given the document's models rather than a reference to each: a model
-    the browser already has is looked up when it is met, not all of them before. (``has_ref``
-    is Bokeh's: it is only asked about models not synced yet.)"""
+    """Bokeh's serializer as ``PATCH-DOC`` messages use it, keeping the set of models the browser
+    already has (``references``) as it is: a model's reference is made when it is met, not one for
+    each of them up front. (``has_ref`` is Bokeh's: it is only asked about models not synced yet.)"""
 
-    def __init__(self, models, **kwargs):
+    def __init__(self, *, references=frozenset(), **kwargs):
         super().__init__(**kwargs)
-        self._models = models  # the document's DocumentModelManager
-
-    def _synced(self, obj):
-        return (isinstance(obj, Model) and self._models._models.get(obj.id) is obj
-                and obj not in self._models._new_models)
+        self._synced = references
 
     def get_ref(self, obj):
         ref = super().get_ref(obj)
-        return obj.ref if ref is None and self._synced(obj) else ref
+        return obj.ref if ref is None and isinstance(obj, Model) and obj in self._synced else ref
 
 
-#: Bokeh's own ``patch_doc.create`` (see :func:`serialize_only_what_changed`).
-_BOKEH_PATCH_CREATE = patch_doc.create.__func__
-
-
-def _create_patch(cls, events, **metadata):
-    """``patch_doc.create`` with a :class:`_SyncedSerializer`; otherwise Bokeh's code."""
-    if not events:
-        raise ValueError("PATCH-DOC message requires at least one event")
-    docs = {event.document for event in events}
-    if len(docs) != 1:
-        raise ValueError("PATCH-DOC message configured with events for more than one document")
-    [doc] = docs
-    serializer = _SyncedSerializer(doc.models)
-    content = PatchJson(events=serializer.encode(events))
-    doc.models.flush_synced(lambda model: not serializer.has_ref(model))
-    msg = cls(cls.create_header(), metadata, content)
-    msg.add_buffers(*serializer.buffers)
-    return msg
+#: The module of ``patch_doc`` (``bokeh.protocol.messages.patch_doc`` names the class there).
+_PATCH_DOC_MODULE = sys.modules[patch_doc.__module__]
 
 
 def serialize_only_what_changed():
     """Every message to a browser (``PATCH-DOC``) began with a reference object built for each of
     the document's ~360 models, to recognise the ones the browser already has: 15 % of the time
     the server held the GIL under the load test (``py-spy record --gil``), ~6 messages per map
-    update. Now a model met while encoding is looked up in the document instead; the message is
-    the same (tests/test_server_threads.py compares them)."""
-    patch_doc.create = classmethod(_create_patch)
+    update. Bokeh's ``patch_doc.create`` now encodes with :class:`_SyncedSerializer`; the message
+    is the same (tests/test_server_threads.py compares them)."""
+    _PATCH_DOC_MODULE.Serializer = _SyncedSerializer
 
 
 #: Panel's own ``Reactive._update_properties`` (see :func:`design_only_for_stylesheets`).

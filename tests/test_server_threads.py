@@ -9,6 +9,7 @@ import uuid
 
 import numpy as np
 import panel as pn
+from bokeh.core.serialization import Serializer
 from bokeh.document import Document
 from tornado.locks import Lock
 
@@ -78,11 +79,21 @@ def _patch_events(doc, change):
     return events
 
 
-def _message(create, doc, events):
+def _patch(serializer, events):
+    """Bokeh's PATCH-DOC message of ``events``, encoded with ``serializer`` (a class)."""
+    module = server_threads._PATCH_DOC_MODULE
+    bokeh_serializer, module.Serializer = module.Serializer, serializer
+    try:
+        return module.patch_doc.create(events)
+    finally:
+        module.Serializer = bokeh_serializer
+
+
+def _message(serializer, doc, events):
     """A PATCH-DOC message as comparable data (:func:`_comparable`) and the models it leaves as not
     yet synced; the document's state is put back afterwards."""
     new = set(doc.models._new_models)
-    msg = create(server_threads.patch_doc, events)
+    msg = _patch(serializer, events)
     left_new = set(doc.models._new_models)
     doc.models._new_models = new
     return (*_comparable(msg), left_new)
@@ -124,11 +135,15 @@ def test_patch_messages_are_bokehs_own_with_references_looked_up():
 
     events = _patch_events(doc, change)
     assert doc.models._new_models  # the new Div
-    ours, bokehs = _message(server_threads._create_patch, doc, events), \
-        _message(server_threads._BOKEH_PATCH_CREATE, doc, events)
+    ours, bokehs = _message(server_threads._SyncedSerializer, doc, events), _message(Serializer, doc, events)
     assert ours == bokehs
     assert ours[2] == set()  # the new Div was sent in full: synced from now on
     assert '"text": "new"' in ours[0] and len(ours[1]) == 1
+
+
+def test_patch_messages_are_encoded_with_the_synced_serializer_once_configured():
+    server_threads.configure()
+    assert server_threads._PATCH_DOC_MODULE.Serializer is server_threads._SyncedSerializer
 
 
 def test_a_patch_message_does_not_build_a_reference_for_every_model(monkeypatch):
@@ -139,10 +154,10 @@ def test_a_patch_message_does_not_build_a_reference_for_every_model(monkeypatch)
     built = []
     bokeh_ref = Model.ref
     monkeypatch.setattr(Model, "ref", property(lambda self: built.append(self) or bokeh_ref.fget(self)))
-    server_threads._create_patch(server_threads.patch_doc, events)
+    _patch(server_threads._SyncedSerializer, events)
     assert len(built) <= 2  # the changed slider's, in the event (Bokeh's own: all ~300)
     built.clear()
-    server_threads._BOKEH_PATCH_CREATE(server_threads.patch_doc, events)
+    _patch(Serializer, events)
     assert len(built) > 300  # what the test guards against
 
 
