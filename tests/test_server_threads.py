@@ -9,8 +9,10 @@ import uuid
 
 import numpy as np
 import panel as pn
+import pytest
 from bokeh.core.serialization import Serializer
 from bokeh.document import Document
+from bokeh.server.views.ws import WSHandler
 from tornado.locks import Lock
 
 from app import server_threads
@@ -224,3 +226,81 @@ def test_a_pulled_document_is_bokehs_own_reply_encoded_off_the_event_loop(monkey
     assert threads and threads[0].startswith("page-send")
     assert _comparable(reply) == _comparable(create("PULL-DOC-REPLY", "42", doc))
     assert reply.header["reqid"] == "42"
+
+
+class _Frames(WSHandler):
+    """Bokeh's websocket handler without its session set-up, which sends one Bokeh-shaped message (two text frames, a dict, a binary frame) when it opens,
+    through ``write`` (Bokeh's method or the patched one), and notes whether the event loop got
+    a turn while the four writes were awaited."""
+
+    compress = False
+    write = None
+    report = None
+
+    def prepare(self):
+        pass
+
+    def check_origin(self, origin):
+        return True
+
+    def select_subprotocol(self, subprotocols):
+        return None
+
+    def get_compression_options(self):
+        return {} if self.compress else None
+
+    async def open(self):
+        turned = []
+        asyncio.get_running_loop().call_soon(turned.append, True)
+        async with self.write_lock:
+            for part, binary in (('{"msgtype":"PATCH-DOC"}', False), ("{}", False), ({"a": [1, 2]}, False),
+                                 (b"\x00\x01binary" * 100, True)):
+                await type(self).write(self, part, binary, locked=False)
+        await type(self).write(self, "after, locked", False)
+        type(self).report.append(bool(turned))
+        self.close()
+
+
+async def _frames_received(write, compress):
+    from tornado.web import Application as TornadoApp
+    from tornado.websocket import websocket_connect
+
+    from tests.server import free_port
+
+    report = []
+    handler = type("H", (_Frames,), dict(write=write, compress=compress, report=report))
+    port = free_port()
+    server = TornadoApp([("/ws", handler, dict(application_context=None, bokeh_websocket_path="/ws"))]).listen(port, address="127.0.0.1")
+    try:
+        conn = await websocket_connect(f"ws://127.0.0.1:{port}/ws",
+                                       compression_options={} if compress else None)
+        frames = []
+        while (msg := await conn.read_message()) is not None:
+            frames.append(msg)
+        conn.close()
+        return frames, report
+    finally:
+        server.stop()
+
+
+@pytest.mark.parametrize("compress", [False, True])
+def test_frames_written_at_once_are_the_same_frames_without_turns_of_the_event_loop(compress):
+    # Bokeh's write (through Tornado's, which wraps each frame in a task) gave the loop a turn per
+    # frame, with the session's document lock held; the patched write sends the same frames and
+    # completes without one when the socket takes the bytes at once.
+    bokeh_frames, bokeh_turned = asyncio.run(_frames_received(server_threads._BOKEH_WRITE_MESSAGE, compress))
+    ours, ours_turned = asyncio.run(_frames_received(server_threads._write_message_at_once, compress))
+    assert ours == bokeh_frames
+    assert ours[:3] == ['{"msgtype":"PATCH-DOC"}', "{}", '{"a": [1, 2]}']
+    assert ours[3] == b"\x00\x01binary" * 100 and ours[4] == "after, locked"
+    assert bokeh_turned == [True] and ours_turned == [False]
+    server_threads.configure()
+    assert WSHandler.write_message is server_threads._write_message_at_once
+
+
+def test_a_frame_for_a_closed_websocket_raises_what_bokeh_catches():
+    from tornado.websocket import WebSocketClosedError
+
+    handler = types.SimpleNamespace(ws_connection=None, write_lock=Lock())
+    with pytest.raises(WebSocketClosedError):
+        asyncio.run(server_threads._write_message_at_once(handler, "x"))
