@@ -16,7 +16,8 @@ within seconds, then:
 3. meanwhile a probe thread times (a) ``GET /liveness`` (the server's event loop) and (b) on its own
    session, a refused value (P_h < 0: the server answers with a message, no map computation), i.e.
    how long a cheap event of one session waits behind the others' computations; the target is
-   the median time of one map computation (measured here, in-process, before the load);
+   the median time of one map computation (measured here, in-process, before the load). The same
+   cheap event is also timed on the idle server, just before the load: its own cost;
 4. after the sessions close: the server's RSS must come back within 10 % of the baseline.
 
 Prints PASS/FAIL lines and exits 1 if any target is missed. Uses private parts of the Bokeh
@@ -188,6 +189,16 @@ class Probe(threading.Thread):
         self.join(60)
 
 
+def idle_round_trips(client, n=15):
+    """The probe's cheap event on the idle server (before the load): what it costs by itself."""
+    times = []
+    for i in range(n):
+        bad = -(1000 + i + 0.5)
+        times.append(client.change(client.ph, "value_throttled", bad, Client.message_shows(bad), timeout=30))
+        time.sleep(0.1)
+    return times
+
+
 def liveness_rtt(url):
     """Seconds for one ``GET /liveness`` (answered by the server's event loop)."""
     t0 = time.perf_counter()
@@ -298,6 +309,7 @@ def main(argv=None):
         print(f"{len(live)} of {args.sessions} sessions (+1 probe) connected in {connect_time:.1f} s "
               f"(RSS {mb(mon.rss())}); errors: {errors or 'none'}")
 
+        idle_event = idle_round_trips(clients[-1]) if clients[-1] is not None else []
         probe = Probe(url, clients[-1])
         probe.start()
         procs = (mon.proc, psutil.Process())  # the server, this load generator
@@ -349,6 +361,9 @@ def main(argv=None):
     if probe.http:
         print(f"GET /liveness under load: median {statistics.median(probe.http) * 1e3:.0f} ms, "
               f"p95 {pct(probe.http, 95) * 1e3:.0f} ms (n={len(probe.http)})")
+    if idle_event and None not in idle_event:
+        print(f"the same cheap event on the idle server, before the load: median "
+              f"{statistics.median(idle_event) * 1e3:.0f} ms, p95 {pct(idle_event, 95) * 1e3:.0f} ms (n={len(idle_event)})")
     if probe.event:
         print(f"cheap event of another session (refused value -> message) under load: median "
               f"{statistics.median(probe.event) * 1e3:.0f} ms, p95 {pct(probe.event, 95) * 1e3:.0f} ms "
