@@ -229,9 +229,9 @@ def test_a_pulled_document_is_bokehs_own_reply_encoded_off_the_event_loop(monkey
 
 
 class _Frames(WSHandler):
-    """Bokeh's websocket handler without its session set-up, which sends one Bokeh-shaped message (two text frames, a dict, a binary frame) when it opens,
-    through ``write`` (Bokeh's method or the patched one), and notes whether the event loop got
-    a turn while the four writes were awaited."""
+    """Bokeh's websocket handler without its session set-up. When it opens it sends one
+    Bokeh-shaped message (two text frames, a dict, a binary frame) through ``write`` (Bokeh's
+    method or the patched one), and notes whether the event loop got a turn during the writes."""
 
     compress = False
     write = None
@@ -260,6 +260,9 @@ class _Frames(WSHandler):
         type(self).report.append(bool(turned))
         self.close()
 
+    def on_close(self):
+        type(self).closed.set()
+
 
 async def _frames_received(write, compress):
     from tornado.web import Application as TornadoApp
@@ -268,7 +271,7 @@ async def _frames_received(write, compress):
     from tests.server import free_port
 
     report = []
-    handler = type("H", (_Frames,), dict(write=write, compress=compress, report=report))
+    handler = type("H", (_Frames,), dict(write=write, compress=compress, report=report, closed=asyncio.Event()))
     port = free_port()
     server = TornadoApp([("/ws", handler, dict(application_context=None, bokeh_websocket_path="/ws"))]).listen(port, address="127.0.0.1")
     try:
@@ -278,6 +281,12 @@ async def _frames_received(write, compress):
         while (msg := await conn.read_message()) is not None:
             frames.append(msg)
         conn.close()
+        # Both ends of the socket closed before the loop ends (else a ResourceWarning, later).
+        await asyncio.wait_for(handler.closed.wait(), 10)
+        for _ in range(1000):
+            if conn.protocol is None or conn.protocol.stream.closed():
+                break
+            await asyncio.sleep(0.01)
         return frames, report
     finally:
         server.stop()
