@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import os
 import socket
@@ -57,6 +58,16 @@ def served_app(*extra, port=None, timeout=120):
             proc.wait(10)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+async def close_websocket(conn, timeout=10.0):
+    """Close a Tornado websocket client and wait until its socket is closed: one still open when
+    the event loop ends is reported much later, by whichever test is running, as a ResourceWarning."""
+    stream = conn.protocol.stream if conn.protocol is not None else None
+    conn.close()
+    deadline = time.monotonic() + timeout
+    while stream is not None and not stream.closed() and time.monotonic() < deadline:
+        await asyncio.sleep(0.01)
 
 
 @contextlib.contextmanager

@@ -16,7 +16,7 @@ from tornado.httpclient import HTTPClientError, HTTPRequest
 from tornado.websocket import websocket_connect
 
 from app.scenario import ACCEPTED, Scenario
-from tests.server import CHROMIUM, chromium_browser, served_app
+from tests.server import CHROMIUM, chromium_browser, close_websocket, served_app
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +56,7 @@ async def _handshake(url, origin):
         header = await asyncio.wait_for(ws.read_message(), 60)  # first frame of the ACK message
         return json.loads(header)["msgtype"]
     finally:
-        ws.close()
+        await close_websocket(ws)
 
 
 def test_foreign_websocket_origin_is_refused(server):

@@ -268,7 +268,7 @@ async def _frames_received(write, compress):
     from tornado.web import Application as TornadoApp
     from tornado.websocket import websocket_connect
 
-    from tests.server import free_port
+    from tests.server import close_websocket, free_port
 
     report = []
     handler = type("H", (_Frames,), dict(write=write, compress=compress, report=report, closed=asyncio.Event()))
@@ -280,13 +280,8 @@ async def _frames_received(write, compress):
         frames = []
         while (msg := await conn.read_message()) is not None:
             frames.append(msg)
-        conn.close()
-        # Both ends of the socket closed before the loop ends (else a ResourceWarning, later).
-        await asyncio.wait_for(handler.closed.wait(), 10)
-        for _ in range(1000):
-            if conn.protocol is None or conn.protocol.stream.closed():
-                break
-            await asyncio.sleep(0.01)
+        await close_websocket(conn)
+        await asyncio.wait_for(handler.closed.wait(), 10)  # the server's end is closed too
         return frames, report
     finally:
         server.stop()
