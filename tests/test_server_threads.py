@@ -308,3 +308,70 @@ def test_a_frame_for_a_closed_websocket_raises_what_bokeh_catches():
     handler = types.SimpleNamespace(ws_connection=None, write_lock=Lock())
     with pytest.raises(WebSocketClosedError):
         asyncio.run(server_threads._write_message_at_once(handler, "x"))
+
+
+def _wire_fragments(msg):
+    """A Bokeh message as its websocket frames: header, metadata, content, then per buffer its
+    header and its bytes (what ``Message.send`` writes)."""
+    frames = [msg.header_json, msg.metadata_json, msg.content_json]
+    for buffer in msg.buffers:
+        frames += [json.dumps(buffer.ref), bytes(buffer.to_bytes())]
+    return frames
+
+
+def _receiving_handler(on_message):
+    """A Bokeh websocket handler past its handshake (a receiver), recording what it hands on."""
+    from bokeh.protocol import Protocol
+    from bokeh.protocol.receiver import Receiver
+
+    handled, errors = [], []
+
+    class Handler(WSHandler):
+        async def _handle(self, message):
+            handled.append(message)
+
+        def _protocol_error(self, message):
+            errors.append(message)
+
+    handler = object.__new__(Handler)  # no Tornado connection: only the receiving path is used
+    handler.receiver = Receiver(Protocol())
+    handler.on_message = on_message.__get__(handler)
+    return handler, handled, errors
+
+
+def _take_in(on_message, fragments):
+    handler, handled, errors = _receiving_handler(on_message)
+    awaited = []
+    for fragment in fragments:
+        result = handler.on_message(fragment)
+        awaited.append(result is not None)
+        if result is not None:
+            asyncio.run(result)
+    return awaited, handled, errors
+
+
+def test_fragments_are_taken_in_at_once_into_the_message_bokeh_assembles():
+    # Bokeh's on_message is a coroutine for every fragment (Tornado runs each as a task: two turns
+    # of the loop). Now only the fragment that completes a message has one to await; the message
+    # assembled (with its binary buffer) is the one Bokeh's own handler assembles.
+    doc, sliders, source, column = _document()
+    events = _patch_events(doc, lambda: setattr(source, "data", dict(image=[np.ones((3, 3), np.float32)])))
+    fragments = _wire_fragments(_patch(Serializer, events))
+    assert len(fragments) == 5  # header, metadata, content, buffer header, buffer
+
+    awaited, ours, errors = _take_in(server_threads._on_message_at_once, fragments)
+    bokeh_awaited, bokehs, bokeh_errors = _take_in(server_threads._BOKEH_ON_MESSAGE, fragments)
+    assert awaited == [False, False, True, False, True]  # content and payload may complete it
+    assert bokeh_awaited == [True] * 5
+    assert errors == bokeh_errors == [] and len(ours) == len(bokehs) == 1
+    assert _comparable(ours[0]) == _comparable(bokehs[0])
+    assert ours[0].header == bokehs[0].header
+    server_threads.configure()
+    assert WSHandler.on_message is server_threads._on_message_at_once
+
+
+def test_a_malformed_fragment_is_the_protocol_error_bokeh_reports():
+    bad = [b"binary where the header belongs"]
+    _, ours, errors = _take_in(server_threads._on_message_at_once, bad)
+    _, bokehs, bokeh_errors = _take_in(server_threads._BOKEH_ON_MESSAGE, bad)
+    assert ours == bokehs == [] and errors == bokeh_errors and "expected text fragment" in errors[0]
