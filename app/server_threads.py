@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
-import logging
 import sys
 import threading
 
@@ -15,7 +14,6 @@ import panel as pn
 import tornado.escape
 from bokeh.core.serialization import Serializer
 from bokeh.model import Model
-from bokeh.protocol.exceptions import MessageError, ProtocolError, ValidationError
 from bokeh.protocol.messages.patch_doc import patch_doc
 from bokeh.server.session import ServerSession, _needs_document_lock
 from bokeh.server.views.ws import WSHandler
@@ -244,41 +242,6 @@ def write_frames_at_once():
     WSHandler.write_message = _write_message_at_once
 
 
-#: Bokeh's own ``WSHandler.on_message`` (see :func:`take_in_fragments_at_once`).
-_BOKEH_ON_MESSAGE = WSHandler.on_message
-
-#: The receiver's steps for fragments that never complete a message: its header, its metadata, a
-#: buffer's header (the content or a buffer's payload may complete it).
-_OPENING_FRAGMENTS = {"_HEADER", "_METADATA", "_BUFFER_HEADER"}
-
-
-def _on_message_at_once(self, fragment):
-    """Bokeh's ``WSHandler.on_message``, less its coroutine for a fragment that cannot complete a
-    message: Bokeh's receiver takes it in (what ``Receiver.consume`` does, which never awaits),
-    with Bokeh's error handling, and there is nothing to await."""
-    step = getattr(self.receiver, "_current_consumer", None)
-    if getattr(step, "__name__", None) not in _OPENING_FRAGMENTS:
-        return _BOKEH_ON_MESSAGE(self, fragment)
-    try:
-        step(fragment)
-    except (MessageError, ProtocolError, ValidationError) as e:
-        self._protocol_error(str(e))
-    except Exception as e:
-        logging.getLogger("bokeh.server.views.ws").error(
-            "Unhandled exception receiving a message: %r: %r", e, fragment, exc_info=True)
-        self._internal_error("server failed to parse a message")
-    return None
-
-
-def take_in_fragments_at_once():
-    """Each websocket frame received is handed to Bokeh's ``on_message``, a coroutine, which
-    Tornado runs as a task and awaits: two turns of the event loop's queue per frame, behind
-    everything queued there, before the next frame is read. A message from the browser is 3 or
-    more frames; traced under the load test, from its first frame to the message being whole
-    took up to 190 ms. Frames that cannot complete a message are now taken in at once."""
-    WSHandler.on_message = _on_message_at_once
-
-
 def configure():
     sys.setswitchinterval(SWITCH_INTERVAL)
     drop_process_wide_busy_flag()
@@ -288,4 +251,3 @@ def configure():
     build_pages_off_loop()
     send_pages_off_loop()
     write_frames_at_once()
-    take_in_fragments_at_once()
