@@ -111,6 +111,11 @@ class Client:
         return lambda events: any(attr == "text" and isinstance(new, str) and needle in new
                                   for attr, _, new in events)
 
+    def refuse(self, value, timeout=30):
+        """A P_h release the server refuses (``value`` < 0): a cheap event, answered with a message
+        and no maps. Seconds until the message names ``value``, or None."""
+        return self.change(self.ph, "value_throttled", value, self.message_shows(value), timeout=timeout)
+
     def maps_done(self, events):
         return len({mid for attr, mid, _ in events if attr == "data" and mid in self.images}) == 3
 
@@ -179,8 +184,7 @@ class Probe(threading.Thread):
             n += 1
             if self.client is not None and self.active.is_set():
                 bad = -(n + 0.5)
-                dt = self.client.change(self.client.ph, "value_throttled", bad, Client.message_shows(bad),
-                                        timeout=30)
+                dt = self.client.refuse(bad)
                 self.event.append(dt if dt is not None else float("inf"))
             time.sleep(0.2)
 
@@ -194,7 +198,7 @@ def idle_round_trips(client, n=15):
     times = []
     for i in range(n):
         bad = -(1000 + i + 0.5)
-        times.append(client.change(client.ph, "value_throttled", bad, Client.message_shows(bad), timeout=30))
+        times.append(client.refuse(bad))
         time.sleep(0.1)
     return times
 
