@@ -11,6 +11,7 @@ import threading
 
 import bokeh.io.doc
 import panel as pn
+import param
 import tornado.escape
 from bokeh.core.serialization import Serializer
 from bokeh.model import Model
@@ -20,6 +21,7 @@ from bokeh.server.views.ws import WSHandler
 from panel.io.application import Application
 from panel.io.state import set_curdoc
 from panel.reactive import Reactive
+from param.parameterized import Parameters, Undefined
 from tornado.iostream import StreamClosedError
 from tornado.websocket import WebSocketClosedError
 
@@ -242,6 +244,62 @@ def write_frames_at_once():
     WSHandler.write_message = _write_message_at_once
 
 
+#: param's own ``Parameters._update`` (see :func:`update_reads_only_what_it_sets`).
+_PARAM_UPDATE = Parameters._update
+
+
+def _update(self_, arg=Undefined, /, **kwargs):
+    """param 2.4's ``Parameters._update``, reading the old values (returned for ``with
+    obj.param.update(...)`` to restore) of the parameters it sets rather than of all of them."""
+    BATCH_WATCH = self_._BATCH_WATCH
+    self_._BATCH_WATCH = True
+    self_or_cls = self_.self_or_cls
+
+    base = {}
+    if arg is not Undefined:
+        base.update(arg)
+    base.update(kwargs)
+
+    trigger_params = [k for k in base if k in self_ and hasattr(self_[k], '_autotrigger_value')]
+    for tp in trigger_params:
+        self_[tp]._mode = 'set'
+
+    existing = self_.objects('existing')
+    restore = {k: self_.get_value_generator(k, existing) for k in base if k in existing}
+
+    for (k, v) in base.items():
+        if k not in self_:
+            self_._BATCH_WATCH = False
+            raise ValueError(f"{k!r} is not a parameter of {self_.cls.__name__}")
+        try:
+            setattr(self_or_cls, k, v)
+        except Exception:
+            self_._BATCH_WATCH = False
+            raise
+
+    self_._BATCH_WATCH = BATCH_WATCH
+    if not BATCH_WATCH:
+        self_._batch_call_watchers()
+
+    for tp in trigger_params:
+        p = self_[tp]
+        p._mode = 'reset'
+        setattr(self_or_cls, tp, p._autotrigger_reset_value)
+        p._mode = 'set-reset'
+    return restore
+
+
+def update_reads_only_what_it_sets():
+    """Every ``obj.param.update(...)`` began by reading the value of each of the object's
+    parameters (``param.values()``: a widget has ~40, each read through param's descriptors) to
+    keep the old values of the few it sets. A slider change goes through ~12 of them (Panel's
+    widget, its editable twin, the link to the Scenario and back): 28 % of the Python of a value
+    the Scenario refuses, under cProfile. Only the parameters set are read now; the update is
+    otherwise param's own (tests/test_server_threads.py runs both on the same objects)."""
+    if param.__version__.startswith("2.4."):  # the version this copy was taken from
+        Parameters._update = _update
+
+
 def configure():
     sys.setswitchinterval(SWITCH_INTERVAL)
     drop_process_wide_busy_flag()
@@ -251,3 +309,4 @@ def configure():
     build_pages_off_loop()
     send_pages_off_loop()
     write_frames_at_once()
+    update_reads_only_what_it_sets()

@@ -308,3 +308,67 @@ def test_a_frame_for_a_closed_websocket_raises_what_bokeh_catches():
     handler = types.SimpleNamespace(ws_connection=None, write_lock=Lock())
     with pytest.raises(WebSocketClosedError):
         asyncio.run(server_threads._write_message_at_once(handler, "x"))
+
+
+def _watched(*, fail=False):
+    """A Parameterized with ~40 parameters, an event parameter and a watcher that records."""
+    import param
+
+    class Many(param.Parameterized):
+        a = param.Number(1.0)
+        b = param.Number(2.0, bounds=(0, 10))
+        go = param.Event()
+        locals().update({f"p{i}": param.Integer(i) for i in range(36)})
+
+    obj, seen = Many(), []
+    obj.param.watch(lambda *events: seen.append([(e.name, e.old, e.new, e.type) for e in events]),
+                    ["a", "b", "go", "p3"])
+    return obj, seen
+
+
+@pytest.mark.parametrize("update", [dict(a=5.0, b=3.0), dict(go=True, a=7.0), dict(p3=9, a=1.0)])
+def test_a_param_update_is_params_own_reading_only_what_it_sets(update, monkeypatch):
+    from param.parameterized import Parameters
+
+    ours, params_own = _watched(), _watched()
+    restore = server_threads._update(ours[0].param, update)
+    assert restore == server_threads._PARAM_UPDATE(params_own[0].param, update)
+    assert restore == {k: getattr(_watched()[0], k) for k in update}  # the old values
+    assert ours[1] == params_own[1] and ours[1]  # the same events, batched the same way
+    assert ours[0].param.values() == {**params_own[0].param.values(), "name": ours[0].name}
+    read = []
+    own_read = Parameters.get_value_generator
+    monkeypatch.setattr(Parameters, "get_value_generator",
+                        lambda self_, name, *a: read.append(name) or own_read(self_, name, *a))
+    server_threads._update(ours[0].param, update)
+    assert sorted(read) == sorted(update)
+    read.clear()
+    server_threads._PARAM_UPDATE(ours[0].param, update)
+    assert len(read) == 40  # param's own reads them all: what the patch removes
+
+
+def test_a_param_update_refuses_what_params_own_refuses():
+    outcomes = []
+    for update in (server_threads._update, server_threads._PARAM_UPDATE):
+        obj, seen = _watched()
+        with pytest.raises(ValueError, match="'nope' is not a parameter"):
+            update(obj.param, dict(a=4.0, nope=1))
+        with pytest.raises(ValueError, match="must be at most 10"):
+            update(obj.param, dict(b=99.0))
+        obj.param.update(a=6.0)  # batching was switched off again: the watcher runs
+        assert obj.a == 6.0 and seen and seen[-1][-1] == ("a", 4.0, 6.0, "changed")
+        outcomes.append((obj.a, obj.b, seen))
+    assert outcomes[0] == outcomes[1]
+
+
+def test_param_updates_read_only_what_they_set_once_configured():
+    import param
+    from param.parameterized import Parameters
+
+    server_threads.configure()
+    # A param other than 2.4 keeps its own (the copy is of 2.4's): this fails to say so.
+    assert param.__version__.startswith("2.4.") and Parameters._update is server_threads._update
+    obj, seen = _watched()
+    with obj.param.update(a=3.0):  # the context form restores what the patched update returns
+        assert obj.a == 3.0
+    assert obj.a == 1.0 and [e[0][:3] for e in seen] == [("a", 1.0, 3.0), ("a", 3.0, 1.0)]
