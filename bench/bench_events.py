@@ -30,15 +30,15 @@ def refused_release(repeat):
     server_threads.configure()
     pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
     doc = Document()
-    times = {"param's own": [], "reads only what it sets": []}
     updates = {"param's own": server_threads._PARAM_UPDATE, "reads only what it sets": server_threads._update}
+    times = {kind: [] for kind in updates}
     with set_curdoc(doc):
         page = create_app()
         page.server_doc(doc)
         slider = next(w for w in page.select(TypedFloatSlider) if "w-Ph" in w.css_classes)._slider
         try:
             for i in range(repeat):
-                kind = list(times)[(i // 10) % 2]  # blocks of ten, alternating
+                kind = list(updates)[(i // 10) % 2]  # blocks of ten, alternating
                 Parameters._update = updates[kind]
                 bad = -(i + 0.5)
                 t0 = time.perf_counter()

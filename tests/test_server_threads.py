@@ -9,13 +9,18 @@ import uuid
 
 import numpy as np
 import panel as pn
+import param
 import pytest
 from bokeh.core.serialization import Serializer
 from bokeh.document import Document
 from bokeh.server.views.ws import WSHandler
+from param.parameterized import Parameters
 from tornado.locks import Lock
+from tornado.web import Application as TornadoApp
+from tornado.websocket import WebSocketClosedError, websocket_connect
 
 from app import server_threads
+from tests.server import close_websocket, free_port
 
 
 def test_events_are_not_counted_into_the_process_wide_busy_flag():
@@ -56,8 +61,6 @@ def test_websockets_send_without_nagle_delay(monkeypatch):
     # Each Bokeh message is several frames; with Nagle on, every frame after the first waited
     # ~40 ms for the peer's delayed ACK. After configure() a session's socket is set to
     # TCP_NODELAY when it opens, before Bokeh's own open runs.
-    from bokeh.server.views.ws import WSHandler
-
     calls = []
 
     class Handler:
@@ -265,11 +268,6 @@ class _Frames(WSHandler):
 
 
 async def _frames_received(write, compress):
-    from tornado.web import Application as TornadoApp
-    from tornado.websocket import websocket_connect
-
-    from tests.server import close_websocket, free_port
-
     report = []
     handler = type("H", (_Frames,), dict(write=write, compress=compress, report=report, closed=asyncio.Event()))
     port = free_port()
@@ -303,16 +301,13 @@ def test_frames_written_at_once_are_the_same_frames_without_turns_of_the_event_l
 
 
 def test_a_frame_for_a_closed_websocket_raises_what_bokeh_catches():
-    from tornado.websocket import WebSocketClosedError
-
     handler = types.SimpleNamespace(ws_connection=None, write_lock=Lock())
     with pytest.raises(WebSocketClosedError):
         asyncio.run(server_threads._write_message_at_once(handler, "x"))
 
 
-def _watched(*, fail=False):
+def _watched():
     """A Parameterized with ~40 parameters, an event parameter and a watcher that records."""
-    import param
 
     class Many(param.Parameterized):
         a = param.Number(1.0)
@@ -328,8 +323,6 @@ def _watched(*, fail=False):
 
 @pytest.mark.parametrize("update", [dict(a=5.0, b=3.0), dict(go=True, a=7.0), dict(p3=9, a=1.0)])
 def test_a_param_update_is_params_own_reading_only_what_it_sets(update, monkeypatch):
-    from param.parameterized import Parameters
-
     ours, params_own = _watched(), _watched()
     restore = server_threads._update(ours[0].param, update)
     assert restore == server_threads._PARAM_UPDATE(params_own[0].param, update)
@@ -362,9 +355,6 @@ def test_a_param_update_refuses_what_params_own_refuses():
 
 
 def test_param_updates_read_only_what_they_set_once_configured():
-    import param
-    from param.parameterized import Parameters
-
     server_threads.configure()
     # A param other than 2.4 keeps its own (the copy is of 2.4's): this fails to say so.
     assert param.__version__.startswith("2.4.") and Parameters._update is server_threads._update
