@@ -87,9 +87,9 @@ CSV_COLUMNS = ("B1", "B2", "B3", "psi", "theta", "phi")
 ANGLE_LIMIT = 2.0 * np.pi
 #: Γ (columns scaled to unit norm) has rank r when r singular values exceed CAL_RANK_RTOL times
 #: the largest. Exactly confounded coefficients (level headings) give ≤ 1e-15 (round-off); a
-#: roll of 0.01° amplitude varying over four headings already gives 4e-5 (tests/test_calibration.py),
-#: so 1e-9 separates "not determined at all" from "determined, perhaps poorly" with ≥ 4 decades
-#: either side. How poorly is the CRLB's job, not the rank's.
+#: roll of amplitude 0.01° (0.01°, 0, −0.01°, 0 on the four headings) already gives 2.5e-6
+#: (tests/test_calibration.py), so 1e-9 separates "not determined at all" from "determined,
+#: perhaps poorly" with ≥ 3 decades either side. How poorly is the CRLB's job, not the rank's.
 CAL_RANK_RTOL = 1e-9
 
 # Elementary passive rotations (earth → body components): R_z(a) turns the x axis towards y.
