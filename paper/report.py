@@ -168,5 +168,7 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
     w("")
     w("| `exact` | `paper` |\n|---|---|")
     w("| " + " | ".join(_img(doc_dir, pngs[(m, "dscan")], "d scan") for m in sc.MODELS) + " |\n")
+    from .calibration import section as seed004_section  # seed 004, paper/calibration.py
+    w(seed004_section())
     with open(doc_path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(L))

@@ -396,3 +396,23 @@ def test_cli_bad_input(tmp_path):
         assert p.returncode == 2, (msg, err)
         assert msg in err and "Traceback" not in err and out == ""
         assert len(err.strip().splitlines()) == 1
+
+
+# --------------------------------------------------------------------------- report section
+def test_report_section_numbers():
+    from paper import calibration as pc
+
+    n = pc.numbers(mc_runs=20)
+    assert n["four"]["rank"] == 9 and n["four"]["rank_roll_pitch"] == 12
+    assert n["four"]["rank_constant_heel"] == 9
+    t = n["table1"]
+    # least squares has the smallest residual of any (K, Bp) under its convention
+    assert t["lsq_fit"][0] <= t["paper_fit"][0] and t["lsq_fit"][0] <= t["kal_fit"][0] + 1e-6
+    for label, lsq_fit, paper_fit in t["conventions"]:
+        assert lsq_fit[0] <= paper_fit[0] + 1e-9, label
+    # the paper's estimate is consistent with least squares given the residual noise
+    assert np.abs(t["z"]).max() < 3
+    text = pc.section(n)
+    assert "rank Γ = **9** of 12" in text and "K's third column and Bp cannot be told apart" in text
+    for c in core.CONVENTIONS:
+        assert f"| `{c}` |" in text
