@@ -152,6 +152,39 @@ class Scenario(param.Parameterized):
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
 
+    # -- calibration tab (seed 004, app/calibration.py): every name starts with cal_. Hard bounds
+    # (the widgets cannot leave them); the headings text is parsed, and refused, by that tab.
+    cal_source = param.Selector(
+        objects=["Designed manoeuvre", "Seed 004 simulation", "Seed 004 Table 1", "Uploaded CSV"],
+        default="Seed 004 simulation", label="Calibration data",
+        doc="Designed or simulated manoeuvres use seed 004's simulated ship (K, Bp) as the truth.")
+    cal_headings = param.String("0, 90, 180, 270", label="Headings (°)",
+                                doc="Designed manoeuvre: headings sailed in turn, degrees from north.")
+    cal_roll_deg = param.Number(10.0, bounds=(0.0, 45.0), label="Roll amplitude (°)",
+                                doc="Designed manoeuvre: roll = amplitude · cos(2πn/N), degrees.")
+    cal_pitch_deg = param.Number(5.0, bounds=(0.0, 30.0), label="Pitch amplitude (°)",
+                                 doc="Designed manoeuvre: pitch = amplitude · sin(2πn/N), degrees.")
+    cal_n_attitudes = param.Integer(12, bounds=(1, 120), label="Attitudes N",
+                                    doc="Number of attitudes of a designed or simulated manoeuvre.")
+    cal_noise_nt = param.Number(100.0, bounds=(0.1, 5000.0), label="Reading error bound ± (nT)",
+                                doc="Uniform reading errors within ± this, nT; the filter and the CRLB "
+                                    "use σ = bound/√3.")
+    cal_angle_noise_deg = param.Number(0.05, bounds=(0.0, 2.0), label="Angle error bound ± (°)",
+                                       doc="Uniform errors of each recorded angle within ± this, degrees.")
+    cal_be_n = param.Number(34000.0, bounds=(-1e5, 1e5), label="Be north (nT)",
+                            doc="Geomagnetic field, north component, nT.")
+    cal_be_e = param.Number(2000.0, bounds=(-1e5, 1e5), label="Be east (nT)",
+                            doc="Geomagnetic field, east component, nT.")
+    cal_be_d = param.Number(35000.0, bounds=(-1e5, 1e5), label="Be down (nT)",
+                            doc="Geomagnetic field, down component, nT.")
+    cal_iterations = param.Integer(600, bounds=(1, 5000), label="Kalman iterations",
+                                   doc="Filter steps; the readings are reused cyclically (seed 004).")
+    cal_p0_bp_nt = param.Number(3000.0, bounds=(0.01, 1e6), label="Prior σ of Bp in P(0) (nT)",
+                                doc="Square root of P(0)'s Bp entry, nT (K entries: 1). Small values "
+                                    "slow the filter down.")
+    cal_seed = param.Integer(4, bounds=(0, 1_000_000), label="Random seed",
+                             doc="Seed of the simulated attitudes and errors.")
+
     def __init__(self, **params):
         # Hard limits hold from the start: a bad value given here falls back to the default.
         notes = [n for n in (self.problem(k, v) for k, v in params.items() if k in ACCEPTED) if n]

@@ -808,7 +808,8 @@ def convergence_iteration(history, tol):
     history : array_like, shape (..., M + 1, 12)
         Estimates after each iteration (e.g. :attr:`KalmanResult.coefficients`).
     tol : array_like, shape (12,) or float
-        Tolerance per coefficient (coefficient units), > 0, e.g. the CRLB standard deviations.
+        Tolerance per coefficient (coefficient units), > 0, e.g. the CRLB standard deviations;
+        +inf ignores a coefficient (an undetermined one's CRLB).
 
     Returns
     -------
@@ -816,11 +817,14 @@ def convergence_iteration(history, tol):
         0 if x(0) is already within tolerance, M if only the last estimate is.
     """
     h = _array("history", history, "shape (..., M + 1, 12)")
-    t = _array("tol", tol, "coefficient units")
+    try:
+        t = np.asarray(tol, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"tol must be numbers > 0 (coefficient units); got {tol!r}") from None
     if h.ndim < 2 or h.shape[-1] != 12:
         raise ValueError(f"history must have shape (..., M + 1, 12); got {h.shape}")
-    if not (t > 0).all():
-        raise ValueError("tol must be > 0")
+    if not (t > 0).all():  # also refuses NaN
+        raise ValueError("tol must be > 0 (coefficient units; +inf ignores a coefficient)")
     ok = np.all(np.abs(h - h[..., -1:, :]) <= t, axis=-1)  # (..., M + 1)
     # the last iteration that is not within tolerance, plus one
     bad_rev = np.argmax(~ok[..., ::-1], axis=-1)  # position from the end of the last bad one

@@ -1,0 +1,108 @@
+"""The Calibration tab (app/calibration.py) served alone and used in headless Chromium."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import subprocess
+import sys
+import time
+import urllib.request
+
+import numpy as np
+import pytest
+
+from tests.server import CHROMIUM, ROOT, chromium_browser, free_port
+
+playwright = pytest.importorskip("playwright.sync_api")
+expect = playwright.expect
+#: ms to wait for a change to reach the page: 2 cores shared by many processes (load ~10 seen).
+SLOW = 90_000
+pytestmark = pytest.mark.skipif(
+    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
+    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
+)
+
+AXES_JS = """() => {
+  const out = [];
+  for (const d of Bokeh.documents) for (const m of d.all_models)
+    if (m.axis_label !== undefined && m.axis_label) out.push(m.axis_label);
+  return out;
+}"""
+
+
+@contextlib.contextmanager
+def served_tab(log_path, timeout=120):
+    port = free_port()
+    cmd = [sys.executable, "-m", "panel", "serve", "tests/calibration_page.py", "--port", str(port),
+           "--address", "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness"]
+    with open(log_path, "w") as log:
+        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
+    url = f"http://127.0.0.1:{port}/calibration_page"
+    try:
+        deadline = time.time() + timeout
+        while True:
+            if proc.poll() is not None:
+                raise RuntimeError(f"panel serve exited with {proc.returncode}")
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/liveness", timeout=2):
+                    break
+            except OSError:
+                if time.time() > deadline:
+                    raise TimeoutError("the tab's server did not answer /liveness") from None
+                time.sleep(0.3)
+        yield url
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(10)
+
+
+def test_calibration_tab_in_chromium(tmp_path):
+    from app import calibration as ac
+    from app.scenario import Scenario
+
+    log = tmp_path / "server.log"
+    bad = tmp_path / "bad.csv"
+    bad.write_text("B1,B2,psi,theta,phi\n1,2,0,0,0\n")
+    table1 = ROOT / "data" / "seed004_table1.csv"
+    with served_tab(log) as url, chromium_browser() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 1400})
+        page.goto(url)
+        page.wait_for_selector("text=Rank of Γ: 12 of 12", timeout=90_000)
+        # every axis says what it shows, with units
+        page.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0")
+        labels = set(page.evaluate(AXES_JS))
+        for want in ("Iteration n (log scale)", "K entry (dimensionless)", "Bp (nT)", "Be error (nT)",
+                     "Attitude n", "Heading ψ (°)", "Roll θ (°)"):
+            assert want in labels, labels
+        # seed 004's observability point: the four-heading preset is rank 9, words and all
+        page.get_by_role("button", name="Four level headings").click()
+        page.wait_for_selector("text=Rank of Γ: 9 of 12", timeout=SLOW)
+        page.wait_for_selector("text=K's third column and Bp cannot be told apart", timeout=SLOW)
+        expect(page.locator(".w-cal_source select")).to_have_value("Designed manoeuvre", timeout=SLOW)
+        expect(page.locator(".w-cal_roll_deg input")).to_have_value("0", timeout=SLOW)
+        # a bad upload: a message in the page, nothing else breaks
+        page.locator(".w-cal-upload input[type=file]").set_input_files(str(bad))
+        page.wait_for_selector("text=lacks column(s) B3", timeout=SLOW)
+        expect(page.locator(".w-cal_source select")).to_have_value("Uploaded CSV", timeout=SLOW)
+        # Table 1's Be, then Table 1 uploaded: the page shows what compute() gives for it
+        page.get_by_role("button", name="Seed 004 Table 1").click()
+        page.wait_for_selector("text=Rank of Γ: 12 of 12", timeout=SLOW)
+        page.locator(".w-cal_source select").select_option("Uploaded CSV")
+        page.locator(".w-cal-upload input[type=file]").set_input_files(str(table1))
+        s = Scenario()
+        s.param.update(ac.PRESETS["Seed 004 Table 1"], cal_source="Uploaded CSV")
+        res = ac.compute({f: getattr(s, f) for f in ac.FIELDS}, table1.read_bytes())
+        rms = res["be_rms"]["kal"].rms_nt
+        assert np.isfinite(rms)
+        page.wait_for_selector(f"text=Kalman {rms:.1f} nT", timeout=SLOW)
+        assert page.locator(".w-cal-error").inner_text().strip() == ""
+    # no exception from the tab's code on the server (a websocket closed by the browser's exit
+    # may log Tornado's own WebSocketClosedError: not ours)
+    text = log.read_text()
+    for ours in ("app/calibration.py", "core/calibration.py", "ValueError"):
+        assert ours not in text, text[-3000:]
