@@ -788,9 +788,9 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
         c = C[..., (n - 1) % N, :]  # (..., 4)
         y = B[..., (n - 1) % N, :]  # (..., 3)
         R = P + Qm
-        Rc = np.einsum("...ij,...j->...i", R, c)
-        m = Rc / (np.einsum("...i,...i->...", c, Rc) + sigma2)[..., None]  # gain (..., 4)
-        innov = y - np.einsum("...i,...ij->...j", c, x)  # (..., 3)
+        Rc = (R @ c[..., :, None])[..., 0]  # R Cᵀ (..., 4)
+        m = Rc / ((c * Rc).sum(axis=-1) + sigma2)[..., None]  # gain (..., 4)
+        innov = y - (c[..., None, :] @ x)[..., 0, :]  # y − C x (..., 3)
         x = x + m[..., :, None] * innov[..., None, :]
         IKC = E - m[..., :, None] * c[..., None, :]
         P = IKC @ R @ np.swapaxes(IKC, -1, -2) + sigma2 * m[..., :, None] * m[..., None, :]
