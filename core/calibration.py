@@ -20,11 +20,12 @@ gives three equations that are *linear* in them, so everything here is exact lin
   constant heel; a roll or pitch that *varies* between attitudes tilts them off it.
 
 The attitude convention (:data:`CONVENTIONS`): seed 004 prints A as eq. (2),
-``A = R_y(φ)ᵀ-like · R_x(θ) · R_z(ψ)`` (exactly the matrices of :func:`attitude_matrix`'s
-Notes), but its caption names φ, θ, ψ as heading, roll and pitch, contradicting its own Table 1
-(ψ takes the four heading values 0, π/2, π, 3π/2; θ is the roll of ±0.2 rad; φ the small pitch).
-The default ``"seed004"`` is eq. (2) with Table 1's labels: the paper's own K and Bp fit Table 1
-better under it than under any other convention tried (docs/calibration.md has the comparison).
+``A = R_y(−φ) · R_x(θ) · R_z(ψ)`` with R the standard passive rotations (the matrices are in
+:func:`attitude_matrix`'s Notes), but its caption names φ, θ, ψ as heading, roll and pitch,
+contradicting its own Table 1 (ψ takes the four heading values 0, π/2, π, 3π/2; θ is the roll of
+±0.2 rad; φ the small pitch). The default ``"seed004"`` is eq. (2) with Table 1's names: the
+paper's own K and Bp fit Table 1 only with eq. (2)'s sign of the pitch factor (residual RMS
+454 nT, against ≥ 837 nT with the standard sign); docs/calibration.md has the comparison.
 
 No web stack is imported here.
 """
@@ -554,15 +555,17 @@ def calibration_covariance(attitudes, be, *, noise_nt, angle_noise_rad=0.0, K=No
     J = np.einsum("ij,nkjl,l->nik", Kmat, dA, be)  # (N, 3 readings, 3 angles)
     S = sb ** 2 * np.eye(3) + sa ** 2 * J @ np.swapaxes(J, -1, -2)
     scale, s, Vt, rank = _scaled_svd(G.reshape(3 * N, 12), CAL_RANK_RTOL)
-    Gs = G / scale
+    # Work in the determined subspace (the first `rank` right singular vectors of the scaled Γ):
+    # a pseudo-inverse of F itself would invert F's round-off eigenvalues (~eps · largest).
+    Vr = Vt[:rank].T  # (12, r)
+    Gr = (G / scale) @ Vr  # (N, 3, r)
     if estimator == "crlb":
-        F = np.einsum("nki,nkl,nlj->ij", Gs, np.linalg.inv(S), Gs)
-        cov = np.linalg.pinv(F, rcond=CAL_RANK_RTOL ** 2, hermitian=True)
+        F = np.einsum("nki,nkl,nlj->ij", Gr, np.linalg.inv(S), Gr)
+        cov_r = np.linalg.inv(F)
     else:
-        Hinv = np.linalg.pinv(np.einsum("nki,nkj->ij", Gs, Gs), rcond=CAL_RANK_RTOL ** 2,
-                              hermitian=True)
-        M = np.einsum("nki,nkl,nlj->ij", Gs, S, Gs)
-        cov = Hinv @ M @ Hinv
+        Hinv = np.linalg.inv(np.einsum("nki,nkj->ij", Gr, Gr))
+        cov_r = Hinv @ np.einsum("nki,nkl,nlj->ij", Gr, S, Gr) @ Hinv
+    cov = Vr @ cov_r @ Vr.T
     cov = cov / np.outer(scale, scale)
     if rank < 12:
         bad = np.linalg.norm(Vt[rank:], axis=0) >= 1e-8

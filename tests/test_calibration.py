@@ -152,6 +152,11 @@ def test_four_level_headings_rank_9_k3_with_bp():
     crlb = core.calibration_crlb(core.level_headings(), BE_SIM, noise_nt=100)
     assert np.isfinite(crlb[obs.observable]).all() and np.isinf(crlb[~obs.observable]).all()
     assert obs.singular_values[-1] < 1e-15 and obs.singular_values[8] > 0.1
+    # closed form: k_i3·Be_z + Bp_i is one parameter, so K's first two columns have the
+    # variance of a fit with columns (h1, h2, 1)
+    C3 = core.design_rows(core.level_headings(), BE_SIM)[:, [0, 1, 3]]
+    np.testing.assert_allclose(crlb[[0, 1]], 100 * np.sqrt(np.diag(np.linalg.inv(C3.T @ C3))[:2]),
+                               rtol=1e-9)
 
 
 def test_any_level_headings_and_constant_heel_stay_rank_9():
