@@ -13,19 +13,21 @@ Everything here builds on the all-rows Fisher information of :mod:`core.fisher`
 
 Unobservable points
 -------------------
-Where Γ is structurally rank-deficient (η < :data:`core.ETA_TOL`, the flag of
-:func:`core.fisher_measures`, which agrees with :func:`core.observable_rank`), F is singular: the
-CRLB is +inf and the D-optimal measure −inf. Region criteria cannot average −inf, so
-:func:`layout_criterion` counts such a point at its **D-optimal floor**, the value it would
-have at η = ETA_TOL:
+Where Γ is structurally rank-deficient (:func:`core.observable_rank` < n, the flag of
+:func:`core.fisher_measures`), F is singular: the CRLB is +inf and the D-optimal measure −inf.
+Region criteria cannot average −inf, so :func:`layout_criterion` counts such a point at its
+**D-optimal floor**, the value it would have at the largest η a rank-deficient Γ_s can have,
+η_max = RANK_RTOL·√(e·n) (σ_min ≤ RANK_RTOL·σ_max, σ_max ≤ √n, and Π of the other n − 1
+singular values ≤ √e, all for unit columns):
 
-    floor = log10(ETA_TOL) + Σ_j log10 ‖Γ_j‖ − n·log10(noise),
+    floor = log10(η_max) + Σ_j log10 ‖Γ_j‖ − n·log10(noise),
 
-the largest D-optimal value that float64 round-off could fake at that point. It joins the
-observable values continuously at the flag boundary (D-opt = log10 η + Σ log10‖Γ_j‖ −
-n log10 noise there), so the criterion stays finite and an optimiser sees a slope towards
-observability; :attr:`CriterionResult.observable_fraction` says how much of the region is
-truly observable. For ``"area_crlb"`` an unobservable point simply fails the threshold.
+the largest D-optimal value that float64 round-off could fake at that point (D-opt =
+log10 η + Σ log10‖Γ_j‖ − n log10 noise where observable). The criterion stays finite and the
+floor grows with the column norms, so an optimiser sees a slope; an observable point may lie
+below it (η measures volume, not rank), so :attr:`CriterionResult.observable_fraction` says how
+much of the region is truly observable. For ``"area_crlb"`` an unobservable point simply
+fails the threshold.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from scipy import optimize
 from . import validation
 from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures
 from .grids import Plane
-from .observability import ETA_TOL, gamma
+from .observability import RANK_RTOL, gamma
 
 __all__ = [
     "CRITERIA",
@@ -448,7 +450,8 @@ def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, m
         g = gamma(states[bad], stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
         with np.errstate(divide="ignore"):
             log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
-        d_opt[bad] = np.log10(ETA_TOL) + log_norms - g.shape[-1] * np.log10(noise)
+        n = g.shape[-1]
+        d_opt[bad] = np.log10(RANK_RTOL * np.sqrt(np.e * n)) + log_norms - n * np.log10(noise)
     value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
     return CriterionResult(float(value), frac)
 

@@ -1,9 +1,10 @@
 """Every qualitative claim of the paper, checked with numbers under four analyses.
 
 - ``a``: the paper's own method, log10|det Γ| of the square paper-rule Γ in float64.
-- ``b``: the same, with structural rank taken into account: a point counts only where the
-  observability index η = |det Γ| / Π‖Γ_j‖ reaches :data:`core.ETA_TOL` (rank 7, spec §4);
-  elsewhere det Γ is structurally 0 and its float64 value is round-off.
+- ``b``: the same, with structural rank taken into account: a point counts only where Γ has
+  rank 7 (:func:`core.observable_rank`: σ_min/σ_max of the column-scaled Γ above
+  :data:`core.RANK_RTOL`, spec §4); elsewhere det Γ is structurally 0 and its float64 value is
+  round-off.
 - ``c_dual``: the physically consistent analysis for 7 unknown states: the D-optimal Fisher
   measure ½ log10 det F (all rows, :data:`core.DEFAULT_STEPS` instants, noise
   :data:`core.DEFAULT_NOISE` V/m). One station gives F singular (−inf); the dual layout is
@@ -28,7 +29,7 @@ from . import scenarios as sc
 METHODS = ("a", "b", "c_dual", "c_known")
 METHOD_TITLES = {
     "a": "(a) paper's method, float64 log10|det Γ|",
-    "b": "(b) same, structural rank enforced (η ≥ ETA_TOL)",
+    "b": "(b) same, structural rank enforced (rank Γ = 7)",
     "c_dual": "(c) dual station, Fisher D-optimal (7 states)",
     "c_known": "(c) moments known, Fisher D-optimal (5 states)",
 }
@@ -77,14 +78,14 @@ def _status(ok):
 
 
 def _single_roundoff(plane, model, moments=(sc.PH, sc.PV)):
-    """Check (b) for a single-station claim: η everywhere below ETA_TOL → not meaningful."""
+    """Check (b) for a single-station claim: rank 6 at every point → not meaningful."""
     eta = sc.field_map(plane, None, moments, "log10_eta", model)
     top = np.nanmax(eta.value)
     if eta.observable.any():
         return None
-    return Check("not meaningful", {"max_log10_eta": _r(top), "log10_ETA_TOL": _r(np.log10(core.ETA_TOL))},
-                 f"η ≤ 10^{top:.1f} < ETA_TOL at every point: rank 6, det Γ = 0 structurally; "
-                 "the map is round-off")
+    return Check("not meaningful", {"max_log10_eta": _r(top), "log10_RANK_RTOL": _r(np.log10(core.RANK_RTOL))},
+                 f"rank 6 at every point (σ_min/σ_max ≤ RANK_RTOL; η ≤ 10^{top:.1f}): det Γ = 0 "
+                 "structurally; the map is round-off")
 
 
 def _maps(plane, model, d=None, moments=(sc.PH, sc.PV)):

@@ -56,10 +56,10 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
         w(f"- **{cl.METHOD_TITLES[m]}**")
     w("")
     w(f"(a) uses `core.log10_abs_det_gamma` / `core.evaluate_map(measure='log10_det')` exactly as the "
-      f"paper does. (b) adds the structural rank: a point counts only where the observability index "
-      f"η = |det Γ| / Π‖Γ_j‖ ≥ `core.ETA_TOL` = {core.ETA_TOL:g} (the same test as "
-      f"`core.observable_rank` with `RANK_RTOL` = {core.RANK_RTOL:g}); where it does not, det Γ = 0 "
-      f"structurally and the float64 value is round-off. (c) uses the Fisher D-optimal measure "
+      f"paper does. (b) adds the structural rank: a point counts only where `core.observable_rank` "
+      f"is 7, i.e. the column-scaled Γ has σ_min/σ_max > `core.RANK_RTOL` = {core.RANK_RTOL:g} (the "
+      f"one criterion of `core`, also the `observable` flag of every map); where it does not, "
+      f"det Γ = 0 structurally and the float64 value is round-off. (c) uses the Fisher D-optimal measure "
       f"½ log10 det(ΓᵀΓ/σ_n²) over all rows of {core.DEFAULT_STEPS} instants (σ_n = {core.DEFAULT_NOISE:g} V/m): "
       f"for one station with 7 unknowns it is −∞ (F singular), so (c) runs the dual layout "
       f"(d = {sc.DUAL_D:g} m unless the claim is about d) and the single station with the moments known "
@@ -94,8 +94,8 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
               f"{_f(r[f'mp{d1}_log10_eta'])} | {_f(r['dual_f64_log10_eta'])} / {_f(r['dual_mp_log10_eta'])} | "
               f"{r['f64_null_residual']:.1e} / {r['mp_null_residual']:.1e} | {r['cos_core_direction']:.12f} |")
         w("")
-    w(f"The index η over the whole Fig. 1 plane (one station: never above ETA_TOL = {core.ETA_TOL:g}; "
-      f"dual d = {sc.DUAL_D:g} m: far above it):\n")
+    w(f"The index η over the whole Fig. 1 plane (one station: round-off, rank 6 everywhere; "
+      f"dual d = {sc.DUAL_D:g} m: a measure, rank 7 everywhere):\n")
     w("| `exact` | `paper` |\n|---|---|")
     w("| " + " | ".join(_img(doc_dir, pngs[(m, "eta_single")], "eta single") for m in sc.MODELS) + " |")
     w("| " + " | ".join(_img(doc_dir, pngs[(m, "eta_dual")], "eta dual") for m in sc.MODELS) + " |\n")
@@ -105,7 +105,7 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
       "single-station operand): their values are float64 round-off of a structurally singular Γ, shown "
       "only to reproduce the paper. Difference maps come in pairs: the paper's log10 Δ|det Γ| "
       "(blank where Δ ≤ 0, computed from the logs) and the signed log-ratio. Grey marks points a "
-      "dual-station Γ fails the η test. Interactive versions: "
+      "dual-station Γ fails the rank test. Interactive versions: "
       + ", ".join(f"`{os.path.basename(p)}`" for (m, f), p in sorted(htmls.items()) if m == "exact")
       + " under the HTML folder of each model.\n")
     fig_keys = {}
