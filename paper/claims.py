@@ -13,7 +13,10 @@
   single station unless the claim compares layouts (then both layouts with moments known).
 
 Each check returns a status (``holds``, ``fails``, ``not meaningful``, ``n/a``), the numbers
-behind it and one sentence saying why. Thresholds are module constants, stated in the doc.
+behind it, one sentence saying why and, where the verdict compares two numbers, its margin: the
+relative gap between them. A margin below :data:`WEAK_MARGIN` makes the verdict *weak* (a few per
+cent can flip with the grid, the transect's ends or the model). Thresholds are module constants,
+stated in the doc.
 """
 
 from __future__ import annotations
@@ -46,6 +49,9 @@ FIG4_DEPTHS = (110.0, 120.0, 150.0, 200.0)
 #: Fig. 2 points (x, y, z) in m: the near point and the ends of the x and z transects.
 FIG2_POINTS = {"near": (0.0, 50.0, 100.0), "x_end": (300.0, 50.0, 100.0), "z_end": (0.0, 50.0, 400.0)}
 DUAL_D = sc.DUAL_D
+#: A verdict whose margin (relative gap between the two numbers it compares) is below this is
+#: reported as weak.
+WEAK_MARGIN = 0.05
 
 
 @dataclass
@@ -53,6 +59,13 @@ class Check:
     status: str
     numbers: dict
     note: str
+    #: relative gap between the numbers the verdict compares (None: exact or not a comparison)
+    margin: float | None = None
+
+    @property
+    def weak(self):
+        """The verdict rests on a margin below WEAK_MARGIN."""
+        return self.margin is not None and self.margin < WEAK_MARGIN
 
 
 @dataclass
@@ -75,6 +88,13 @@ def _r(x, nd=3):
 
 def _status(ok):
     return "holds" if ok else "fails"
+
+
+def _rel(a, b):
+    """Relative gap |a − b| / max(|a|, |b|) between two numbers a verdict compares (0 if both 0)."""
+    a, b = float(a), float(b)
+    top = max(abs(a), abs(b))
+    return round(abs(a - b) / top, 4) if top > 0 else 0.0
 
 
 def _single_roundoff(plane, model, moments=(sc.PH, sc.PV)):
@@ -164,12 +184,13 @@ def claim_fig2(model, n):
         a1, a2 = dz1 - dx1, dz2 - dx2
         slow.checks[m] = Check(_status(dx1 < dz1), {"dx": _r(dx1), "dz": _r(dz1), "asymmetry": _r(a1)},
                                f"Δx = {dx1:.2f}, Δz = {dz1:.2f} decades (Δz − Δx = {a1:+.2f}, "
-                               f"{100 * a1 / dz1:+.1f} % of Δz)")
+                               f"{100 * a1 / dz1:+.1f} % of Δz)", _rel(dx1, dz1))
         ok = a1 > 0 and abs(a2) <= 0.5 * a1
         equal.checks[m] = Check(_status(ok), {"dx": _r(dx2), "dz": _r(dz2), "asymmetry": _r(a2),
                                               "asymmetry_ph_gt_pv": _r(a1)},
                                 f"Δz − Δx = {a2:+.2f} with Ph = Pv vs {a1:+.2f} with Ph > Pv "
-                                "(holds if the asymmetry at least halves)")
+                                "(holds if the asymmetry at least halves)",
+                                _rel(abs(a2), 0.5 * a1) if a1 > 0 else None)
     b = _single_roundoff(sc.xz_plane(n), model)
     slow.checks["b"] = equal.checks["b"] = b
     return [slow, equal]
@@ -233,14 +254,18 @@ def claim_fig4(model, n):
         far = [f[1] for f in fr]
         nums = {"near_positive": [_r(x) for x in near], "far_positive": [_r(x) for x in far]}
         txt = "Δ > 0 on " + ", ".join(f"{100 * a:.0f} % near / {100 * b:.0f} % far" for a, b in zip(near, far))
-        lower.checks[m] = Check(_status(all(a < 0.5 for a in near) and all(b > 0.5 for b in far)), nums, txt)
-        only.checks[m] = Check(_status(all(a > 0.5 for a in near) and all(b < 0.5 for b in far)), nums, txt)
+        margin = min(_rel(f, 0.5) for f in near + far)  # each fraction against one half
+        lower.checks[m] = Check(_status(all(a < 0.5 for a in near) and all(b > 0.5 for b in far)), nums, txt,
+                                margin)
+        only.checks[m] = Check(_status(all(a > 0.5 for a in near) and all(b < 0.5 for b in far)), nums, txt,
+                               margin)
         blanks = [fig4_fractions(model, n, m, (2, 0), z)[2] for z in FIG4_DEPTHS]
         shrinking = bool(np.all(np.diff(blanks) <= 0) and blanks[0] > blanks[-1])
         depth.checks[m] = Check(_status(shrinking), {"depths_m": list(FIG4_DEPTHS),
                                                      "blank_fraction": [_r(x, 4) for x in blanks]},
                                 "blank fraction at z = " + ", ".join(
-                                    f"{z:.0f} m: {100 * b:.1f} %" for z, b in zip(FIG4_DEPTHS, blanks)))
+                                    f"{z:.0f} m: {100 * b:.1f} %" for z, b in zip(FIG4_DEPTHS, blanks)),
+                                min(_rel(a, b) for a, b in zip(blanks[:-1], blanks[1:])))
     b = _single_roundoff(sc.xy_plane(n), model, sc.FIG4_MOMENTS[1])
     lower.checks["b"] = only.checks["b"] = depth.checks["b"] = b
     return [lower, only, depth]
@@ -275,7 +300,8 @@ def claim_fig5(model, n):
         why = {"a": "", "b": "; the single station is structurally 0, so only unobservable dual "
                "points could be blank", "c_dual": "; single-station F is singular (D-opt = −inf)",
                "c_known": "; both layouts with moments known"}[m]
-        blank2.checks[m] = Check(_status(f2 > BLANK_MIN), nums, f"blank {100 * f2:.1f} % of the map{why}")
+        blank2.checks[m] = Check(_status(f2 > BLANK_MIN), nums, f"blank {100 * f2:.1f} % of the map{why}",
+                                 _rel(f2, BLANK_MIN))
         pos15.checks[m] = Check(_status(f15 == 0.0), nums, f"blank {100 * f15:.1f} % of the map{why}")
     return [blank2, pos15]
 
@@ -291,7 +317,8 @@ def claim_fig6(model, n):
         c.checks[m] = Check(_status(grows), {"d_m": list(sc.FIG6_D), "blank_fraction": [_r(x, 4) for x in tot],
                                              "blank_fraction_within_100m": [_r(x, 4) for x in near]},
                             "blank " + ", ".join(f"d = {d:.0f}: {100 * t:.1f} % (≤ 100 m: {100 * q:.0f} %)"
-                                                 for d, t, q in zip(sc.FIG6_D, tot, near)))
+                                                 for d, t, q in zip(sc.FIG6_D, tot, near)),
+                            min(_rel(a, b) for a, b in zip(tot[:-1], tot[1:])))
     return [c]
 
 
@@ -337,16 +364,16 @@ def claim_conclusions(model, n, scan):
         k2.checks[m] = Check(_status(ok), {"median_sz_over_sxy_100_20": _r(med[0]),
                                            "median_sz_over_sxy_100_100": _r(med[1])},
                              f"median CRLB σz / σxy over the Fig. 1 grid: {med[0]:.2f} with (100, 20), "
-                             f"{med[1]:.2f} with (100, 100)")
+                             f"{med[1]:.2f} with (100, 100)", min(_rel(med[0], 1.0), _rel(med[0], med[1])))
 
     k3 = Claim("K3", "Conclusion 3", "dual beats single, but the spacing must suit the target: too large "
                "a d lowers observability near the stations")
     k3.checks["a"] = Check("n/a", {}, "see C5a, C5b, C6")
     k3.checks["b"] = Check("n/a", {}, "see C5a, C5b, C6")
     for m, key in (("c_dual", "d_optimal"), ("c_known", "d_optimal_known")):
-        s = scan[model][key]
+        peaks = scan[model]["peaks"]  # refined optima (paper.beyond.refine_peak), not grid points
         d = np.asarray(scan["d_m"])
-        best, best_near = float(d[np.nanargmax(s["mean"])]), float(d[np.nanargmax(s["near_mean"])])
+        best, best_near = peaks[key]["d"], peaks[f"{key}_near"]["d"]
         ok = best_near < d[-1]
         k3.checks[m] = Check(_status(ok), {"argmax_mean_d_m": _r(best, 2), "argmax_near_d_m": _r(best_near, 2)},
                              f"mean D-opt over the map peaks at d = {best:.1f} m; within {NEAR_M:.0f} m "

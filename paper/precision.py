@@ -80,15 +80,15 @@ def evidence(model, points=POINTS):
                "f64_log10_det": float(core.log10_abs_det_gamma(state, single, **kw)),
                "f64_log10_eta": float(core.observability_index(state, single, **kw)),
                "dual_f64_log10_eta": float(core.observability_index(state, dual, **kw))}
+        mats = {dg: gamma_mp(state, single, model, dg) for dg in DIGITS}
         for dg in DIGITS:
-            row[f"mp{dg}_log10_det"], row[f"mp{dg}_log10_eta"] = _log10_det_and_eta(
-                gamma_mp(state, single, model, dg), dg)
+            row[f"mp{dg}_log10_det"], row[f"mp{dg}_log10_eta"] = _log10_det_and_eta(mats[dg], dg)
         row["dual_mp_log10_eta"] = _log10_det_and_eta(gamma_mp(state, dual, model, DIGITS[0]), DIGITS[0])[1]
         n = null_vector(state, single[0])
         g = core.gamma(state, single, **kw)
         row["f64_null_residual"] = float(np.linalg.norm(g @ n) / np.sum(np.linalg.norm(g, axis=0) * np.abs(n)))
         with mp.workdps(DIGITS[0]):
-            gm = gamma_mp(state, single, model, DIGITS[0])
+            gm = mats[DIGITS[0]]
             nm = mp.matrix([mp.mpf(repr(float(v))) for v in n])
             scale = mp.fsum(mp.norm(gm[:, j]) * abs(nm[j]) for j in range(7))
             row["mp_null_residual"] = float(mp.norm(gm * nm) / scale)
