@@ -220,7 +220,7 @@ def claim_fig3(model, n):
         c.checks[m] = Check(_status(blank == 0.0), {
             "blank_fraction": _r(blank, 4), "ratio_min": _r(np.nanmin(ratio)),
             "ratio_max": _r(np.nanmax(ratio))},
-            f"log10 ratio {np.nanmin(ratio):.3f} … {np.nanmax(ratio):.3f}; blank {100 * blank:.1f} %"
+            f"log10 ratio {np.nanmin(ratio):.3f} … {np.nanmax(ratio):.3f}; blank {100 * blank:.2g} %"
             + (" (5 of 7 columns are linear in the moments: +5 is a scaling identity)"
                if m != "a" else ""))
     c.checks["b"] = _single_roundoff(plane, model)

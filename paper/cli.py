@@ -123,10 +123,9 @@ def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, com
         chosen = report.SECTIONS if sections is None else sections
         parts = [report.render(ctx, [s]) for s in chosen]
         text = report.render(ctx, chosen)
-        committed = open(doc, encoding="utf-8").read() if os.path.exists(doc) else ""
+        committed = _read(doc)
         stale = stale_sections(text if sections is None else committed, committed, parts)
-        old = open(cpath, encoding="utf-8").read() if os.path.exists(cpath) else ""
-        if old != numbers:
+        if _read(cpath) != numbers:
             stale.append(f"{cpath} (the numbers behind the verdicts)")
         return {"doc": doc, "claims": cpath, "stale": stale}
     with open(cpath, "w", encoding="utf-8") as fh:
@@ -134,6 +133,14 @@ def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, com
     with open(doc, "w", encoding="utf-8") as fh:
         fh.write(report.render(ctx))
     return {"doc": doc, "claims": cpath, "pngs": pngs, "htmls": htmls}
+
+
+def _read(path):
+    """A text file's contents, '' if it does not exist."""
+    if not os.path.exists(path):
+        return ""
+    with open(path, encoding="utf-8") as fh:
+        return fh.read()
 
 
 def committed_command(doc):

@@ -208,13 +208,15 @@ def section_beyond(ctx):
       "best point is given in brackets.\n")
     for model in sc.MODELS:
         pk = scan[model]["peaks"]
-        at = lambda key: (f"{pk[key]['d']:.1f} m (grid {pk[key]['d_grid']:g} m"
-                          + (", an end of the scan: the optimum may lie beyond)" if pk[key]["at_end"] else ")"))
-        w(f"- `{model}`: mean D-optimal (7 states) is largest at **d = {at('d_optimal')}**; with the "
-          f"moments known at d = {at('d_optimal_known')}; the median CRLB position error is smallest "
-          f"({pk['crlb_median']['value']:.4g} m) at d = {at('crlb_median')}; the mean paper measure "
-          f"log10|det Γ| peaks at d = {at('log10_det_mean')}. Within {cl.NEAR_M:g} m of station 1 the "
-          f"best spacing is d = {at('d_optimal_near')} (moments known: {at('d_optimal_known_near')})."
+        def at(key, bold=False):
+            b = "**" if bold else ""
+            return (f"{b}d = {pk[key]['d']:.1f} m{b} (grid {pk[key]['d_grid']:g} m"
+                    + (", an end of the scan: the optimum may lie beyond)" if pk[key]["at_end"] else ")"))
+        w(f"- `{model}`: mean D-optimal (7 states) is largest at {at('d_optimal', True)}; with the "
+          f"moments known at {at('d_optimal_known')}; the median CRLB position error is smallest, "
+          f"{pk['crlb_median']['value']:.4g} m, at {at('crlb_median')}; the mean paper measure "
+          f"log10|det Γ| peaks at {at('log10_det_mean')}. Within {cl.NEAR_M:g} m of station 1 the "
+          f"best spacing is {at('d_optimal_near')}; with the moments known {at('d_optimal_known_near')}."
           + (f" The map-wide optimum exceeds the largest spacing the paper tried ({max(sc.FIG6_D):g} m)."
              if pk["d_optimal"]["d"] > max(sc.FIG6_D) else ""))
     w("")

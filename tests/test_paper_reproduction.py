@@ -205,7 +205,7 @@ def test_d_scan_reports_refined_peaks_not_grid_points(run):
             for step in (-0.5, 0.5):
                 assert sense * _plane_criterion(model, key, peak["d"] + step) <= sense * at + 1e-12
             assert abs(peak["d"] - peak["d_grid"]) < 0.3 * peak["d_grid"]  # within the bracket
-        assert f"largest at **d = {scan[model]['peaks']['d_optimal']['d']:.1f} m (grid" in run["text"]
+        assert f"largest at **d = {scan[model]['peaks']['d_optimal']['d']:.1f} m** (grid" in run["text"]
 
 
 def test_weak_verdicts_are_marked(run):
