@@ -270,3 +270,17 @@ def test_check_mode_detects_a_stale_doc(tmp_path, run):
     # the untouched report of the fixture's run is current
     res = cli.run(out, doc=str(doc), command=f"python -m paper --out {out} --n {N}", **kw)
     assert res["stale"] == []
+
+
+def test_check_tolerates_sections_appended_by_other_modules():
+    """A section another module appends (paper.report.SECTIONS) leaves the paper's own sections
+    current; a changed or missing own section does not."""
+    from paper.cli import stale_sections
+
+    own = ["# Title\n\nintro", "## Verdicts\n\n| a | b |"]
+    committed = "\n".join(own) + "\n## Layered sea\n\nappended by paper/sea.py"
+    assert stale_sections(committed, committed, own) == []
+    assert stale_sections("\n".join(own), committed, own) == [
+        "(the report as a whole: a section is missing, extra or out of order)"]
+    assert stale_sections(committed, committed.replace("| a |", "| c |"), own) == ["## Verdicts"]
+    assert stale_sections(committed, committed, own[::-1]) == ["# Title"]  # out of order
