@@ -738,6 +738,8 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective):
     best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
     tol = 2.0 * _LAYOUT_XATOL  # Brent stops within ~⅔ xatol of a minimiser on a bound
     at_bound = (("d_min",) if best_d - lo <= tol else ()) + (("d_max",) if hi - best_d <= tol else ())
+    if n == 1:
+        at_bound = ()  # one station: d plays no part
     return float(best_d), float(best_v), int(d.size + res.nfev), at_bound
 
 

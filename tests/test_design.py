@@ -306,3 +306,8 @@ def test_at_bound_names_the_box_sides_a_free_station_touches():
     assert wide.value > r.value
     interior = core.optimise_layout("free", 2, APP_REGION, maxfev=150)
     assert interior.at_bound == ()
+
+
+def test_one_station_layout_reports_no_spacing_bound():
+    r = core.optimise_layout("line", 1, APP_REGION, n_curve=3)
+    assert r.at_bound == () and r.stations.tolist() == [[0.0, 0.0, 100.0]]  # centred
