@@ -134,7 +134,7 @@ def unobservable_note(s: Scenario, results, stations):
                 f"3Ph, 3Pv) = ({nice}). Use 'moments known' or a second station."
             )
         else:
-            line = f"{name}: {frac:.0%} of the map is numerically singular (η < {core.ETA_TOL:g})."
+            line = f"{name}: {frac:.0%} of the map is numerically singular (σ_min/σ_max ≤ {core.RANK_RTOL:g})."
             n_free = 7 - len(s.core_options()["known"])
             if core.MEASURES[s.core_options()["measure"]][2] and 3 * len(st) >= n_free:
                 line += (" The paper's square rule keeps only the first instant's rows here, and one "

@@ -32,7 +32,6 @@ from .fisher import (
 from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
 from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
 from .observability import (
-    ETA_TOL,
     RANK_RTOL,
     gamma,
     log10_abs_det_gamma,
@@ -43,7 +42,7 @@ from .observability import (
 from .validation import STATE_NAMES
 
 __all__ = [
-    "DEFAULT_NOISE", "DEFAULT_STEPS", "ETA_TOL", "MAX_RESOLUTION", "MEASURES", "MODELS",
+    "DEFAULT_NOISE", "DEFAULT_STEPS", "MAX_RESOLUTION", "MEASURES", "MODELS",
     "RANK_RTOL", "STATE_NAMES", "STATE_UNITS", "FisherMeasures", "MapResult", "Plane",
     "dipole_field", "dual_station", "evaluate_map", "field_jacobian", "fisher_information",
     "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",

@@ -13,19 +13,21 @@ Everything here builds on the all-rows Fisher information of :mod:`core.fisher`
 
 Unobservable points
 -------------------
-Where Γ is structurally rank-deficient (η < :data:`core.ETA_TOL`, the flag of
-:func:`core.fisher_measures`, which agrees with :func:`core.observable_rank`), F is singular: the
-CRLB is +inf and the D-optimal measure −inf. Region criteria cannot average −inf, so
-:func:`layout_criterion` counts such a point at its **D-optimal floor**, the value it would
-have at η = ETA_TOL:
+Where Γ is structurally rank-deficient (:func:`core.observable_rank` < n, the flag of
+:func:`core.fisher_measures`), F is singular: the CRLB is +inf and the D-optimal measure −inf.
+Region criteria cannot average −inf, so :func:`layout_criterion` counts such a point at its
+**D-optimal floor**, the value it would have at the largest η a rank-deficient Γ_s can have,
+η_max = RANK_RTOL·√(e·n) (σ_min ≤ RANK_RTOL·σ_max, σ_max ≤ √n, and Π of the other n − 1
+singular values ≤ √e, all for unit columns):
 
-    floor = log10(ETA_TOL) + Σ_j log10 ‖Γ_j‖ − n·log10(noise),
+    floor = log10(η_max) + Σ_j log10 ‖Γ_j‖ − n·log10(noise),
 
-the largest D-optimal value that float64 round-off could fake at that point. It joins the
-observable values continuously at the flag boundary (D-opt = log10 η + Σ log10‖Γ_j‖ −
-n log10 noise there), so the criterion stays finite and an optimiser sees a slope towards
-observability; :attr:`CriterionResult.observable_fraction` says how much of the region is
-truly observable. For ``"area_crlb"`` an unobservable point simply fails the threshold.
+the largest D-optimal value that float64 round-off could fake at that point (D-opt =
+log10 η + Σ log10‖Γ_j‖ − n log10 noise where observable). The criterion stays finite and the
+floor grows with the column norms, so an optimiser sees a slope; an observable point may lie
+below it (η measures volume, not rank), so :attr:`CriterionResult.observable_fraction` says how
+much of the region is truly observable. For ``"area_crlb"`` an unobservable point simply
+fails the threshold.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from scipy import optimize
 from . import validation
 from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures
 from .grids import Plane
-from .observability import ETA_TOL, gamma
+from .observability import RANK_RTOL, gamma
 
 __all__ = [
     "CRITERIA",
@@ -448,7 +450,8 @@ def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, m
         g = gamma(states[bad], stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
         with np.errstate(divide="ignore"):
             log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
-        d_opt[bad] = np.log10(ETA_TOL) + log_norms - g.shape[-1] * np.log10(noise)
+        n = g.shape[-1]
+        d_opt[bad] = np.log10(RANK_RTOL * np.sqrt(np.e * n)) + log_norms - n * np.log10(noise)
     value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
     return CriterionResult(float(value), frac)
 
@@ -665,7 +668,8 @@ class LayoutResult:
     Attributes
     ----------
     stations : ndarray, shape (N, 3)
-        Optimised station positions (m).
+        Optimised station positions (m). Scaled kinds are centred on the region (the stations'
+        mean (x, y) is the centre of the region's horizontal box).
     value : float
         Criterion of that layout.
     kind : str
@@ -673,6 +677,11 @@ class LayoutResult:
         Spacing (m) for the scaled kinds; None for ``"free"``.
     nfev : int
         Criterion evaluations.
+    at_bound : tuple of str
+        The bounds the optimum lies on, empty when it is interior: ``"d_min"`` or ``"d_max"``
+        (the ends of ``d_range``) for the scaled kinds; for ``"free"`` the sides of the box that
+        a station touches, from ``"x_min"``, ``"x_max"``, ``"y_min"``, ``"y_max"``. A bound
+        that is hit means the optimum may lie beyond it.
     """
 
     stations: np.ndarray
@@ -680,6 +689,7 @@ class LayoutResult:
     kind: str
     d: float | None
     nfev: int
+    at_bound: tuple = ()
 
 
 def _default_bounds(region):
@@ -691,18 +701,61 @@ def _default_bounds(region):
     return tuple(map(float, region.u)), (region.fixed - half, region.fixed + half)
 
 
+#: Tolerance (m) of the bounded Brent search over d in :func:`optimise_layout`.
+_LAYOUT_XATOL = 0.05
+#: A free station within this fraction of the box width of a side counts as on it.
+_BOX_TOUCH = 1e-3
+
+
+def _centred_layout(kind, n, d, h, box):
+    """``station_layout(kind, n, d=d, h=h)`` shifted so that its mean (x, y) is the box centre."""
+    st = station_layout(kind, n, d=d, h=h)
+    st[:, :2] += np.mean(box, axis=1) - st[:, :2].mean(axis=0)
+    return st
+
+
+def _largest_spacing(kind, n, box):
+    """Largest d at which the centred ``kind`` layout of n stations fits in the box (m)."""
+    unit = station_layout(kind, n, d=1.0)[:, :2]
+    extent = unit.max(axis=0) - unit.min(axis=0)
+    width = np.diff(box, axis=1)[:, 0]
+    fits = [w / e for w, e in zip(width, extent) if e > 0]
+    return float(min(fits)) if fits else float(width.max())  # one station: d plays no part
+
+
+def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective):
+    """Best d of the centred layout: coarse curve over d_range, then bounded Brent on the
+    bracket of its best point (as :func:`best_spacing`). Returns (d, value, nfev, at_bound)."""
+    lo, hi = d_range
+    if isinstance(n_curve, bool) or not isinstance(n_curve, (int, np.integer)) or n_curve < 3:
+        raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
+    d = np.linspace(lo, hi, int(n_curve))
+    f = lambda v: objective(_centred_layout(kind, n, v, h, box))
+    curve = np.array([f(v) for v in d])
+    i = int(np.argmax(curve))
+    res = optimize.minimize_scalar(lambda v: -f(v), bounds=(d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]),
+                                   method="bounded", options={"xatol": _LAYOUT_XATOL})
+    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
+    tol = 2.0 * _LAYOUT_XATOL  # Brent stops within ~⅔ xatol of a minimiser on a bound
+    at_bound = (("d_min",) if best_d - lo <= tol else ()) + (("d_max",) if hi - best_d <= tol else ())
+    if n == 1:
+        at_bound = ()  # one station: d plays no part
+    return float(best_d), float(best_v), int(d.size + res.nfev), at_bound
+
+
 def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                     noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                    known=(), d_range=(2.0, 200.0), n_curve=25, x0=None, bounds=None,
-                    maxfev=400):
+                    known=(), d_range=None, n_curve=25, x0=None, bounds=None, maxfev=400):
     """Optimise an N-station layout for a region criterion.
 
     Parameters
     ----------
     kind : {"line", "triangle", "square", "free"}
-        Scaled kinds optimise their one spacing d with :func:`best_spacing` (over ``d_range``,
-        ``n_curve``). ``"free"`` optimises the (x, y) of all N stations at depth h with
+        Scaled kinds optimise their one spacing d, the layout centred on the region (its mean
+        station (x, y) at the centre of the region's horizontal box), as :func:`best_spacing`
+        does (a coarse curve of ``n_curve`` points over ``d_range``, then bounded Brent).
+        ``"free"`` optimises the (x, y) of all N stations at depth h with
         ``scipy.optimize.minimize(method="Powell")`` within ``bounds`` (derivative-free, so it
         copes with the piecewise-constant ``"area_crlb"``).
     n_stations : int
@@ -711,13 +764,18 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         Surveillance region.
     h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
         As for :func:`spacing_curve`.
-    d_range, n_curve
-        Scaled kinds, and the default start of ``"free"``; see :func:`best_spacing`.
+    d_range : (float, float), optional
+        (min, max) spacing (m) of the scaled kinds, 0 < min < max, and of the default start of
+        ``"free"``. Default: from min(2 m, d_fit / 2) to d_fit, the largest spacing at which the
+        centred layout still fits in the box (``bounds``' default).
+    n_curve : int
+        Points of the coarse curve over ``d_range``, ≥ 3.
     x0 : array_like, shape (N, 2), optional
-        ``"free"``: starting (x, y) (m). Default: the best ``"square"`` lattice (so the free
-        result is never worse than it), clipped into ``bounds``.
+        ``"free"``: starting (x, y) (m). Default: the best centred ``"square"`` lattice (so the
+        free result is never worse than it), clipped into ``bounds``.
     bounds : ((xmin, xmax), (ymin, ymax)), optional
-        ``"free"``: box for every station (m). Default: the region's horizontal extent (for an
+        Box for every station (m): ``"free"`` keeps the stations in it; it sets the scaled
+        kinds' centre and default ``d_range``. Default: the region's horizontal extent (for an
         x–z band, y within half the band's x width of its y).
     maxfev : int
         ``"free"``: budget of criterion evaluations for Powell, ≥ 1.
@@ -725,6 +783,8 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     Returns
     -------
     LayoutResult
+        ``at_bound`` names the bounds the optimum lies on (``d_min``/``d_max``, or the box sides
+        for ``"free"``; a station within 1e-3 of the box width of a side is on it).
 
     Examples
     --------
@@ -740,19 +800,35 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
               "threshold": threshold, "noise": noise, "steps": steps, "T": T, "sigma": sigma,
               "model": model, "known": known}
     n = _n_stations(n_stations)
-    if kind != "free":
-        r = best_spacing(region, d_range=d_range, n_curve=n_curve, kind=kind, n_stations=n,
-                         **common)
-        return LayoutResult(station_layout(kind, n, d=r.d, h=h), r.value, kind, r.d, r.nfev)
     if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
         raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
+    states = _region_states(region, velocity, moments)
     (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
         _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
     if not (xlo < xhi and ylo < yhi):
         raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
+    box = np.array([[xlo, xhi], [ylo, yhi]])
+    if kind != "free":
+        if d_range is None:
+            fit = _largest_spacing(kind, n, box)
+            d_range = (min(2.0, 0.5 * fit), fit)
+        lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
+        if not lo < hi:
+            raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
+        threshold = _check_criterion(criterion, threshold)
+        noise = validation.positive("noise", noise, "V/m")
+        h = station_layout("line", 1, h=h)[0, 2]  # validates h
+
+        def objective(st):
+            return _criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
+                              known).value
+
+        d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective)
+        return LayoutResult(_centred_layout(kind, n, d, h, box), value, kind, d, nfev, at_bound)
     nfev = 0
     if x0 is None:
-        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve, **common)
+        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve,
+                                bounds=((xlo, xhi), (ylo, yhi)), **common)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
         xy = validation._array("x0", x0)
@@ -762,7 +838,6 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
     threshold = _check_criterion(criterion, threshold)
     noise = validation.positive("noise", noise, "V/m")
-    states = _region_states(region, velocity, moments)
     station_layout("line", 1, h=h)  # validates h
 
     def objective(p):
@@ -776,4 +851,8 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     p = res.x if res.fun <= objective(xy.ravel()) else xy.ravel()
     value = -objective(p)
     st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
-    return LayoutResult(st, float(value), kind, None, int(nfev + res.nfev + 2))
+    near = _BOX_TOUCH * np.diff(box, axis=1)[:, 0]
+    at_bound = tuple(name for name, hit in (
+        ("x_min", np.any(st[:, 0] - xlo <= near[0])), ("x_max", np.any(xhi - st[:, 0] <= near[0])),
+        ("y_min", np.any(st[:, 1] - ylo <= near[1])), ("y_max", np.any(yhi - st[:, 1] <= near[1]))) if hit)
+    return LayoutResult(st, float(value), kind, None, int(nfev + res.nfev + 2), at_bound)

@@ -5,7 +5,7 @@ noise of standard deviation ``noise`` (V/m) on each component, ``R = noise² I``
 
     F = Γᵀ R⁻¹ Γ,    D-optimal measure = ½ log10 det F,    Cov ≥ F⁻¹ (Cramér–Rao).
 
-Where Γ is structurally rank-deficient (η < :data:`core.observability.ETA_TOL`) F is singular:
+Where Γ is structurally rank-deficient (:func:`core.observable_rank` < n) F is singular:
 the D-optimal measure is ``-inf`` and every bound is ``+inf``.
 """
 
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels, validation
-from .observability import ETA_TOL, _prepare, gamma
+from .observability import _full_rank, _prepare, gamma
 
 __all__ = ["DEFAULT_NOISE", "DEFAULT_STEPS", "FisherMeasures", "fisher_information", "fisher_measures"]
 
@@ -37,7 +37,7 @@ class FisherMeasures:
     log10_eta : ndarray
         Scale-free observability index log10 sqrt(det Γ_sᵀΓ_s) ≤ 0.
     observable : ndarray of bool
-        η ≥ ETA_TOL.
+        Full rank: ``core.observable_rank(..., steps=steps) == n`` (the one criterion).
     std : ndarray, shape (..., n)
         CRLB standard deviation of each unknown state (m, m/s, A·m); +inf where not observable.
     position_std : ndarray
@@ -97,9 +97,9 @@ def _fisher_from_kernel(states, options, n_rows, noise):
     """Run the compiled kernel on (P, 7) valid states; FisherMeasures with flat (P,) arrays."""
     npts, free = states.shape[0], options[-1]
     log_eta, log_norms, inv_diag = np.empty(npts), np.empty(npts), np.empty((npts, free.size))
-    kernels.fisher_measures(states, *options, n_rows, log_eta, log_norms, inv_diag)
-    with np.errstate(invalid="ignore"):
-        observable = log_eta >= np.log10(ETA_TOL)  # NaN (on a station) compares False
+    log_rcond = np.empty(npts)
+    kernels.fisher_measures(states, *options, n_rows, log_eta, log_norms, inv_diag, log_rcond)
+    observable = _full_rank(log_rcond, states, options, n_rows)  # False on a station (NaN)
     # ½ log10 det(ΓᵀΓ / noise²) = log10 η + Σ log10‖Γ_j‖ − n log10(noise)
     d_opt = np.where(observable, log_eta + log_norms - free.size * np.log10(noise), -np.inf)
     var = np.where(observable[:, None], inv_diag * noise**2, np.inf)

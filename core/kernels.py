@@ -12,6 +12,10 @@ Column scaling is used throughout: with ``Γ_s = Γ / ‖Γ_j‖`` (unit columns
 
 and ``η = sqrt(det Γ_sᵀ Γ_s) ∈ [0, 1]`` (for square Γ, ``|det Γ_s|``, the Hadamard ratio) is the
 scale-free observability index: 1 for orthogonal columns, 0 for a rank-deficient Γ.
+
+The rank test (:data:`core.observability.RANK_RTOL`) reads ``rcond = 1 / (‖Γ_s‖_F ‖R_s⁻¹‖_F)``,
+the reciprocal Frobenius condition number of Γ_s (R_s its R factor), which brackets the ratio of
+extreme singular values: ``rcond ≤ σ_min/σ_max ≤ n · rcond``.
 """
 
 from __future__ import annotations
@@ -195,6 +199,7 @@ def _qr_abs_det_lanes(w, n):
             w[kk, lane] = v0
             w[_BETA, lane] = 2.0 / vnorm2 if vnorm2 > 0.0 else 0.0
             w[_DET, lane] *= abs(alpha)
+            w[_T, lane] = alpha  # R_kk, stored over v0 once the columns right of k are done
         for c in range(k + 1, n):
             for lane in range(LANES):
                 w[_DOT, lane] = 0.0
@@ -208,10 +213,43 @@ def _qr_abs_det_lanes(w, n):
                 rk, rc = _G + 7 * r + k, _G + 7 * r + c
                 for lane in range(LANES):
                     w[rc, lane] -= w[_DOT, lane] * w[rk, lane]
+        for lane in range(LANES):
+            w[kk, lane] = w[_T, lane]  # R (upper triangle, signed diagonal) is now in w[_G…]
+
+
+@nb.njit(inline="always", **JIT)
+def _rinv_scaled_frobenius2_lanes(w, n):
+    """w[_NORM2] = ‖R_s⁻¹‖_F² = Σ_i ‖Γ_i‖² Σ_k (R⁻¹)_ik² for the R in w[_G…] (upper triangle)
+    and the squared column norms in w[_SQ…], one column of R⁻¹ at a time (back substitution
+    into the free rows w[_J:_J+7]). inf or NaN where an R_jj is 0."""
+    for lane in range(LANES):
+        w[_NORM2, lane] = 0.0
+    for k in range(n):
+        for i in range(k, -1, -1):
+            xi = _J + i
+            for lane in range(LANES):
+                w[xi, lane] = 1.0 if i == k else 0.0
+            for j in range(i + 1, k + 1):
+                ij, xj = _G + 7 * i + j, _J + j
+                for lane in range(LANES):
+                    w[xi, lane] -= w[ij, lane] * w[xj, lane]
+            ii, si = _G + 8 * i, _SQ + i
+            for lane in range(LANES):
+                w[xi, lane] /= w[ii, lane]
+                w[_NORM2, lane] += w[si, lane] * w[xi, lane] * w[xi, lane]
+
+
+@nb.njit(inline="always", **JIT)
+def _log10_rcond(frob2, n):
+    """log10(1 / (√n ‖R_s⁻¹‖_F)) from ‖R_s⁻¹‖_F²; -inf where that is not finite (singular R)."""
+    if frob2 > 0.0 and frob2 < np.inf:
+        return -0.5 * math.log10(n * frob2)
+    return -np.inf
 
 
 @nb.njit(**JIT)
-def _square_groups(states, first, last, stations, step, kappa, model, free, log_det, log_eta):
+def _square_groups(states, first, last, stations, step, kappa, model, free, log_det, log_eta,
+                   log_rcond):
     """:func:`square_measures` for the groups of LANES points ``first`` … ``last − 1``. The
     workspace is allocated here once, with a shape known at compile time so that LLVM sees its
     row stride (and not per group: freeing it each time let malloc hand the pages back to the
@@ -230,12 +268,15 @@ def _square_groups(states, first, last, stations, step, kappa, model, free, log_
                 for lane in range(LANES):
                     w[_SQ + j, lane] += w[rj, lane] * w[rj, lane]
         _qr_abs_det_lanes(w, n)
+        _rinv_scaled_frobenius2_lanes(w, n)
         for lane in range(count):
             p = p0 + lane
             if w[_BAD, lane] != 0.0:
                 log_det[p] = np.nan
                 log_eta[p] = np.nan
+                log_rcond[p] = np.nan
                 continue
+            log_rcond[p] = _log10_rcond(w[_NORM2, lane], n)
             prod = 1.0
             for j in range(n):
                 prod *= w[_SQ + j, lane]
@@ -253,14 +294,14 @@ def _square_groups(states, first, last, stations, step, kappa, model, free, log_
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
-def square_measures(states, stations, step, kappa, model, free, log_det, log_eta):
-    """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point (NaN on
-    stations), LANES points at a time."""
+def square_measures(states, stations, step, kappa, model, free, log_det, log_eta, log_rcond):
+    """Paper rule: square Γ (n_free rows). Writes log10|det Γ|, log10 η and log10 rcond per
+    point (NaN on stations), LANES points at a time."""
     groups = (states.shape[0] + LANES - 1) // LANES
     chunks = min(groups, _CHUNKS)
     for c in nb.prange(chunks):
         _square_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step, kappa,
-                       model, free, log_det, log_eta)
+                       model, free, log_det, log_eta, log_rcond)
 
 
 # Workspace rows of fisher_measures beyond the shared ones: R (7 × 7 at _G), the incoming row
@@ -310,7 +351,7 @@ def _inverse_lanes(w, n):
 
 @nb.njit(**JIT)
 def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_rows, log_eta,
-                   log_norm_sum, inv_diag):
+                   log_norm_sum, inv_diag, log_rcond):
     """:func:`fisher_measures` for the groups ``first`` … ``last − 1`` (see :func:`_square_groups`)."""
     n = free.shape[0]
     w = np.empty((_FISHER_ROWS, LANES))
@@ -337,6 +378,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_ro
                 log_eta[p] = np.nan
                 log_norm_sum[p] = np.nan
                 inv_diag[p] = np.nan
+                log_rcond[p] = np.nan
                 continue
             norms = 0.0
             log_r = 0.0
@@ -351,6 +393,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_ro
             log_norm_sum[p] = norms
             # η = Π R_jj / Π ‖Γ_j‖ (the R of the unit-column Γ_s is R with unit-scaled columns)
             log_eta[p] = -np.inf if singular else log_r - norms
+            frob2 = 0.0  # ‖R_s⁻¹‖_F² = Σ_i ‖Γ_i‖² (R⁻¹R⁻ᵀ)_ii
             for i in range(n):
                 acc = 0.0
                 for k in range(i, n):
@@ -358,24 +401,26 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_ro
                     acc += v * v
                 # (ΓᵀΓ)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)²
                 inv_diag[p, i] = np.inf if singular else acc
+                frob2 += w[_SQ + i, lane] * acc
+            log_rcond[p] = -np.inf if singular else _log10_rcond(frob2, n)
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
 def fisher_measures(states, stations, step, kappa, model, free, n_rows,
-                    log_eta, log_norm_sum, inv_diag):
+                    log_eta, log_norm_sum, inv_diag, log_rcond):
     """All-rows Γ (n_rows × n_free, N = n_rows / 3S instants) reduced through its QR
     factorisation, LANES points at a time, without storing Γ.
 
     Per point: ``log_eta`` = log10 η, η = sqrt(det Γ_sᵀΓ_s) = Π|R_jj| of the unit-column Γ_s;
     ``log_norm_sum`` = Σ log10 ‖Γ_j‖; ``inv_diag`` (P, n_free) = diag((ΓᵀΓ)⁻¹) (times the
-    noise variance, the CRLB variances). The caller decides observability from η. NaN on
-    stations.
+    noise variance, the CRLB variances); ``log_rcond`` = log10 rcond (module docstring), from
+    which the caller decides the rank. NaN on stations.
     """
     groups = (states.shape[0] + LANES - 1) // LANES
     chunks = min(groups, _CHUNKS)
     for c in nb.prange(chunks):
         _fisher_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step, kappa,
-                       model, free, n_rows, log_eta, log_norm_sum, inv_diag)
+                       model, free, n_rows, log_eta, log_norm_sum, inv_diag, log_rcond)
 
 
 @nb.njit(cache=True, nogil=True)

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import kernels, validation
 from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, _fisher_from_kernel
-from .observability import ETA_TOL, _options
+from .observability import _full_rank, _options
 
 __all__ = ["MEASURES", "MapResult", "evaluate_map", "log10_positive_difference", "log10_ratio"]
 
@@ -57,8 +57,9 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     -------
     MapResult
         ``value`` is NaN within ``ON_STATION`` of a station. ``observable`` is False there and
-        where Γ is structurally rank-deficient (η < ETA_TOL); there ``log10_det`` still holds
-        float64's round-off value, for display as such.
+        where Γ is structurally rank-deficient (:func:`core.observable_rank` < n, the one
+        criterion); there ``log10_det`` still holds float64's round-off value, for display as
+        such.
 
     Notes
     -----
@@ -74,6 +75,7 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     n = plane.n
     value = np.empty((n, n))
     log_eta = np.empty((n, n))
+    observable = np.empty((n, n), dtype=bool)
     rows_per_chunk = max(1, CHUNK_POINTS // n)
     for r0 in range(0, n, rows_per_chunk):
         rows = slice(r0, min(n, r0 + rows_per_chunk))
@@ -81,16 +83,17 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
         eta = log_eta[rows].reshape(-1)  # views: the kernels write straight into the map
         out = value[rows].reshape(-1)
         if square:
+            rcond = np.empty(len(states))
             kernels.square_measures(states, *options, out if measure == "log10_det" else
-                                    np.empty(len(states)), eta)
+                                    np.empty(len(states)), eta, rcond)
             if measure == "log10_eta":
                 out[:] = eta
+            observable[rows] = _full_rank(rcond, states, options, n_rows).reshape(-1, n)
         else:
             m = _fisher_from_kernel(states, options, n_rows, noise)
             eta[:] = m.log10_eta
             out[:] = m.d_optimal if measure == "d_optimal" else m.position_std
-    with np.errstate(invalid="ignore"):
-        observable = log_eta >= np.log10(ETA_TOL)  # NaN (on a station) compares False
+            observable[rows] = m.observable.reshape(-1, n)
     return MapResult(value=value, observable=observable, measure=measure)
 
 

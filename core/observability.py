@@ -10,6 +10,20 @@ station-major, then component (Ex, Ey, Ez).
 Structural rank is decided on the column-scaled Γ, never on |det Γ| itself: one station has a
 scale symmetry (spec §4) that makes Γ exactly singular, and float64 then returns
 ``|det Γ| ≈ 1e-20 · Π‖Γ_j‖`` of pure round-off.
+
+One criterion
+-------------
+Γ has full rank where the column-scaled Γ_s has ``σ_min > RANK_RTOL · σ_max``
+(:data:`RANK_RTOL`). :func:`observable_rank` counts the singular values above that line, and
+every ``observable`` flag (:func:`core.evaluate_map`, :func:`core.fisher_measures` and all that
+builds on them, the app's grey veil included) is ``observable_rank == n`` at the same point, by
+construction (:func:`_full_rank`). The observability index η = Π σ_i is a *measure*, not a rank
+test: it multiplies n singular values, so it can be tiny where every one of them is resolved.
+At ``X = [6000, 8000, 150, 2, 2, 100, 20]`` with stations 2 m apart, 50-digit arithmetic gives
+σ_min/σ_max = 1.9e-5 and log10 η = −15.8, and float64 reproduces both to ~1e-10
+(tests/test_observability.py): the point is observable, and its η is no round-off. What float64
+cannot resolve is a singular value below ~1e-15 · σ_max (the backward error of the SVD and QR),
+which the ratio test, unlike η, reads directly.
 """
 
 from __future__ import annotations
@@ -20,7 +34,6 @@ from . import kernels, validation
 from .fields import MODELS
 
 __all__ = [
-    "ETA_TOL",
     "RANK_RTOL",
     "gamma",
     "log10_abs_det_gamma",
@@ -29,18 +42,17 @@ __all__ = [
     "unobservable_direction",
 ]
 
-#: A column-scaled Γ whose smallest singular value is below ``RANK_RTOL`` times its largest is
-#: rank-deficient. Measured on the paper's x–y grid (tests/test_observability.py): one station,
-#: exactly singular, gives at most 3e-16 (round-off); two stations 2–15 m apart give at least
-#: 4e-8 for the paper-rule Γ and 6e-4 for the all-rows Γ. 1e-10 sits between with ≥ 2.5
-#: decades of margin on either side.
+#: The one rank criterion: a column-scaled Γ whose smallest singular value is not above
+#: ``RANK_RTOL`` times its largest is rank-deficient (structurally unobservable). Measured on
+#: the paper's x–y grid (tests/test_observability.py): one station, exactly singular, gives at
+#: most 3e-16 (round-off: float64's SVD and QR resolve singular values down to ~1e-15 σ_max);
+#: two stations 2–15 m apart give at least 4e-8 for the paper-rule Γ and 6e-4 for the all-rows
+#: Γ. 1e-10 sits between with ≥ 2.5 decades of margin on either side.
 RANK_RTOL = 1e-10
-#: Observability index η = sqrt(det Γ_sᵀΓ_s) (the Hadamard ratio for square Γ) below which a
-#: point is flagged unobservable. One station's round-off gives η ≤ 4e-18 on the paper grids.
-#: Below 1e-15 the float64 determinant of a unit-column matrix carries at most one significant
-#: digit (relative error ~ eps/η), so such a value cannot be told from round-off either: this
-#: also flags the thin curves where a dual-station paper-rule det Γ changes sign.
-ETA_TOL = 1e-15
+#: Safety factor of the kernels' bracket (:func:`_full_rank`). Both the bracket and the SVD are
+#: exact for Γ_s + E with ‖E‖ ≲ 1e-14 (backward stability), so at the threshold the two differ
+#: by ~1e-4 relative: a factor 10 is ample.
+_BRACKET_MARGIN = 10.0
 
 
 def _options(stations, T, sigma, model, known, steps):
@@ -110,9 +122,8 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, know
 
 def _square(states, stations, T, sigma, model, known):
     args, _, lead = _prepare(states, stations, T, sigma, model, known, None)
-    log_det = np.empty(args[0].shape[0])
-    log_eta = np.empty(args[0].shape[0])
-    kernels.square_measures(*args, log_det, log_eta)
+    log_det, log_eta, log_rcond = (np.empty(args[0].shape[0]) for _ in range(3))
+    kernels.square_measures(*args, log_det, log_eta, log_rcond)
     return log_det.reshape(lead), log_eta.reshape(lead)
 
 
@@ -126,8 +137,8 @@ def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", kn
     ndarray, shape (...)
         log10 |det Γ| (Γ in (V/m) per state unit). ``-inf`` where det Γ is exactly zero in
         float64. For one station with all 7 states unknown the finite values returned are
-        round-off (spec §4): check :func:`observability_index` against :data:`ETA_TOL` or
-        :func:`observable_rank` before reading them as observability.
+        round-off (spec §4): check :func:`observable_rank` (or the ``observable`` flag of
+        :func:`core.evaluate_map`, the same test) before reading them as observability.
 
     Examples
     --------
@@ -144,8 +155,9 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", st
     """Scale-free observability index log10 η, η = sqrt(det Γ_sᵀΓ_s) ∈ [0, 1].
 
     ``Γ_s`` is Γ with unit columns, so η does not depend on units or moment scale. For the
-    square paper-rule Γ, η = |det Γ| / Π‖Γ_j‖ (the Hadamard ratio). η < :data:`ETA_TOL` means
-    structurally unobservable; ``-inf`` where η is exactly 0.
+    square paper-rule Γ, η = |det Γ| / Π‖Γ_j‖ (the Hadamard ratio); ``-inf`` where η is exactly
+    0. η = Π σ_i of Γ_s is a measure, not the rank test: that is :func:`observable_rank`
+    (module notes, "One criterion").
 
     Returns
     -------
@@ -156,8 +168,8 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", st
         return _square(states, stations, T, sigma, model, known)[1]
     args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
     npts, n = args[0].shape[0], args[-1].size
-    log_eta, lns, inv = np.empty(npts), np.empty(npts), np.empty((npts, n))
-    kernels.fisher_measures(*args, n_rows, log_eta, lns, inv)
+    log_eta, lns, inv, rc = np.empty(npts), np.empty(npts), np.empty((npts, n)), np.empty(npts)
+    kernels.fisher_measures(*args, n_rows, log_eta, lns, inv, rc)
     return log_eta.reshape(lead)
 
 
@@ -170,11 +182,39 @@ def _scaled_svd(g):
     return np.linalg.svd(gs, full_matrices=True), norms
 
 
+def _svd_rank(g):
+    """Rank of each Γ in the stack ``g`` (..., rows, n): singular values of the column-scaled Γ
+    above RANK_RTOL times the largest. The one criterion (module notes)."""
+    (_, s, _), _ = _scaled_svd(g)
+    return np.sum(s > RANK_RTOL * s[..., :1], axis=-1)
+
+
+def _full_rank(log_rcond, states, options, n_rows):
+    """``observable_rank == n`` at (P, 7) valid states, from the kernels' log10 rcond (P,).
+
+    rcond = 1 / (‖Γ_s‖_F ‖Γ_s⁺‖_F) brackets σ_min/σ_max in [rcond, n · rcond]
+    (:mod:`core.kernels`). Where the bracket lies clear of RANK_RTOL by :data:`_BRACKET_MARGIN`
+    it decides; elsewhere (a thin band, rare) Γ is rebuilt and :func:`_svd_rank` decides, so the
+    flag equals :func:`observable_rank` everywhere. NaN (on a station) gives False.
+    """
+    n = options[-1].size
+    with np.errstate(invalid="ignore"):
+        out = log_rcond >= np.log10(RANK_RTOL * _BRACKET_MARGIN)
+        unsure = ~out & (log_rcond + np.log10(n) > np.log10(RANK_RTOL / _BRACKET_MARGIN))
+    idx = np.flatnonzero(unsure)
+    if idx.size:
+        g = np.empty((idx.size, n_rows, n))
+        kernels.fill_gamma(np.ascontiguousarray(states[idx]), *options, n_rows, g)
+        out[idx] = _svd_rank(g) == n
+    return out
+
+
 def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, known=()):
     """Structural rank of Γ from the SVD of the column-scaled Γ.
 
     A singular value counts when it exceeds :data:`RANK_RTOL` times the largest. Column scaling
-    removes the units (m, m/s, A·m), so the tolerance judges geometry, not scale.
+    removes the units (m, m/s, A·m), so the tolerance judges geometry, not scale. This is the
+    one rank criterion: every ``observable`` flag in :mod:`core` is ``observable_rank == n``.
 
     Returns
     -------
@@ -190,8 +230,7 @@ def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=
     7
     """
     g = gamma(states, stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
-    (_, s, _), _ = _scaled_svd(g)
-    return np.sum(s > RANK_RTOL * s[..., :1], axis=-1)
+    return _svd_rank(g)
 
 
 def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None,

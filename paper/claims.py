@@ -1,9 +1,10 @@
 """Every qualitative claim of the paper, checked with numbers under four analyses.
 
 - ``a``: the paper's own method, log10|det Γ| of the square paper-rule Γ in float64.
-- ``b``: the same, with structural rank taken into account: a point counts only where the
-  observability index η = |det Γ| / Π‖Γ_j‖ reaches :data:`core.ETA_TOL` (rank 7, spec §4);
-  elsewhere det Γ is structurally 0 and its float64 value is round-off.
+- ``b``: the same, with structural rank taken into account: a point counts only where Γ has
+  rank 7 (:func:`core.observable_rank`: σ_min/σ_max of the column-scaled Γ above
+  :data:`core.RANK_RTOL`, spec §4); elsewhere det Γ is structurally 0 and its float64 value is
+  round-off.
 - ``c_dual``: the physically consistent analysis for 7 unknown states: the D-optimal Fisher
   measure ½ log10 det F (all rows, :data:`core.DEFAULT_STEPS` instants, noise
   :data:`core.DEFAULT_NOISE` V/m). One station gives F singular (−inf); the dual layout is
@@ -12,7 +13,10 @@
   single station unless the claim compares layouts (then both layouts with moments known).
 
 Each check returns a status (``holds``, ``fails``, ``not meaningful``, ``n/a``), the numbers
-behind it and one sentence saying why. Thresholds are module constants, stated in the doc.
+behind it, one sentence saying why and, where the verdict compares two numbers, its margin: the
+relative gap between them. A margin below :data:`WEAK_MARGIN` makes the verdict *weak* (a few per
+cent can flip with the grid, the transect's ends or the model). Thresholds are module constants,
+stated in the doc.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from . import scenarios as sc
 METHODS = ("a", "b", "c_dual", "c_known")
 METHOD_TITLES = {
     "a": "(a) paper's method, float64 log10|det Γ|",
-    "b": "(b) same, structural rank enforced (η ≥ ETA_TOL)",
+    "b": "(b) same, structural rank enforced (rank Γ = 7)",
     "c_dual": "(c) dual station, Fisher D-optimal (7 states)",
     "c_known": "(c) moments known, Fisher D-optimal (5 states)",
 }
@@ -45,6 +49,9 @@ FIG4_DEPTHS = (110.0, 120.0, 150.0, 200.0)
 #: Fig. 2 points (x, y, z) in m: the near point and the ends of the x and z transects.
 FIG2_POINTS = {"near": (0.0, 50.0, 100.0), "x_end": (300.0, 50.0, 100.0), "z_end": (0.0, 50.0, 400.0)}
 DUAL_D = sc.DUAL_D
+#: A verdict whose margin (relative gap between the two numbers it compares) is below this is
+#: reported as weak.
+WEAK_MARGIN = 0.05
 
 
 @dataclass
@@ -52,6 +59,13 @@ class Check:
     status: str
     numbers: dict
     note: str
+    #: relative gap between the numbers the verdict compares (None: exact or not a comparison)
+    margin: float | None = None
+
+    @property
+    def weak(self):
+        """The verdict rests on a margin below WEAK_MARGIN."""
+        return self.margin is not None and self.margin < WEAK_MARGIN
 
 
 @dataclass
@@ -76,15 +90,22 @@ def _status(ok):
     return "holds" if ok else "fails"
 
 
+def _rel(a, b):
+    """Relative gap |a − b| / max(|a|, |b|) between two numbers a verdict compares (0 if both 0)."""
+    a, b = float(a), float(b)
+    top = max(abs(a), abs(b))
+    return round(abs(a - b) / top, 4) if top > 0 else 0.0
+
+
 def _single_roundoff(plane, model, moments=(sc.PH, sc.PV)):
-    """Check (b) for a single-station claim: η everywhere below ETA_TOL → not meaningful."""
+    """Check (b) for a single-station claim: rank 6 at every point → not meaningful."""
     eta = sc.field_map(plane, None, moments, "log10_eta", model)
     top = np.nanmax(eta.value)
     if eta.observable.any():
         return None
-    return Check("not meaningful", {"max_log10_eta": _r(top), "log10_ETA_TOL": _r(np.log10(core.ETA_TOL))},
-                 f"η ≤ 10^{top:.1f} < ETA_TOL at every point: rank 6, det Γ = 0 structurally; "
-                 "the map is round-off")
+    return Check("not meaningful", {"max_log10_eta": _r(top), "log10_RANK_RTOL": _r(np.log10(core.RANK_RTOL))},
+                 f"rank 6 at every point (σ_min/σ_max ≤ RANK_RTOL; η ≤ 10^{top:.1f}): det Γ = 0 "
+                 "structurally; the map is round-off")
 
 
 def _maps(plane, model, d=None, moments=(sc.PH, sc.PV)):
@@ -163,12 +184,13 @@ def claim_fig2(model, n):
         a1, a2 = dz1 - dx1, dz2 - dx2
         slow.checks[m] = Check(_status(dx1 < dz1), {"dx": _r(dx1), "dz": _r(dz1), "asymmetry": _r(a1)},
                                f"Δx = {dx1:.2f}, Δz = {dz1:.2f} decades (Δz − Δx = {a1:+.2f}, "
-                               f"{100 * a1 / dz1:+.1f} % of Δz)")
+                               f"{100 * a1 / dz1:+.1f} % of Δz)", _rel(dx1, dz1))
         ok = a1 > 0 and abs(a2) <= 0.5 * a1
         equal.checks[m] = Check(_status(ok), {"dx": _r(dx2), "dz": _r(dz2), "asymmetry": _r(a2),
                                               "asymmetry_ph_gt_pv": _r(a1)},
                                 f"Δz − Δx = {a2:+.2f} with Ph = Pv vs {a1:+.2f} with Ph > Pv "
-                                "(holds if the asymmetry at least halves)")
+                                "(holds if the asymmetry at least halves)",
+                                _rel(abs(a2), 0.5 * a1) if a1 > 0 else None)
     b = _single_roundoff(sc.xz_plane(n), model)
     slow.checks["b"] = equal.checks["b"] = b
     return [slow, equal]
@@ -198,7 +220,7 @@ def claim_fig3(model, n):
         c.checks[m] = Check(_status(blank == 0.0), {
             "blank_fraction": _r(blank, 4), "ratio_min": _r(np.nanmin(ratio)),
             "ratio_max": _r(np.nanmax(ratio))},
-            f"log10 ratio {np.nanmin(ratio):.3f} … {np.nanmax(ratio):.3f}; blank {100 * blank:.1f} %"
+            f"log10 ratio {np.nanmin(ratio):.3f} … {np.nanmax(ratio):.3f}; blank {100 * blank:.2g} %"
             + (" (5 of 7 columns are linear in the moments: +5 is a scaling identity)"
                if m != "a" else ""))
     c.checks["b"] = _single_roundoff(plane, model)
@@ -232,14 +254,18 @@ def claim_fig4(model, n):
         far = [f[1] for f in fr]
         nums = {"near_positive": [_r(x) for x in near], "far_positive": [_r(x) for x in far]}
         txt = "Δ > 0 on " + ", ".join(f"{100 * a:.0f} % near / {100 * b:.0f} % far" for a, b in zip(near, far))
-        lower.checks[m] = Check(_status(all(a < 0.5 for a in near) and all(b > 0.5 for b in far)), nums, txt)
-        only.checks[m] = Check(_status(all(a > 0.5 for a in near) and all(b < 0.5 for b in far)), nums, txt)
+        margin = min(_rel(f, 0.5) for f in near + far)  # each fraction against one half
+        lower.checks[m] = Check(_status(all(a < 0.5 for a in near) and all(b > 0.5 for b in far)), nums, txt,
+                                margin)
+        only.checks[m] = Check(_status(all(a > 0.5 for a in near) and all(b < 0.5 for b in far)), nums, txt,
+                               margin)
         blanks = [fig4_fractions(model, n, m, (2, 0), z)[2] for z in FIG4_DEPTHS]
         shrinking = bool(np.all(np.diff(blanks) <= 0) and blanks[0] > blanks[-1])
         depth.checks[m] = Check(_status(shrinking), {"depths_m": list(FIG4_DEPTHS),
                                                      "blank_fraction": [_r(x, 4) for x in blanks]},
                                 "blank fraction at z = " + ", ".join(
-                                    f"{z:.0f} m: {100 * b:.1f} %" for z, b in zip(FIG4_DEPTHS, blanks)))
+                                    f"{z:.0f} m: {100 * b:.1f} %" for z, b in zip(FIG4_DEPTHS, blanks)),
+                                min(_rel(a, b) for a, b in zip(blanks[:-1], blanks[1:])))
     b = _single_roundoff(sc.xy_plane(n), model, sc.FIG4_MOMENTS[1])
     lower.checks["b"] = only.checks["b"] = depth.checks["b"] = b
     return [lower, only, depth]
@@ -274,7 +300,8 @@ def claim_fig5(model, n):
         why = {"a": "", "b": "; the single station is structurally 0, so only unobservable dual "
                "points could be blank", "c_dual": "; single-station F is singular (D-opt = −inf)",
                "c_known": "; both layouts with moments known"}[m]
-        blank2.checks[m] = Check(_status(f2 > BLANK_MIN), nums, f"blank {100 * f2:.1f} % of the map{why}")
+        blank2.checks[m] = Check(_status(f2 > BLANK_MIN), nums, f"blank {100 * f2:.1f} % of the map{why}",
+                                 _rel(f2, BLANK_MIN))
         pos15.checks[m] = Check(_status(f15 == 0.0), nums, f"blank {100 * f15:.1f} % of the map{why}")
     return [blank2, pos15]
 
@@ -290,7 +317,8 @@ def claim_fig6(model, n):
         c.checks[m] = Check(_status(grows), {"d_m": list(sc.FIG6_D), "blank_fraction": [_r(x, 4) for x in tot],
                                              "blank_fraction_within_100m": [_r(x, 4) for x in near]},
                             "blank " + ", ".join(f"d = {d:.0f}: {100 * t:.1f} % (≤ 100 m: {100 * q:.0f} %)"
-                                                 for d, t, q in zip(sc.FIG6_D, tot, near)))
+                                                 for d, t, q in zip(sc.FIG6_D, tot, near)),
+                            min(_rel(a, b) for a, b in zip(tot[:-1], tot[1:])))
     return [c]
 
 
@@ -336,16 +364,16 @@ def claim_conclusions(model, n, scan):
         k2.checks[m] = Check(_status(ok), {"median_sz_over_sxy_100_20": _r(med[0]),
                                            "median_sz_over_sxy_100_100": _r(med[1])},
                              f"median CRLB σz / σxy over the Fig. 1 grid: {med[0]:.2f} with (100, 20), "
-                             f"{med[1]:.2f} with (100, 100)")
+                             f"{med[1]:.2f} with (100, 100)", min(_rel(med[0], 1.0), _rel(med[0], med[1])))
 
     k3 = Claim("K3", "Conclusion 3", "dual beats single, but the spacing must suit the target: too large "
                "a d lowers observability near the stations")
     k3.checks["a"] = Check("n/a", {}, "see C5a, C5b, C6")
     k3.checks["b"] = Check("n/a", {}, "see C5a, C5b, C6")
     for m, key in (("c_dual", "d_optimal"), ("c_known", "d_optimal_known")):
-        s = scan[model][key]
+        peaks = scan[model]["peaks"]  # refined optima (paper.beyond.refine_peak), not grid points
         d = np.asarray(scan["d_m"])
-        best, best_near = float(d[np.nanargmax(s["mean"])]), float(d[np.nanargmax(s["near_mean"])])
+        best, best_near = peaks[key]["d"], peaks[f"{key}_near"]["d"]
         ok = best_near < d[-1]
         k3.checks[m] = Check(_status(ok), {"argmax_mean_d_m": _r(best, 2), "argmax_near_d_m": _r(best_near, 2)},
                              f"mean D-opt over the map peaks at d = {best:.1f} m; within {NEAR_M:.0f} m "

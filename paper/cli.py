@@ -6,6 +6,11 @@ verdict) and the report (``DIR/paper-reproduction.md`` unless ``--doc`` puts it 
 links are relative to the report). The committed docs are made with
 
     python -m paper --out docs/paper --doc docs/paper-reproduction.md --no-html --dpi 64
+
+``--check`` recomputes every number and the report's text without rendering an image or writing
+a file, and exits with status 1 (saying which section differs) unless the existing report and
+``claims.json`` are exactly what the command would write. Rerun with ``--check`` appended to
+the command above: it is the test that the committed document is current.
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shlex
 import sys
 
@@ -31,16 +37,41 @@ def _parser():
     p.add_argument("--no-html", action="store_true", help="skip the Bokeh HTML pages")
     p.add_argument("--inline", action="store_true", help="embed BokehJS in the HTML (works offline, ~1 MB each)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--check", action="store_true",
+                   help="write nothing; exit 1 unless the report and claims.json are current")
     return p
 
 
-def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, command=None):
-    """Do everything; returns {"doc": path, "claims": path, "pngs": {...}, "htmls": {...}}."""
+def stale_sections(text, committed, sections):
+    """Headings (or indices) of the rendered ``sections`` texts not found verbatim in the
+    committed report, in order: the check of :func:`run` with ``check=True``."""
+    stale, pos = [], 0
+    for i, part in enumerate(sections):
+        at = committed.find(part, pos)
+        if at < 0:
+            head = next((line for line in part.splitlines() if line.startswith("#")), f"section {i}")
+            stale.append(head)
+        else:
+            pos = at + len(part)
+    if not stale and text != committed:
+        stale.append("(the report as a whole: a section is missing, extra or out of order)")
+    return stale
+
+
+def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, command=None,
+        check=False, sections=None):
+    """Do everything; returns {"doc": path, "claims": path, "pngs": {...}, "htmls": {...}}.
+
+    ``check=True`` computes all numbers and the text but renders and writes nothing; it returns
+    {"doc", "claims", "stale": [what differs from the files on disk: section headings, or
+    claims.json]}. ``sections``: check only these of :data:`paper.report.SECTIONS`, each of
+    which must appear verbatim and in order (default: all, and the report must match exactly)."""
     if not 3 <= n <= 1000:
         raise ValueError(f"--n must be in [3, 1000]; got {n}")
-    os.makedirs(out, exist_ok=True)
     doc = doc or os.path.join(out, "paper-reproduction.md")
-    os.makedirs(os.path.dirname(os.path.abspath(doc)), exist_ok=True)
+    if not check:
+        os.makedirs(out, exist_ok=True)
+        os.makedirs(os.path.dirname(os.path.abspath(doc)), exist_ok=True)
     # per model: the d scan, the high-precision check, 26 PNG panels, 9 HTML figures
     steps = len(sc.MODELS) * (len(beyond.SCAN_D) + 1 + 26 + (9 if html else 0))
     bar = tqdm(total=steps, desc="paper", unit="step", disable=quiet, file=sys.stderr)
@@ -57,41 +88,84 @@ def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, com
         evidence[model] = precision.evidence(model)
         tick()
         png_dir = os.path.join(out, "png", model)
-        os.makedirs(png_dir, exist_ok=True)
+        if not check:
+            os.makedirs(png_dir, exist_ok=True)
         figs = figures.paper_figures(model, n) + figures.extra_figures(model, n, scan)
         bar.set_postfix_str(f"{model}: rendering")
         for f in figs:
             if f.line:
                 pngs[(model, f.key)] = path = os.path.join(png_dir, f"{f.key}.png")
-                figures.render_line_png(f, path, dpi)
+                if not check:
+                    figures.render_line_png(f, path, dpi)
                 tick()
             for p in f.panels:
                 pngs[(model, p.key)] = path = os.path.join(png_dir, f"{p.key}.png")
-                figures.render_png(p, path, dpi)
+                if not check:
+                    figures.render_png(p, path, dpi)
                 tick()
             if html:
                 hdir = os.path.join(out, "html", model)
-                os.makedirs(hdir, exist_ok=True)
                 htmls[(model, f.key)] = path = os.path.join(hdir, f"{f.key}.html")
-                figures.render_html(f, path, inline=inline)
+                if not check:
+                    os.makedirs(hdir, exist_ok=True)
+                    figures.render_html(f, path, inline=inline)
                 tick()
     cpath = os.path.join(out, "claims.json")
-    with open(cpath, "w", encoding="utf-8") as fh:
-        json.dump({"n": n, "claims": {m: [c.to_dict() for c in cs] for m, cs in claims_by_model.items()},
-                   "roundoff": evidence, "d_scan": scan, "known_moments": known}, fh, indent=1)
-    report.write(doc, n=n, command=command or f"python -m paper --out {out} --n {n}",
-                 claims_by_model=claims_by_model, evidence_by_model=evidence, scan=scan,
-                 known_summary=known, pngs=pngs, htmls=htmls)
+    numbers = json.dumps({"n": n, "claims": {m: [c.to_dict() for c in cs] for m, cs in claims_by_model.items()},
+                          "roundoff": evidence, "d_scan": scan, "known_moments": known}, indent=1)
+    ctx = report.Context(n=n, command=command or f"python -m paper --out {out} --n {n}",
+                         claims_by_model=claims_by_model, evidence_by_model=evidence, scan=scan,
+                         known_summary=known, pngs=pngs, htmls=htmls,
+                         doc_dir=os.path.dirname(os.path.abspath(doc)))
     bar.update(bar.total - bar.n)
     bar.close()
+    if check:
+        chosen = report.SECTIONS if sections is None else sections
+        parts = [report.render(ctx, [s]) for s in chosen]
+        text = report.render(ctx, chosen)
+        committed = _read(doc)
+        stale = stale_sections(text if sections is None else committed, committed, parts)
+        if _read(cpath) != numbers:
+            stale.append(f"{cpath} (the numbers behind the verdicts)")
+        return {"doc": doc, "claims": cpath, "stale": stale}
+    with open(cpath, "w", encoding="utf-8") as fh:
+        fh.write(numbers)
+    with open(doc, "w", encoding="utf-8") as fh:
+        fh.write(report.render(ctx))
     return {"doc": doc, "claims": cpath, "pngs": pngs, "htmls": htmls}
+
+
+def _read(path):
+    """A text file's contents, '' if it does not exist."""
+    if not os.path.exists(path):
+        return ""
+    with open(path, encoding="utf-8") as fh:
+        return fh.read()
+
+
+def committed_command(doc):
+    """The arguments of the ``python -m paper`` command named in a report's first lines."""
+    with open(doc, encoding="utf-8") as fh:
+        head = fh.read(2000)
+    found = re.search(r"Generated by `python -m paper ([^`]*)`", head)
+    if not found:
+        raise ValueError(f"{doc} does not say which `python -m paper` command generated it")
+    return shlex.split(found.group(1))
 
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     a = _parser().parse_args(argv)
-    return run(a.out, n=a.n, doc=a.doc, dpi=a.dpi, html=not a.no_html, inline=a.inline, quiet=a.quiet,
-               command="python -m paper " + shlex.join(argv))
+    made = "python -m paper " + shlex.join([v for v in argv if v not in ("--check", "--quiet")])
+    res = run(a.out, n=a.n, doc=a.doc, dpi=a.dpi, html=not a.no_html, inline=a.inline, quiet=a.quiet,
+              command=made, check=a.check)
+    if a.check:
+        if res["stale"]:
+            print(f"{res['doc']} is not current; differing: " + "; ".join(res["stale"])
+                  + f". Regenerate with: {made}", file=sys.stderr)
+            sys.exit(1)
+        print(f"{res['doc']} and {res['claims']} are current.")
+    return res
 
 
 if __name__ == "__main__":

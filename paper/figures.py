@@ -105,7 +105,7 @@ def extra_figures(model, n, scan):
     single = sc.field_map(xy, None, (sc.PH, sc.PV), "log10_eta", model)
     dual = sc.field_map(xy, sc.DUAL_D, (sc.PH, sc.PV), "log10_eta", model)
     figs.append(Figure("eta", f"Observability index log10 η = log10(|det Γ| / Π‖Γ_j‖) [{model}]; "
-                       f"ETA_TOL = {core.ETA_TOL:g}", [
+                       "grey: rank < 7", [
                            Panel("eta_single", "log10 η, one station (Fig. 1 scenario)", xy, single.value,
                                  "log10 η (dimensionless)", ~single.observable, True),
                            Panel("eta_dual", f"log10 η, dual d = {sc.DUAL_D:g} m", xy, dual.value,

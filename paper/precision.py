@@ -30,13 +30,14 @@ def _jacobian_function(model):
     return sp.lambdify((*X, *S, SIGMA), jac.tolist(), "mpmath")
 
 
-def gamma_mp(state, stations, model, digits):
-    """Paper-rule Γ (7 × 7) as an mpmath matrix at ``digits`` significant digits."""
+def gamma_mp(state, stations, model, digits, steps=None):
+    """Γ as an mpmath matrix at ``digits`` significant digits: the paper rule (7 × 7) for
+    ``steps=None``, else all rows of ``steps`` instants ((3·S·steps) × 7)."""
     jfun = _jacobian_function(model)
     with mp.workdps(digits):
         st = [mp.mpf(repr(float(v))) for v in state]
         rows = []
-        for i in range(-(-7 // (3 * len(stations)))):
+        for i in range(-(-7 // (3 * len(stations))) if steps is None else steps):
             phi = mp.eye(7)
             phi[0, 3] = phi[1, 4] = i * sc.T
             moved = phi * mp.matrix(st)
@@ -44,7 +45,7 @@ def gamma_mp(state, stations, model, digits):
                 jac = mp.matrix(jfun(*moved, *[mp.mpf(repr(float(c))) for c in s], mp.mpf(sc.SIGMA)))
                 block = jac * phi
                 rows.extend([[block[r, c] for c in range(7)] for r in range(3)])
-        return mp.matrix(rows[:7])
+        return mp.matrix(rows[:7] if steps is None else rows)
 
 
 def _log10_det_and_eta(g, digits):
@@ -79,15 +80,15 @@ def evidence(model, points=POINTS):
                "f64_log10_det": float(core.log10_abs_det_gamma(state, single, **kw)),
                "f64_log10_eta": float(core.observability_index(state, single, **kw)),
                "dual_f64_log10_eta": float(core.observability_index(state, dual, **kw))}
+        mats = {dg: gamma_mp(state, single, model, dg) for dg in DIGITS}
         for dg in DIGITS:
-            row[f"mp{dg}_log10_det"], row[f"mp{dg}_log10_eta"] = _log10_det_and_eta(
-                gamma_mp(state, single, model, dg), dg)
+            row[f"mp{dg}_log10_det"], row[f"mp{dg}_log10_eta"] = _log10_det_and_eta(mats[dg], dg)
         row["dual_mp_log10_eta"] = _log10_det_and_eta(gamma_mp(state, dual, model, DIGITS[0]), DIGITS[0])[1]
         n = null_vector(state, single[0])
         g = core.gamma(state, single, **kw)
         row["f64_null_residual"] = float(np.linalg.norm(g @ n) / np.sum(np.linalg.norm(g, axis=0) * np.abs(n)))
         with mp.workdps(DIGITS[0]):
-            gm = gamma_mp(state, single, model, DIGITS[0])
+            gm = mats[DIGITS[0]]
             nm = mp.matrix([mp.mpf(repr(float(v))) for v in n])
             scale = mp.fsum(mp.norm(gm[:, j]) * abs(nm[j]) for j in range(7))
             row["mp_null_residual"] = float(mp.norm(gm * nm) / scale)

@@ -220,7 +220,8 @@ def test_best_spacing_is_an_optimum(criterion):
 def test_optimise_layout_scaled_and_free():
     small = core.Plane("xy", (-200, 200), (-200, 200), 120.0, 9)
     sq = core.optimise_layout("square", 4, small, d_range=(5, 300), n_curve=7)
-    np.testing.assert_allclose(sq.stations, core.station_layout("square", 4, d=sq.d, h=100))
+    lattice = core.station_layout("square", 4, d=sq.d, h=100)
+    np.testing.assert_allclose(sq.stations, lattice - [[sq.d / 2, sq.d / 2, 0]])  # centred
     free = core.optimise_layout("free", 3, small, d_range=(5, 300), n_curve=7, maxfev=150)
     assert free.stations.shape == (3, 3) and np.all(free.stations[:, 2] == 100)
     assert np.all(np.abs(free.stations[:, :2]) <= 200)
@@ -251,3 +252,62 @@ def test_sweep_cli_writes_csv_and_png(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "core.sweep", "--x", "d=0:5:2", "--y", "z=1,2",
                           "--out", str(out)], capture_output=True, text=True, timeout=60, check=False)
     assert bad.returncode == 2 and "d must be > 0" in bad.stderr
+
+
+# Issue 16, defect 7: scaled layouts centred on the region, bounds from the region, bounds reported.
+APP_REGION = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 31)  # the app's Layout design grid
+
+
+def _centred(kind, n, d, centre, h=100.0):
+    st = core.station_layout(kind, n, d=d, h=h)
+    st[:, :2] += np.asarray(centre) - st[:, :2].mean(axis=0)
+    return st
+
+
+@pytest.mark.parametrize("region,centre", [
+    (APP_REGION, (0.0, 0.0)),
+    (core.Plane("xy", (100, 700), (-200, 400), 120.0, 31), (400.0, 100.0)),
+])
+def test_square_of_four_is_centred_on_the_region_and_not_capped(region, centre):
+    r = core.optimise_layout("square", 4, region)
+    np.testing.assert_allclose(r.stations[:, :2].mean(axis=0), centre, atol=1e-9)
+    np.testing.assert_allclose(r.stations, _centred("square", 4, r.d, centre))
+    # the old optimiser stopped at its 200 m cap (199.98 m, a corner at the origin)
+    assert 250.0 < r.d < 600.0 and r.at_bound == ()
+    np.testing.assert_allclose(r.value, core.layout_criterion(r.stations, region).value)
+    # an interior optimum: 5 m either way is no better (Brent's xatol is 0.05 m)
+    for d in (r.d - 5.0, r.d + 5.0):
+        assert core.layout_criterion(_centred("square", 4, d, centre), region).value < r.value
+    # and it beats the old answer, the capped corner-anchored square
+    old = core.layout_criterion(core.station_layout("square", 4, d=199.98, h=100), region).value
+    assert r.value > old + 0.1
+
+
+def test_at_bound_names_the_spacing_bound_that_is_hit():
+    r = core.optimise_layout("square", 4, APP_REGION, d_range=(2.0, 200.0))
+    assert r.at_bound == ("d_max",) and abs(r.d - 200.0) < 0.1
+    # the bound binds: a wider square does better
+    wider = core.layout_criterion(_centred("square", 4, 220.0, (0, 0)), APP_REGION).value
+    assert wider > r.value
+    lo = core.optimise_layout("line", 2, APP_REGION, d_range=(300.0, 500.0))
+    assert lo.at_bound == ("d_min",) and abs(lo.d - 300.0) < 0.1
+
+
+def test_at_bound_names_the_box_sides_a_free_station_touches():
+    box = ((-20.0, 20.0), (-20.0, 20.0))
+    r = core.optimise_layout("free", 2, APP_REGION, bounds=box, maxfev=150)
+    assert len(r.at_bound) >= 1 and set(r.at_bound) <= {"x_min", "x_max", "y_min", "y_max"}
+    sides = {"x_min": (0, -20.0), "x_max": (0, 20.0), "y_min": (1, -20.0), "y_max": (1, 20.0)}
+    for name in r.at_bound:
+        axis, edge = sides[name]
+        assert np.min(np.abs(r.stations[:, axis] - edge)) <= 40.0 * 1e-3
+    # the box binds: the same optimiser in a wider box finds a better layout
+    wide = core.optimise_layout("free", 2, APP_REGION, bounds=((-60, 60), (-60, 60)), maxfev=150)
+    assert wide.value > r.value
+    interior = core.optimise_layout("free", 2, APP_REGION, maxfev=150)
+    assert interior.at_bound == ()
+
+
+def test_one_station_layout_reports_no_spacing_bound():
+    r = core.optimise_layout("line", 1, APP_REGION, n_curve=3)
+    assert r.at_bound == () and r.stations.tolist() == [[0.0, 0.0, 100.0]]  # centred
