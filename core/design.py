@@ -523,10 +523,19 @@ def _d_values(d_values):
     return d
 
 
+def _map(f, values, client):
+    """``[f(v) for v in values]`` as an array: here, or on a Dask cluster (core.dask_backend)."""
+    if client is None:
+        return np.array([f(v) for v in values])
+    from . import dask_backend
+
+    return np.array(dask_backend.map_ordered(dask_backend.check_client(client), f, values))
+
+
 def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
                   moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                   noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                  known=()):
+                  known=(), client=None):
     """Criterion against station spacing d (default: the paper's dual, a 2-station line).
 
     Parameters
@@ -543,6 +552,9 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
         Station depth (m).
     velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
         As for :func:`layout_criterion`.
+    client : distributed.Client, optional
+        Evaluate the K spacings as tasks on this Dask cluster (see :mod:`core.dask_backend`);
+        the values are the same as without it.
 
     Returns
     -------
@@ -559,7 +571,7 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
     d = _d_values(d_values)
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
                                  threshold, noise, steps, T, sigma, model, known)
-    return np.array([f(v) for v in d])
+    return _map(f, d, client)
 
 
 @dataclass(frozen=True)
@@ -591,7 +603,7 @@ class SpacingResult:
 def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
                  kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
                  criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
-                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=()):
+                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=(), client=None):
     """Spacing d that maximises a region criterion.
 
     Parameters
@@ -610,6 +622,9 @@ def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xat
     kind, n_stations, h, velocity, moments, criterion, threshold, noise, steps, T, sigma, \
 model, known
         As for :func:`spacing_curve`.
+    client : distributed.Client, optional
+        Evaluate the coarse curve on this Dask cluster (:func:`spacing_curve`); the Brent
+        refinement is sequential and runs here. The result is the same as without it.
 
     Returns
     -------
@@ -648,7 +663,7 @@ model, known
     xatol = validation.positive("xatol", xatol, "m")
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
                                  threshold, noise, steps, T, sigma, model, known)
-    curve = np.array([f(v) for v in d])
+    curve = _map(f, d, client)
     i = int(np.argmax(curve))
     lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
     res = optimize.minimize_scalar(lambda v: -f(v), bounds=(lo, hi), method="bounded",
@@ -695,7 +710,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                     noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
                     known=(), d_range=(2.0, 200.0), n_curve=25, x0=None, bounds=None,
-                    maxfev=400):
+                    maxfev=400, client=None):
     """Optimise an N-station layout for a region criterion.
 
     Parameters
@@ -721,6 +736,9 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         x–z band, y within half the band's x width of its y).
     maxfev : int
         ``"free"``: budget of criterion evaluations for Powell, ≥ 1.
+    client : distributed.Client, optional
+        Evaluate the coarse spacing curves on this Dask cluster (see :func:`best_spacing`);
+        Powell's steps are sequential and run here. The result is the same as without it.
 
     Returns
     -------
@@ -742,7 +760,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     n = _n_stations(n_stations)
     if kind != "free":
         r = best_spacing(region, d_range=d_range, n_curve=n_curve, kind=kind, n_stations=n,
-                         **common)
+                         client=client, **common)
         return LayoutResult(station_layout(kind, n, d=r.d, h=h), r.value, kind, r.d, r.nfev)
     if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
         raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
@@ -752,7 +770,8 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
     nfev = 0
     if x0 is None:
-        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve, **common)
+        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve,
+                                client=client, **common)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
         xy = validation._array("x0", x0)
