@@ -98,7 +98,11 @@ def connect(address, *, timeout=DEFAULT_TIMEOUT):
     except Exception as exc:  # something answered, but not with Dask's protocol
         raise ConnectionError(f"{address!r} answered, but not as a Dask scheduler "
                               f"({type(exc).__name__}: {exc})") from None
-    client = distributed.Client(address, timeout=timeout, set_as_default=False)
+    try:
+        client = distributed.Client(address, timeout=timeout, set_as_default=False)
+    except (OSError, asyncio.TimeoutError) as exc:  # answered the probe, then too slow
+        raise ConnectionError(f"the Dask scheduler at {address!r} did not complete the "
+                              f"handshake within {timeout:g} s: {exc!r}") from None
     try:
         client.wait_for_workers(1, timeout=timeout)
     except (OSError, asyncio.TimeoutError):

@@ -1,0 +1,82 @@
+"""A big sweep three ways on this machine: serial, the local process pool, a Dask LocalCluster.
+
+    python -m bench.bench_sweep_dask [--repeat 3] [--nx 30] [--ny 20] [--region-n 41]
+
+The sweep is ``mean_dopt`` (a region measure: every cell a layout criterion over
+region-n² target positions) over d × z. Timed in this run, median of ``--repeat``:
+
+- serial: :func:`core.sweep.run` with ``workers=1`` in this process (numba's default threads);
+- pool: ``workers=2``, the CLI's default (spawned processes, one numba thread each; the
+  pool's start-up is inside the time, as it is for every CLI run);
+- LocalCluster: 2 worker processes × 1 thread, ``NUMBA_NUM_THREADS=1`` (started once, its
+  start-up reported apart; the first sweep on it, which loads core and the JIT cache in the
+  workers, is a warm-up and not counted).
+
+All three results are checked equal bit for bit. The machine is shared: the numbers are noisy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+
+import numba
+import numpy as np
+
+from core import sweep
+
+
+def timed(fn, repeat):
+    times, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--nx", type=int, default=30, help="spacings d")
+    ap.add_argument("--ny", type=int, default=20, help="depths z")
+    ap.add_argument("--region-n", type=int, default=41)
+    args = ap.parse_args(argv)
+    from dask.distributed import Client, LocalCluster
+
+    base = {k: v[0] for k, v in sweep.PARAMETERS.items()}
+    settings = {"measure": "mean_dopt", "layout": "line", "stations": 2, "model": "exact",
+                "steps": 3, "region": ((-300.0, 300.0), (-300.0, 300.0), args.region_n),
+                "threshold": 10.0}
+    x = sweep.parse_axis(f"d=2:200:{args.nx}")
+    y = sweep.parse_axis(f"z=100:400:{args.ny}")
+    run = lambda **kw: sweep.run(x, y, settings, base, progress=False, **kw)
+    print(f"machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} at start, "
+          f"{numba.config.NUMBA_NUM_THREADS} numba threads in this process")
+    print(f"sweep: mean_dopt over {args.nx} d × {args.ny} z = {args.nx * args.ny} cells, "
+          f"{args.region_n}² region points each; median of {args.repeat}")
+    run(workers=1)  # warm-up: JIT cache
+    t_serial, serial = timed(lambda: run(workers=1), args.repeat)
+    t_pool, pool = timed(lambda: run(workers=2), args.repeat)
+    t0 = time.perf_counter()
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"}) as cluster, \
+            Client(cluster) as client:
+        client.wait_for_workers(2)
+        t_start = time.perf_counter() - t0
+        run(client=client)  # warm-up: imports and JIT cache in the workers
+        t_dask, dask = timed(lambda: run(client=client), args.repeat)
+    np.testing.assert_array_equal(pool, serial)
+    np.testing.assert_array_equal(dask, serial)
+    print(f"serial (workers=1)             {t_serial:7.2f} s   1.00×")
+    print(f"process pool (workers=2)       {t_pool:7.2f} s   {t_serial / t_pool:.2f}× faster")
+    print(f"LocalCluster (2 × 1 thread)    {t_dask:7.2f} s   {t_serial / t_dask:.2f}× faster"
+          f"   (+ {t_start:.1f} s to start the cluster, once)")
+    print("results: all three equal bit for bit")
+
+
+if __name__ == "__main__":
+    main()
