@@ -12,13 +12,18 @@ region-n² target positions) over d × z. Timed in this run, median of ``--repea
   start-up reported apart; the first sweep on it, which loads core and the JIT cache in the
   workers, is a warm-up and not counted).
 
-All three results are checked equal bit for bit. The machine is shared: the numbers are noisy.
+Besides the wall time, the CPU time of one sweep summed over the processes that computed it
+(this one; the pool's children, by ``getrusage``; the cluster's workers, by psutil): on a
+machine shared with other jobs the wall time shows little of the parallel speed-up, the CPU
+time still shows what each way costs. All three results are checked equal bit for bit. The
+machine is shared: the numbers are noisy.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import time
 
@@ -28,13 +33,20 @@ import numpy as np
 from core import sweep
 
 
-def timed(fn, repeat):
-    times, out = [], None
+def _children_cpu():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def timed(fn, repeat, cpu=time.process_time):
+    """Median wall time (s), median CPU time (s) by ``cpu()`` differences, last result."""
+    walls, cpus, out = [], [], None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        c0, t0 = cpu(), time.perf_counter()
         out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
+        walls.append(time.perf_counter() - t0)
+        cpus.append(cpu() - c0)
+    return statistics.median(walls), statistics.median(cpus), out
 
 
 def main(argv=None):
@@ -45,6 +57,7 @@ def main(argv=None):
     ap.add_argument("--ny", type=int, default=20, help="depths z")
     ap.add_argument("--region-n", type=int, default=41)
     args = ap.parse_args(argv)
+    import psutil
     from dask.distributed import Client, LocalCluster
 
     base = {k: v[0] for k, v in sweep.PARAMETERS.items()}
@@ -59,8 +72,9 @@ def main(argv=None):
     print(f"sweep: mean_dopt over {args.nx} d × {args.ny} z = {args.nx * args.ny} cells, "
           f"{args.region_n}² region points each; median of {args.repeat}")
     run(workers=1)  # warm-up: JIT cache
-    t_serial, serial = timed(lambda: run(workers=1), args.repeat)
-    t_pool, pool = timed(lambda: run(workers=2), args.repeat)
+    t_serial, c_serial, serial = timed(lambda: run(workers=1), args.repeat)
+    t_pool, c_pool, pool = timed(lambda: run(workers=2), args.repeat,
+                                 cpu=lambda: _children_cpu() + time.process_time())
     t0 = time.perf_counter()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"}) as cluster, \
@@ -68,13 +82,17 @@ def main(argv=None):
         client.wait_for_workers(2)
         t_start = time.perf_counter() - t0
         run(client=client)  # warm-up: imports and JIT cache in the workers
-        t_dask, dask = timed(lambda: run(client=client), args.repeat)
+        procs = [psutil.Process(pid) for pid in client.run(os.getpid).values()]
+        workers_cpu = lambda: sum(sum(p.cpu_times()[:2]) for p in procs) + time.process_time()
+        t_dask, c_dask, dask = timed(lambda: run(client=client), args.repeat, cpu=workers_cpu)
     np.testing.assert_array_equal(pool, serial)
     np.testing.assert_array_equal(dask, serial)
-    print(f"serial (workers=1)             {t_serial:7.2f} s   1.00×")
-    print(f"process pool (workers=2)       {t_pool:7.2f} s   {t_serial / t_pool:.2f}× faster")
-    print(f"LocalCluster (2 × 1 thread)    {t_dask:7.2f} s   {t_serial / t_dask:.2f}× faster"
+    print("                               wall (s)  vs serial   CPU (s)")
+    print(f"serial (workers=1)             {t_serial:7.2f}     1.00×   {c_serial:7.2f}")
+    print(f"process pool (workers=2)       {t_pool:7.2f}     {t_serial / t_pool:.2f}×   {c_pool:7.2f}")
+    print(f"LocalCluster (2 × 1 thread)    {t_dask:7.2f}     {t_serial / t_dask:.2f}×   {c_dask:7.2f}"
           f"   (+ {t_start:.1f} s to start the cluster, once)")
+    print(f"load average {os.getloadavg()[0]:.1f} at the end")
     print("results: all three equal bit for bit")
 
 

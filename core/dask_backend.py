@@ -82,9 +82,13 @@ def connect(address, *, timeout=DEFAULT_TIMEOUT):
     from concurrent.futures import ThreadPoolExecutor
 
     from distributed.comm import connect as comm_connect
+    from distributed.security import Security
+
+    security = Security()  # from Dask's configuration, as a Client's: tls:// works the same way
 
     async def probe():  # a Client that fails to connect leaves a noisy __del__ behind: probe first
-        comm = await comm_connect(address, timeout=timeout)
+        comm = await comm_connect(address, timeout=timeout,
+                                  **security.get_connection_args("client"))
         await comm.close()
 
     try:  # in a thread of its own: the caller may be running an event loop (Jupyter)
@@ -99,7 +103,8 @@ def connect(address, *, timeout=DEFAULT_TIMEOUT):
         raise ConnectionError(f"{address!r} answered, but not as a Dask scheduler "
                               f"({type(exc).__name__}: {exc})") from None
     try:
-        client = distributed.Client(address, timeout=timeout, set_as_default=False)
+        client = distributed.Client(address, timeout=timeout, set_as_default=False,
+                                    security=security)
     except (OSError, asyncio.TimeoutError) as exc:  # answered the probe, then too slow
         raise ConnectionError(f"the Dask scheduler at {address!r} did not complete the "
                               f"handshake within {timeout:g} s: {exc!r}") from None
