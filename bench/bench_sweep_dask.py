@@ -77,7 +77,7 @@ def main(argv=None):
                                  cpu=lambda: _children_cpu() + time.process_time())
     t0 = time.perf_counter()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"}) as cluster, \
+                      dashboard_address=":0", env={"NUMBA_NUM_THREADS": "1"}) as cluster, \
             Client(cluster) as client:
         client.wait_for_workers(2)
         t_start = time.perf_counter() - t0
@@ -87,11 +87,12 @@ def main(argv=None):
         t_dask, c_dask, dask = timed(lambda: run(client=client), args.repeat, cpu=workers_cpu)
     np.testing.assert_array_equal(pool, serial)
     np.testing.assert_array_equal(dask, serial)
-    print("                               wall (s)  vs serial   CPU (s)")
-    print(f"serial (workers=1)             {t_serial:7.2f}     1.00×   {c_serial:7.2f}")
-    print(f"process pool (workers=2)       {t_pool:7.2f}     {t_serial / t_pool:.2f}×   {c_pool:7.2f}")
-    print(f"LocalCluster (2 × 1 thread)    {t_dask:7.2f}     {t_serial / t_dask:.2f}×   {c_dask:7.2f}"
-          f"   (+ {t_start:.1f} s to start the cluster, once)")
+    print(f"{'':30} wall (s)  vs serial   CPU (s)")
+    for name, wall, cpu in [("serial (workers=1)", t_serial, c_serial),
+                            ("process pool (workers=2)", t_pool, c_pool),
+                            ("LocalCluster (2 × 1 thread)", t_dask, c_dask)]:
+        print(f"{name:30} {wall:8.2f}     {t_serial / wall:.2f}×   {cpu:7.2f}")
+    print(f"(+ {t_start:.1f} s to start the LocalCluster, once)")
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
     print("results: all three equal bit for bit")
 

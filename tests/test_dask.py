@@ -225,13 +225,12 @@ def test_connect_refuses_what_is_not_a_dask_scheduler():
     thread.join(timeout=10)
 
 
-def test_connect_to_a_scheduler_without_workers(tmp_path):
-    scheduler, address = _start_scheduler(tmp_path)
-    try:
+def test_connect_to_a_scheduler_without_workers():
+    # A scheduler alone, in this process (cheaper than another subprocess).
+    with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=":0") as alone:  # any free port
         with pytest.raises(ConnectionError, match="has no worker after 3 s"):
-            dask_backend.connect(address, timeout=3)  # 3 s: a loaded machine answers slowly
-    finally:
-        _stop(scheduler)
+            dask_backend.connect(alone.scheduler_address, timeout=3)  # 3 s: a loaded machine
 
 
 def test_import_core_does_not_import_dask():
