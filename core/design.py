@@ -526,10 +526,19 @@ def _d_values(d_values):
     return d
 
 
+def _map(f, values, client):
+    """``[f(v) for v in values]`` as an array: here, or on a Dask cluster (core.dask_backend)."""
+    if client is None:
+        return np.array([f(v) for v in values])
+    from . import dask_backend
+
+    return np.array(dask_backend.map_ordered(dask_backend.check_client(client), f, values))
+
+
 def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
                   moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                   noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                  known=()):
+                  known=(), client=None):
     """Criterion against station spacing d (default: the paper's dual, a 2-station line).
 
     Parameters
@@ -546,6 +555,9 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
         Station depth (m).
     velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
         As for :func:`layout_criterion`.
+    client : distributed.Client, optional
+        Evaluate the K spacings as tasks on this Dask cluster (see :mod:`core.dask_backend`);
+        the values are the same as without it.
 
     Returns
     -------
@@ -562,7 +574,7 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
     d = _d_values(d_values)
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
                                  threshold, noise, steps, T, sigma, model, known)
-    return np.array([f(v) for v in d])
+    return _map(f, d, client)
 
 
 @dataclass(frozen=True)
@@ -594,7 +606,7 @@ class SpacingResult:
 def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
                  kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
                  criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
-                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=()):
+                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=(), client=None):
     """Spacing d that maximises a region criterion.
 
     Parameters
@@ -613,6 +625,9 @@ def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xat
     kind, n_stations, h, velocity, moments, criterion, threshold, noise, steps, T, sigma, \
 model, known
         As for :func:`spacing_curve`.
+    client : distributed.Client, optional
+        Evaluate the coarse curve on this Dask cluster (:func:`spacing_curve`); the Brent
+        refinement is sequential and runs here. The result is the same as without it.
 
     Returns
     -------
@@ -651,7 +666,7 @@ model, known
     xatol = validation.positive("xatol", xatol, "m")
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
                                  threshold, noise, steps, T, sigma, model, known)
-    curve = np.array([f(v) for v in d])
+    curve = _map(f, d, client)
     i = int(np.argmax(curve))
     lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
     res = optimize.minimize_scalar(lambda v: -f(v), bounds=(lo, hi), method="bounded",
@@ -723,7 +738,7 @@ def _largest_spacing(kind, n, box):
     return float(min(fits)) if fits else float(width.max())  # one station: d plays no part
 
 
-def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective):
+def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None):
     """Best d of the centred layout: coarse curve over d_range, then bounded Brent on the
     bracket of its best point (as :func:`best_spacing`). Returns (d, value, nfev, at_bound)."""
     lo, hi = d_range
@@ -731,7 +746,7 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective):
         raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
     d = np.linspace(lo, hi, int(n_curve))
     f = lambda v: objective(_centred_layout(kind, n, v, h, box))
-    curve = np.array([f(v) for v in d])
+    curve = _map(f, d, client)  # the coarse curve: here, or on a Dask cluster
     i = int(np.argmax(curve))
     res = optimize.minimize_scalar(lambda v: -f(v), bounds=(d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]),
                                    method="bounded", options={"xatol": _LAYOUT_XATOL})
@@ -746,7 +761,8 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective):
 def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                     noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                    known=(), d_range=None, n_curve=25, x0=None, bounds=None, maxfev=400):
+                    known=(), d_range=None, n_curve=25, x0=None, bounds=None, maxfev=400,
+                    client=None):
     """Optimise an N-station layout for a region criterion.
 
     Parameters
@@ -779,6 +795,9 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         x–z band, y within half the band's x width of its y).
     maxfev : int
         ``"free"``: budget of criterion evaluations for Powell, ≥ 1.
+    client : distributed.Client, optional
+        Evaluate the coarse spacing curves on this Dask cluster (see :func:`best_spacing`);
+        Powell's steps are sequential and run here. The result is the same as without it.
 
     Returns
     -------
@@ -823,12 +842,13 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
             return _criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
                               known).value
 
-        d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective)
+        d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective,
+                                                    client)
         return LayoutResult(_centred_layout(kind, n, d, h, box), value, kind, d, nfev, at_bound)
     nfev = 0
     if x0 is None:
         start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve,
-                                bounds=((xlo, xhi), (ylo, yhi)), **common)
+                                bounds=((xlo, xhi), (ylo, yhi)), client=client, **common)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
         xy = validation._array("x0", x0)

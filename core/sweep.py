@@ -22,6 +22,13 @@ Writes ``DIR/sweep.csv`` (one row per (x, y) cell: both parameters and the measu
 Both cores are used by processes, not threads: rows of the grid go to a
 ``concurrent.futures.ProcessPoolExecutor`` (``--workers``, default 2), and each worker pins
 numba to one thread so the two levels of parallelism do not oversubscribe the cores.
+
+Beyond one machine, ``--scheduler tcp://HOST:8786`` sends the rows to a ``dask.distributed``
+cluster instead (``--workers`` is then unused; see :mod:`core.dask_backend` and docs/dask.md).
+Without it the local process pool stays the default: it starts in a fraction of a second, needs
+no optional dependency (dask is never imported), and on one machine a ``LocalCluster`` would
+run the same rows in the same number of processes, after seconds of start-up. The values are
+the same bit for bit either way (each cell is computed by the same code).
 """
 
 from __future__ import annotations
@@ -182,15 +189,23 @@ def _init_worker():
     numba.set_num_threads(1)
 
 
-def run(xaxis, yaxis, settings, base, workers=2, progress=True):
-    """Evaluate the grid; returns values (len(y), len(x)). Rows run in ``workers`` processes."""
+def run(xaxis, yaxis, settings, base, workers=2, progress=True, client=None):
+    """Evaluate the grid; returns values (len(y), len(x)). Rows run in ``workers`` processes,
+    or, given a ``distributed.Client`` as ``client``, as tasks on its cluster."""
     from tqdm import tqdm
 
     (xname, xvals), (yname, yvals) = xaxis, yaxis
     values = np.full((yvals.size, xvals.size), np.nan)
     bar = tqdm(total=yvals.size * xvals.size, unit="cell", disable=not progress,
                desc=f"{settings['measure']} over {xname}×{yname}")
-    if workers == 1:
+    if client is not None:
+        from . import dask_backend
+
+        calls = [(base, xname, xvals, yname, yv, settings) for yv in yvals]
+        for i, row in dask_backend.map_unordered(dask_backend.check_client(client), _row, calls):
+            values[i] = row
+            bar.update(xvals.size)
+    elif workers == 1:
         for i, yv in enumerate(yvals):
             values[i] = _row(base, xname, xvals, yname, yv, settings)
             bar.update(xvals.size)
@@ -273,11 +288,17 @@ def build_parser():
     p.add_argument("--threshold", type=float, default=10.0, help="area_crlb threshold (m)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     p.add_argument("--no-progress", action="store_true", help="hide the tqdm progress bar")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on the dask.distributed cluster at ADDRESS, e.g. tcp://HOST:8786 "
+                        "(needs the [dask] extra; default: local worker processes)")
+    p.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
+                   help="--scheduler: seconds to wait for the scheduler and a worker (default 10)")
     return p
 
 
 def main(argv=None):
-    """Entry point; returns the process exit status (0 ok, 2 bad arguments)."""
+    """Entry point; returns the process exit status (0 ok, 1 scheduler unreachable, 2 bad
+    arguments)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
@@ -305,10 +326,25 @@ def main(argv=None):
         evaluate(dict(base, **{xaxis[0]: xaxis[1][0], yaxis[0]: yaxis[1][0]}), settings)
     except ValueError as exc:
         parser.error(str(exc))  # exits with status 2
+    client = None
+    if args.scheduler is not None:
+        from . import dask_backend
+
+        try:
+            client = dask_backend.connect(args.scheduler, timeout=args.connect_timeout)
+        except ValueError as exc:
+            parser.error(str(exc))
+        except (ConnectionError, ImportError) as exc:
+            print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+            return 1
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    values = run(xaxis, yaxis, settings, base, workers=args.workers,
-                 progress=not args.no_progress)
+    try:
+        values = run(xaxis, yaxis, settings, base, workers=args.workers,
+                     progress=not args.no_progress, client=client)
+    finally:
+        if client is not None:
+            client.close()
     write_csv(out / "sweep.csv", xaxis[0], xaxis[1], yaxis[0], yaxis[1], args.measure, values)
     fixed = {k: v for k, v in base.items() if k not in (xaxis[0], yaxis[0]) and v is not None}
     if SWEEP_MEASURES[args.measure][2]:  # region measures do not use the target's x, y
