@@ -347,3 +347,15 @@ def test_maps_and_design_refuse_planes_outside_the_column():
     with pytest.raises(ValueError, match="station depth 150"):
         core.spacing_curve([10.0], region, h=150.0, sea=SEA)
     assert np.isfinite(core.layout_criterion(core.dual_station(100.0, 10.0), region, sea=SEA).value)
+
+
+@pytest.mark.parametrize("sb, rho_over_d, z, sz", [(1.0, 0.3, 3.0, 20.0), (1.0, 1.0, 12.0, 18.0),
+                                                   (0.1, 0.5, 0.1, 20.0), (2.0, 8.0, 19.0, 0.0)])
+def test_truncation_tolerance_near(sb, rho_over_d, z, sz):
+    # Short ranges, where the tail is small and the shorter tail rule is used.
+    depth = 20.0
+    for state in ([rho_over_d * depth, 0.4 * depth, z, 1.0, 0.3, 1.0, 0.0],
+                  [rho_over_d * depth, 0.4 * depth, z, 1.0, 0.3, 0.0, 1.0]):
+        station = [0.0, 0.0, sz]
+        ref = brute_images(np.array(state), station, depth, sb, 20000)
+        assert rel(core.dipole_field(state, [station], sea=Sea(depth, sb))[0], ref) <= 1e-6
