@@ -30,14 +30,17 @@ SEAS = (core.Sea(200.0, 1.0), core.Sea(130.0, 0.1))
 SIGMA = 4.0
 
 
-def median_time(fn, repeat):
-    fn()  # warm-up (compilation, caches)
-    times = []
+def interleaved_medians(fns, repeat):
+    """Median wall time of each function, runs interleaved so that both see the same load."""
+    for fn in fns:
+        fn()  # warm-up (compilation, caches)
+    times = [[] for _ in fns]
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        for fn, t in zip(fns, times):
+            t0 = time.perf_counter()
+            fn()
+            t.append(time.perf_counter() - t0)
+    return [statistics.median(t) for t in times]
 
 
 def empymod_seconds_per_field(sea, states, stations):
@@ -78,8 +81,7 @@ def main(argv=None):
         def layered(sea=sea):
             return core.evaluate_map(plane, STATIONS, velocity=VELOCITY, moments=MOMENTS,
                                      sigma=SIGMA, sea=sea)
-        t_whole = median_time(whole, args.repeat)  # interleaved: both under the same load
-        t_sea = median_time(layered, args.repeat)
+        t_whole, t_sea = interleaved_medians((whole, layered), args.repeat)
         # images at instant 0 (the other two instants move the target by 2–4 m)
         counts = image_counts(states, STATIONS, sea, sigma=SIGMA)
         t_emp = empymod_seconds_per_field(sea, sample, STATIONS)
