@@ -12,6 +12,7 @@ import core
 
 from . import beyond, precision
 from . import claims as cl
+from . import sea
 from . import scenarios as sc
 
 STATUS_MARK = {"holds": "✅ holds", "fails": "❌ fails", "not meaningful": "⚠️ not meaningful", "n/a": "— n/a"}
@@ -240,6 +241,11 @@ def section_beyond(ctx):
     return L
 
 
+def section_sea(ctx):
+    """The layered sea (spec §7, paper/sea.py)."""
+    return [sea.section(ctx.doc_dir, n=min(ctx.n, 61))]
+
+
 def section_seed004(ctx):
     """Seed 004's magnetometer calibration (paper/calibration.py)."""
     from .calibration import section
@@ -251,7 +257,7 @@ PAPER_SECTIONS = (section_intro, section_method, section_verdicts, section_round
                   section_figures, section_beyond)
 #: The report, section by section: each is a function Context -> list of markdown lines (it may
 #: compute what else it needs, e.g. from ``ctx.n``). A new section is one line here, appended.
-SECTIONS = [*PAPER_SECTIONS, section_seed004]
+SECTIONS = [*PAPER_SECTIONS, section_sea, section_seed004]
 
 
 def render(ctx, sections=None):
