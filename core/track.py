@@ -470,12 +470,15 @@ def main(argv=None):
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-pu", type=int, default=None, help=f"progressive sub-updates (default {DEFAULT_N_PU} for puekf, 1 otherwise)")
-    ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
-                    help="processes (default: both cores)")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="processes (default: both cores from 200 runs on, else this process: "
+                         "spawned workers pay seconds of start-up for imports and compiled kernels)")
     ap.add_argument("--scheduler", default=None, help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
     ap.add_argument("--truth-noise", action="store_true", help="sample true tracks from the DWNA model")
     ap.add_argument("--out", required=True)
     a = ap.parse_args(argv)
+    if a.workers is None:
+        a.workers = min(2, os.cpu_count() or 1) if a.runs >= 200 else 1
     try:
         res = monte_carlo(a.case, filter=a.filter, runs=a.runs, seed=a.seed, n_pu=a.n_pu,
                           workers=a.workers, scheduler=a.scheduler, truth_noise=a.truth_noise,
