@@ -53,6 +53,7 @@ from .observability import (
     unobservable_direction,
 )
 from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
+from .sea import Sea
 from .validation import STATE_NAMES
 
 __all__ = [
@@ -62,6 +63,8 @@ __all__ = [
     "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
     "log10_ratio", "observability_index", "observable_rank", "single_station",
     "unobservable_direction", "velocity_from_heading",
+    # the layered sea (core.sea)
+    "Sea",
     # sensor-layout design (core.design)
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",

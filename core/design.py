@@ -76,7 +76,7 @@ _CHUNK_ENTRIES = 1 << 22
 # CRLB covariance and the errors derived from it
 # --------------------------------------------------------------------------------------------
 
-def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model, known):
+def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model, sea, known):
     """Full 7 × 7 CRLB covariance of (P, 7) valid states, (P, 7, 7).
 
     Known states get zero rows and columns (they are known exactly). Where ``observable`` is
@@ -89,7 +89,8 @@ def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model
     block[:, np.arange(n), np.arange(n)] = np.inf
     idx = np.flatnonzero(observable)
     if idx.size:
-        g = gamma(states[idx], stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+        g = gamma(states[idx], stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps,
+                  known=known)
         norms = np.linalg.norm(g, axis=-2)  # (p, n): column norms, (V/m) per state unit
         # 1. Γ_s = Γ / ‖Γ_j‖ = Q R; (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ. The flag guarantees R is invertible.
         r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (p, n, n)
@@ -102,7 +103,7 @@ def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model
 
 
 def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
-                    sigma=4.0, model="exact", known=()):
+                    sigma=4.0, model="exact", sea=None, known=()):
     """Full Cramér–Rao covariance F⁻¹ of the 7 states.
 
     Parameters
@@ -115,8 +116,8 @@ def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
         Sensor noise standard deviation (V/m) on every field component, > 0.
     steps : int
         Number of instants N ≥ 1 (all rows of all stations).
-    T, sigma, model, known
-        As for :func:`core.gamma`.
+    T, sigma, model, sea, known
+        As for :func:`core.gamma` (``sea``: whole space or a :class:`core.Sea`).
 
     Returns
     -------
@@ -140,10 +141,10 @@ def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
     ((7, 7), True)
     """
     m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
-                        model=model, known=known)  # validates everything, flags observability
+                        model=model, sea=sea, known=known)  # validates everything, flags observability
     flat, lead = validation.states(states)
     cov = _covariance_flat(flat, validation.stations(stations), m.observable.reshape(-1),
-                           float(noise), steps, T, sigma, model, known)
+                           float(noise), steps, T, sigma, model, sea, known)
     return cov.reshape(lead + (7, 7)), m.observable
 
 
@@ -207,7 +208,7 @@ def _errors_from_cov(states, cov, observable):
 
 
 def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
-                             T=1.0, sigma=4.0, model="exact", known=()):
+                             T=1.0, sigma=4.0, model="exact", sea=None, known=()):
     """1-σ horizontal position error ellipse, depth and speed errors from the CRLB.
 
     Parameters
@@ -216,7 +217,7 @@ def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEF
         ``[x, y, z, vx, vy, Ph, Pv]`` in m, m/s, A·m (speed > 0).
     stations : array_like, shape (S, 3)
         Station positions (m).
-    noise, steps, T, sigma, model, known
+    noise, steps, T, sigma, model, sea, known
         As for :func:`crlb_covariance`. A known state has zero error.
 
     Returns
@@ -242,7 +243,7 @@ def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEF
     True
     """
     cov, observable = crlb_covariance(states, stations, noise=noise, steps=steps, T=T,
-                                      sigma=sigma, model=model, known=known)
+                                      sigma=sigma, model=model, sea=sea, known=known)
     flat, lead = validation.states(states)
     fields = _errors_from_cov(flat, cov.reshape(-1, 7, 7), observable.reshape(-1))
     return CrlbErrors(**{k: v.reshape(lead) for k, v in fields.items()})
@@ -269,7 +270,7 @@ def _off_station(states, stations):
 
 
 def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
-              T=1.0, sigma=4.0, model="exact", known=()):
+              T=1.0, sigma=4.0, model="exact", sea=None, known=()):
     """CRLB errors (ellipse, depth, speed, position) over a :class:`core.Plane`.
 
     Parameters
@@ -281,7 +282,7 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=
         Target velocity (m/s), speed > 0.
     moments : (Ph, Pv)
         Dipole moments (A·m).
-    noise, steps, T, sigma, model, known
+    noise, steps, T, sigma, model, sea, known
         As for :func:`crlb_covariance`.
 
     Returns
@@ -310,7 +311,7 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=
     for c0 in range(0, ok.size, chunk):
         idx = ok[c0:c0 + chunk]
         e = horizontal_error_ellipse(states[idx], stations, noise=noise, steps=steps, T=T,
-                                     sigma=sigma, model=model, known=known)
+                                     sigma=sigma, model=model, sea=sea, known=known)
         for k, arr in out.items():
             arr[idx] = getattr(e, k)
     n = plane.n
@@ -432,20 +433,21 @@ def _region_states(region, velocity, moments):
     return _plane_states(region, velocity, moments)
 
 
-def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, known):
+def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, sea, known):
     """Criterion over (P, 7) region states; on-station points are left out."""
     states = states[_off_station(states, stations)]
     if states.shape[0] == 0:
         raise ValueError("every point of the region lies on a station; nothing to evaluate")
     m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
-                        model=model, known=known)
+                        model=model, sea=sea, known=known)
     frac = float(np.mean(m.observable))
     if criterion == "area_crlb":
         return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
     d_opt = m.d_optimal.copy()
     bad = np.flatnonzero(~m.observable)
     if bad.size:  # the D-optimal floor of the module notes
-        g = gamma(states[bad], stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+        g = gamma(states[bad], stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps,
+                  known=known)
         with np.errstate(divide="ignore"):
             log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
         d_opt[bad] = np.log10(ETA_TOL) + log_norms - g.shape[-1] * np.log10(noise)
@@ -455,7 +457,7 @@ def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, m
 
 def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 20.0),
                      criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
-                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=()):
+                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=()):
     """How well a station layout covers a surveillance region.
 
     Parameters
@@ -476,7 +478,7 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
         D-optimal floor (module notes) or as failing the threshold.
     threshold : float
         Position error threshold (m) for ``"area_crlb"``, > 0.
-    noise, steps, T, sigma, model, known
+    noise, steps, T, sigma, model, sea, known
         As for :func:`crlb_covariance`.
 
     Returns
@@ -496,11 +498,11 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
     threshold = _check_criterion(criterion, threshold)
     noise = validation.positive("noise", noise, "V/m")
     return _criterion(_region_states(region, velocity, moments), validation.stations(stations),
-                      criterion, threshold, noise, steps, T, sigma, model, known)
+                      criterion, threshold, noise, steps, T, sigma, model, sea, known)
 
 
 def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                             threshold, noise, steps, T, sigma, model, known):
+                             threshold, noise, steps, T, sigma, model, sea, known):
     """Validate once; return f(d) -> criterion value for a scaled layout."""
     if kind not in ("line", "triangle", "square"):
         raise ValueError(f"a spaced layout kind must be 'line', 'triangle' or 'square'; got {kind!r}")
@@ -512,7 +514,7 @@ def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, cri
 
     def value(d):
         return _criterion(states, station_layout(kind, n_stations, d=d, h=h), criterion,
-                          threshold, noise, steps, T, sigma, model, known).value
+                          threshold, noise, steps, T, sigma, model, sea, known).value
     return value
 
 
@@ -526,7 +528,7 @@ def _d_values(d_values):
 def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
                   moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                   noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                  known=()):
+                  sea=None, known=()):
     """Criterion against station spacing d (default: the paper's dual, a 2-station line).
 
     Parameters
@@ -541,7 +543,7 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
         N, 1 … :data:`MAX_STATIONS`.
     h : float
         Station depth (m).
-    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
+    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known
         As for :func:`layout_criterion`.
 
     Returns
@@ -558,7 +560,7 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
     """
     d = _d_values(d_values)
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                                 threshold, noise, steps, T, sigma, model, known)
+                                 threshold, noise, steps, T, sigma, model, sea, known)
     return np.array([f(v) for v in d])
 
 
@@ -591,7 +593,7 @@ class SpacingResult:
 def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
                  kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
                  criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
-                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", known=()):
+                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=()):
     """Spacing d that maximises a region criterion.
 
     Parameters
@@ -608,7 +610,7 @@ def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xat
     xatol : float
         Absolute tolerance on d (m) of the bounded Brent search, > 0.
     kind, n_stations, h, velocity, moments, criterion, threshold, noise, steps, T, sigma, \
-model, known
+model, sea, known
         As for :func:`spacing_curve`.
 
     Returns
@@ -647,7 +649,7 @@ model, known
             raise ValueError(f"d_values must hold at least 3 distinct spacings; got {d_values!r}")
     xatol = validation.positive("xatol", xatol, "m")
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                                 threshold, noise, steps, T, sigma, model, known)
+                                 threshold, noise, steps, T, sigma, model, sea, known)
     curve = np.array([f(v) for v in d])
     i = int(np.argmax(curve))
     lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
@@ -694,7 +696,7 @@ def _default_bounds(region):
 def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                     noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                    known=(), d_range=(2.0, 200.0), n_curve=25, x0=None, bounds=None,
+                    sea=None, known=(), d_range=(2.0, 200.0), n_curve=25, x0=None, bounds=None,
                     maxfev=400):
     """Optimise an N-station layout for a region criterion.
 
@@ -709,7 +711,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         N, 1 … :data:`MAX_STATIONS`.
     region : core.Plane
         Surveillance region.
-    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, known
+    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known
         As for :func:`spacing_curve`.
     d_range, n_curve
         Scaled kinds, and the default start of ``"free"``; see :func:`best_spacing`.
@@ -738,7 +740,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
     common = {"h": h, "velocity": velocity, "moments": moments, "criterion": criterion,
               "threshold": threshold, "noise": noise, "steps": steps, "T": T, "sigma": sigma,
-              "model": model, "known": known}
+              "model": model, "sea": sea, "known": known}
     n = _n_stations(n_stations)
     if kind != "free":
         r = best_spacing(region, d_range=d_range, n_curve=n_curve, kind=kind, n_stations=n,
@@ -768,7 +770,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     def objective(p):
         st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
         return -_criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
-                           known).value
+                           sea, known).value
 
     res = optimize.minimize(objective, xy.ravel(), method="Powell",
                             bounds=[(xlo, xhi), (ylo, yhi)] * n,

@@ -144,31 +144,25 @@ def _store_rows(rows, e, jac):
         jac[i, 4], jac[i, 5], jac[i, 6] = row[5], row[6], row[7]
 
 
-@nb.njit(parallel=True, nogil=True, **JIT)
-def _field_and_jacobian_kernel(states, stations, kappa, model, e_out, j_out):
-    # states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7)
-    for p in nb.prange(states.shape[0]):
-        x = states[p]
-        for s in range(stations.shape[0]):
-            rows = _local_jacobian(x[0] - stations[s, 0], x[1] - stations[s, 1], x[2] - stations[s, 2],
-                                   x[3], x[4], x[5], x[6], kappa, model)
-            _store_rows(rows, e_out[p, s], j_out[p, s])
-
-
-def _field_and_jacobian(states, stations, sigma, model):
+def _field_and_jacobian(states, stations, sigma, model, sea):
     """Validated front end: returns E (..., S, 3) and ∂E/∂X (..., S, 3, 7)."""
+    from . import kernels  # both import this module's free-space kernel
+    from . import sea as sea_module
+
     states, stations, lead = validation.states_and_stations(states, stations)
     sigma = validation.positive("sigma", sigma, "S/m")
     code = validation.model_code(model, MODELS)
+    medium = sea_module.medium(sea, sigma)
+    sea_module.check_column(sea, states, stations, model)
     validation.no_target_on_station(states, stations)
     n_s = stations.shape[0]
     e = np.empty((states.shape[0], n_s, 3))
     jac = np.empty((states.shape[0], n_s, 3, 7))
-    _field_and_jacobian_kernel(states, stations, 1.0 / (4.0 * np.pi * sigma), code, e, jac)
+    kernels.field_and_jacobian(states, stations, 1.0 / (4.0 * np.pi * sigma), code, medium, e, jac)
     return e.reshape(lead + (n_s, 3)), jac.reshape(lead + (n_s, 3, 7))
 
 
-def dipole_field(states, stations, *, sigma=4.0, model="exact"):
+def dipole_field(states, stations, *, sigma=4.0, model="exact", sea=None):
     """Static electric field of the target dipole at each station.
 
     Parameters
@@ -184,6 +178,10 @@ def dipole_field(states, stations, *, sigma=4.0, model="exact"):
     model : {"exact", "paper"}
         ``"exact"``: point current dipole in a homogeneous conductor. ``"paper"``: the source
         paper's eqs. (10)–(12) as printed (not the field of any dipole; see module notes).
+    sea : core.Sea or None
+        ``None``: the homogeneous whole space. A :class:`core.Sea`: air / seawater / seabed
+        (spec §7), z is depth (surface 0, seabed D) and targets and stations must lie in
+        0 ≤ z ≤ D; the field is the image series of :mod:`core.sea`. Only ``model="exact"``.
 
     Returns
     -------
@@ -194,7 +192,8 @@ def dipole_field(states, stations, *, sigma=4.0, model="exact"):
     ------
     ValueError
         Wrong shapes, non-finite values, zero speed, σ ≤ 0, unknown model, or a target at a
-        station (D = 0, where the field is singular).
+        station (D = 0, where the field is singular); with a sea, a target or station outside
+        the water column, or ``model="paper"``.
 
     Examples
     --------
@@ -205,10 +204,10 @@ def dipole_field(states, stations, *, sigma=4.0, model="exact"):
     >>> bool(np.isclose(E[0, 0], 2 * 100 / (4 * np.pi * 1000)))
     True
     """
-    return _field_and_jacobian(states, stations, sigma, model)[0]
+    return _field_and_jacobian(states, stations, sigma, model, sea)[0]
 
 
-def field_jacobian(states, stations, *, sigma=4.0, model="exact"):
+def field_jacobian(states, stations, *, sigma=4.0, model="exact", sea=None):
     """Exact Jacobian ∂E/∂X of the station fields with respect to the 7 states.
 
     Parameters are those of :func:`dipole_field`.
@@ -226,4 +225,4 @@ def field_jacobian(states, stations, *, sigma=4.0, model="exact"):
     >>> core.field_jacobian([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]).shape
     (1, 3, 7)
     """
-    return _field_and_jacobian(states, stations, sigma, model)[1]
+    return _field_and_jacobian(states, stations, sigma, model, sea)[1]

@@ -55,12 +55,12 @@ class FisherMeasures:
 
 
 def fisher_measures(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
-                    sigma=4.0, model="exact", known=()):
+                    sigma=4.0, model="exact", sea=None, known=()):
     """D-optimal measure and Cramér–Rao bounds at every state.
 
     Parameters
     ----------
-    states, stations, T, sigma, model, known
+    states, stations, T, sigma, model, sea, known
         As for :func:`core.gamma`.
     noise : float
         Sensor noise standard deviation (V/m) on each field component, > 0.
@@ -81,7 +81,7 @@ def fisher_measures(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
     False
     """
     noise = validation.positive("noise", noise, "V/m")
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
     m = _fisher_from_kernel(args[0], args[1:], n_rows, noise)
     return FisherMeasures(
         d_optimal=m.d_optimal.reshape(lead),
@@ -118,7 +118,7 @@ def _fisher_from_kernel(states, options, n_rows, noise):
 
 
 def fisher_information(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
-                       sigma=4.0, model="exact", known=()):
+                       sigma=4.0, model="exact", sea=None, known=()):
     """Fisher information matrix F = ΓᵀΓ / noise².
 
     Returns
@@ -127,5 +127,5 @@ def fisher_information(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_S
         In 1 / (state unit × state unit), n = 7 − len(known).
     """
     noise = validation.positive("noise", noise, "V/m")
-    g = gamma(states, stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+    g = gamma(states, stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps, known=known)
     return np.einsum("...ri,...rj->...ij", g, g) / noise**2  # (..., n, n)

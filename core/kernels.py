@@ -22,13 +22,26 @@ import numba as nb
 import numpy as np
 
 from .fields import JIT, _local_jacobian, _store_rows
+from .sea import station_rows
 from .validation import ON_STATION
 
 _BLOCK = 256
 
 
+@nb.njit(parallel=True, nogil=True, **JIT)
+def field_and_jacobian(states, stations, kappa, model, medium, e_out, j_out):
+    """E and ∂E/∂X: states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7).
+    ``medium`` = [D, η, tol] of :func:`core.sea.medium` (D = 0: whole space)."""
+    for p in nb.prange(states.shape[0]):
+        x = states[p]
+        for s in range(stations.shape[0]):
+            rows = station_rows(x[0] - stations[s, 0], x[1] - stations[s, 1], x[2], stations[s, 2],
+                                x[3], x[4], x[5], x[6], kappa, model, medium)
+            _store_rows(rows, e_out[p, s], j_out[p, s])
+
+
 @nb.njit(**JIT)
-def _gamma_point(x, stations, step, kappa, model, free, n_rows, e, jac, g):
+def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, g):
     """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (7,).
     Returns False, with ``g`` incomplete, if the target comes within ON_STATION of a station.
 
@@ -52,7 +65,8 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, e, jac, g):
             rz = x[2] - stations[s, 2]
             if rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION:
                 return False
-            _store_rows(_local_jacobian(rx, ry, rz, x[3], x[4], x[5], x[6], kappa, model), e, jac)
+            _store_rows(station_rows(rx, ry, x[2], stations[s, 2], x[3], x[4], x[5], x[6], kappa,
+                                     model, medium), e, jac)
             for comp in range(3):
                 if row >= n_rows:
                     break
@@ -70,14 +84,15 @@ def _gamma_point(x, stations, step, kappa, model, free, n_rows, e, jac, g):
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
-def fill_gamma(states, stations, step, kappa, model, free, n_rows, out):
+def fill_gamma(states, stations, step, kappa, model, medium, free, n_rows, out):
     """Γ for every state: states (P, 7) -> out (P, n_rows, n_free) (NaN on stations)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
         e = np.empty(3)
         jac = np.empty((3, 7))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
-            if not _gamma_point(states[p], stations, step, kappa, model, free, n_rows, e, jac, out[p]):
+            if not _gamma_point(states[p], stations, step, kappa, model, medium, free, n_rows, e, jac,
+                                out[p]):
                 out[p] = np.nan
 
 
@@ -105,11 +120,27 @@ def _put_row(w, r0, lane, row):
 
 
 @nb.njit(inline="always", **JIT)
-def _jacobian_lanes(w, dt, stations, s, kappa, model):
+def _jacobian_lanes(w, dt, stations, s, kappa, model, medium):
     """Rows (E_i, ∂E_i/∂X) of station ``s`` at time offset ``dt`` for the LANES states in
     w[_X:_X+7], into w[_J:_J+24]. w[_BAD] = 1 where a target comes within ON_STATION of the
-    station (its offset is replaced by a harmless one; the caller masks the result)."""
+    station (its offset is replaced by a harmless one; the caller masks the result).
+
+    A layered sea (medium[0] = D > 0) takes its own loop over the image series; the whole space
+    keeps the straight loop below, which LLVM vectorises across lanes."""
     sx, sy, sz = stations[s, 0], stations[s, 1], stations[s, 2]
+    if medium[0] > 0.0:
+        for lane in range(LANES):
+            rx = w[_X, lane] + dt * w[_X + 3, lane] - sx
+            ry = w[_X + 1, lane] + dt * w[_X + 4, lane] - sy
+            rz = w[_X + 2, lane] - sz
+            near = rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION
+            w[_BAD, lane] = 1.0 if near else w[_BAD, lane]
+            rows = station_rows(1.0 if near else rx, ry, w[_X + 2, lane], sz, w[_X + 3, lane],
+                                w[_X + 4, lane], w[_X + 5, lane], w[_X + 6, lane], kappa, model, medium)
+            _put_row(w, _J, lane, rows[0])
+            _put_row(w, _J + 8, lane, rows[1])
+            _put_row(w, _J + 16, lane, rows[2])
+        return
     for lane in range(LANES):
         rx = w[_X, lane] + dt * w[_X + 3, lane] - sx
         ry = w[_X + 1, lane] + dt * w[_X + 4, lane] - sy
@@ -153,7 +184,7 @@ def _load_lanes(w, states, p0):
 
 
 @nb.njit(inline="always", **JIT)
-def _assemble_lanes(w, stations, step, kappa, model, free):
+def _assemble_lanes(w, stations, step, kappa, model, medium, free):
     """Γ (paper rule: the first n_free rows, time-major, then station, then component) of the
     LANES states into w[_G + 7 r + q]."""
     n = free.shape[0]
@@ -163,7 +194,7 @@ def _assemble_lanes(w, stations, step, kappa, model, free):
         for s in range(stations.shape[0]):
             if row >= n:
                 break
-            _jacobian_lanes(w, i * step, stations, s, kappa, model)
+            _jacobian_lanes(w, i * step, stations, s, kappa, model, medium)
             for comp in range(3):
                 if row >= n:
                     break
@@ -211,7 +242,8 @@ def _qr_abs_det_lanes(w, n):
 
 
 @nb.njit(**JIT)
-def _square_groups(states, first, last, stations, step, kappa, model, free, log_det, log_eta):
+def _square_groups(states, first, last, stations, step, kappa, model, medium, free, log_det,
+                   log_eta):
     """:func:`square_measures` for the groups of LANES points ``first`` … ``last − 1``. The
     workspace is allocated here once, with a shape known at compile time so that LLVM sees its
     row stride (and not per group: freeing it each time let malloc hand the pages back to the
@@ -221,7 +253,7 @@ def _square_groups(states, first, last, stations, step, kappa, model, free, log_
     for group in range(first, last):
         p0 = group * LANES
         count = _load_lanes(w, states, p0)
-        _assemble_lanes(w, stations, step, kappa, model, free)
+        _assemble_lanes(w, stations, step, kappa, model, medium, free)
         for j in range(n):
             for lane in range(LANES):
                 w[_SQ + j, lane] = 0.0
@@ -253,14 +285,14 @@ def _square_groups(states, first, last, stations, step, kappa, model, free, log_
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
-def square_measures(states, stations, step, kappa, model, free, log_det, log_eta):
+def square_measures(states, stations, step, kappa, model, medium, free, log_det, log_eta):
     """Paper rule: square Γ (n_free rows). Writes log10|det Γ| and log10 η per point (NaN on
     stations), LANES points at a time."""
     groups = (states.shape[0] + LANES - 1) // LANES
     chunks = min(groups, _CHUNKS)
     for c in nb.prange(chunks):
         _square_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step, kappa,
-                       model, free, log_det, log_eta)
+                       model, medium, free, log_det, log_eta)
 
 
 # Workspace rows of fisher_measures beyond the shared ones: R (7 × 7 at _G), the incoming row
@@ -309,8 +341,8 @@ def _inverse_lanes(w, n):
 
 
 @nb.njit(**JIT)
-def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_rows, log_eta,
-                   log_norm_sum, inv_diag):
+def _fisher_groups(states, first, last, stations, step, kappa, model, medium, free, n_rows,
+                   log_eta, log_norm_sum, inv_diag):
     """:func:`fisher_measures` for the groups ``first`` … ``last − 1`` (see :func:`_square_groups`)."""
     n = free.shape[0]
     w = np.empty((_FISHER_ROWS, LANES))
@@ -323,7 +355,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_ro
             w[_SQ + j] = 0.0
         for i in range(n_rows // (3 * stations.shape[0])):
             for s in range(stations.shape[0]):
-                _jacobian_lanes(w, i * step, stations, s, kappa, model)
+                _jacobian_lanes(w, i * step, stations, s, kappa, model, medium)
                 for comp in range(3):
                     _gamma_row_lanes(w, _T, comp, i * step, free)
                     for j in range(n):
@@ -361,7 +393,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, free, n_ro
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
-def fisher_measures(states, stations, step, kappa, model, free, n_rows,
+def fisher_measures(states, stations, step, kappa, model, medium, free, n_rows,
                     log_eta, log_norm_sum, inv_diag):
     """All-rows Γ (n_rows × n_free, N = n_rows / 3S instants) reduced through its QR
     factorisation, LANES points at a time, without storing Γ.
@@ -375,7 +407,7 @@ def fisher_measures(states, stations, step, kappa, model, free, n_rows,
     chunks = min(groups, _CHUNKS)
     for c in nb.prange(chunks):
         _fisher_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step, kappa,
-                       model, free, n_rows, log_eta, log_norm_sum, inv_diag)
+                       model, medium, free, n_rows, log_eta, log_norm_sum, inv_diag)
 
 
 @nb.njit(cache=True, nogil=True)

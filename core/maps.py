@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels, validation
+from . import sea as sea_module
 from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, _fisher_from_kernel
 from .observability import ETA_TOL, _options
 
@@ -37,7 +38,7 @@ class MapResult:
 
 
 def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1.0, sigma=4.0,
-                 model="exact", known=(), noise=DEFAULT_NOISE, steps=DEFAULT_STEPS):
+                 model="exact", sea=None, known=(), noise=DEFAULT_NOISE, steps=DEFAULT_STEPS):
     """Evaluate one measure over a :class:`core.grids.Plane`.
 
     Parameters
@@ -52,6 +53,9 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     measure : {"log10_det", "log10_eta", "d_optimal", "crlb_position"}
         See :data:`MEASURES`. The first two use the paper's square Γ; the others all rows of
         ``steps`` instants and the sensor ``noise`` (V/m).
+    sea : core.Sea or None
+        The whole space (``None``) or a layered sea (:mod:`core.sea`): then the plane must lie
+        in the water column (an x–y plane at 0 ≤ z ≤ D; an x–z plane with 0 ≤ z ≤ D).
 
     Returns
     -------
@@ -68,8 +72,12 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     if measure not in MEASURES:
         raise ValueError(f"measure must be one of {sorted(MEASURES)}; got {measure!r}")
     square = MEASURES[measure][2]
-    options, n_rows = _options(stations, T, sigma, model, known, None if square else steps)
+    options, n_rows = _options(stations, T, sigma, model, known, None if square else steps, sea)
     template, _ = validation.states([0.0, 0.0, 0.0, *velocity, *moments])  # checks speed > 0
+    if sea is not None:  # the plane's depths: its fixed z, or its z range
+        depths = [plane.fixed] if plane.kind == "xy" else list(plane.v)
+        sea_module.check_column(sea, np.array([[0.0, 0.0, z, 0, 0, 0, 0] for z in depths]),
+                                options[0], model)
     noise = validation.positive("noise", noise, "V/m")
     n = plane.n
     value = np.empty((n, n))

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels, validation
+from . import sea as sea_module
 from .fields import MODELS
 
 __all__ = [
@@ -43,27 +44,31 @@ RANK_RTOL = 1e-10
 ETA_TOL = 1e-15
 
 
-def _options(stations, T, sigma, model, known, steps):
+def _options(stations, T, sigma, model, known, steps, sea=None):
     """Validate everything but the states: returns the kernel arguments after ``states``
-    (stations, T, κ = 1/(4πσ), model code, free columns) and the number of rows of Γ."""
+    (stations, T, κ = 1/(4πσ), model code, medium of :func:`core.sea.medium`, free columns)
+    and the number of rows of Γ."""
     stations = validation.stations(stations)
     step = validation.positive("T", T, "s")
     sigma = validation.positive("sigma", sigma, "S/m")
     code = validation.model_code(model, MODELS)
+    medium = sea_module.medium(sea, sigma)
+    sea_module.check_column(sea, np.zeros((0, 7)), stations, model)
     free = validation.free_columns(known)
     n_rows = free.size if steps is None else 3 * stations.shape[0] * validation.steps(steps, 1)
-    return (stations, step, 1.0 / (4.0 * np.pi * sigma), code, free), n_rows
+    return (stations, step, 1.0 / (4.0 * np.pi * sigma), code, medium, free), n_rows
 
 
-def _prepare(states, stations, T, sigma, model, known, steps):
+def _prepare(states, stations, T, sigma, model, known, steps, sea=None):
     """Validate states and options; return the kernel arguments, rows of Γ, leading shape."""
-    options, n_rows = _options(stations, T, sigma, model, known, steps)
+    options, n_rows = _options(stations, T, sigma, model, known, steps, sea)
     states, lead = validation.states(states)
+    sea_module.check_column(sea, states, options[0], model)
     validation.no_target_on_station(states, options[0])
     return (states, *options), n_rows, lead
 
 
-def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, known=()):
+def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None, known=()):
     """Observability matrix Γ.
 
     Parameters
@@ -78,6 +83,9 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, know
         Sea conductivity (S/m), > 0; it scales Γ by 1/σ and so shifts log10|det Γ| by a constant.
     model : {"exact", "paper"}
         Field model (see :mod:`core.fields`).
+    sea : core.Sea or None
+        ``None``: the whole space. A :class:`core.Sea`: air / seawater / seabed (spec §7); z is
+        depth and targets and stations must lie in the water column. Only ``model="exact"``.
     steps : int or None
         ``None``: paper rule, square Γ of the first n rows. ``N ≥ 1``: all rows of N instants.
     known : sequence of str
@@ -101,22 +109,23 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, know
     >>> core.gamma([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]], steps=4).shape
     (12, 7)
     """
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
     n_free = args[-1].size
     out = np.empty((args[0].shape[0], n_rows, n_free))
     kernels.fill_gamma(*args, n_rows, out)
     return out.reshape(lead + (n_rows, n_free))
 
 
-def _square(states, stations, T, sigma, model, known):
-    args, _, lead = _prepare(states, stations, T, sigma, model, known, None)
+def _square(states, stations, T, sigma, model, known, sea=None):
+    args, _, lead = _prepare(states, stations, T, sigma, model, known, None, sea)
     log_det = np.empty(args[0].shape[0])
     log_eta = np.empty(args[0].shape[0])
     kernels.square_measures(*args, log_det, log_eta)
     return log_det.reshape(lead), log_eta.reshape(lead)
 
 
-def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", known=()):
+def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None,
+                        known=()):
     """The paper's measure, log10 |det Γ| of the square (paper-rule) Γ.
 
     Parameters are those of :func:`gamma`.
@@ -136,11 +145,11 @@ def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", kn
     >>> v.shape
     ()
     """
-    return _square(states, stations, T, sigma, model, known)[0]
+    return _square(states, stations, T, sigma, model, known, sea)[0]
 
 
-def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None,
-                        known=()):
+def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None,
+                        steps=None, known=()):
     """Scale-free observability index log10 η, η = sqrt(det Γ_sᵀΓ_s) ∈ [0, 1].
 
     ``Γ_s`` is Γ with unit columns, so η does not depend on units or moment scale. For the
@@ -153,8 +162,8 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", st
         log10 η (dimensionless, ≤ 0).
     """
     if steps is None:
-        return _square(states, stations, T, sigma, model, known)[1]
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps)
+        return _square(states, stations, T, sigma, model, known, sea)[1]
+    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
     npts, n = args[0].shape[0], args[-1].size
     log_eta, lns, inv = np.empty(npts), np.empty(npts), np.empty((npts, n))
     kernels.fisher_measures(*args, n_rows, log_eta, lns, inv)
@@ -170,7 +179,7 @@ def _scaled_svd(g):
     return np.linalg.svd(gs, full_matrices=True), norms
 
 
-def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None, known=()):
+def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None, known=()):
     """Structural rank of Γ from the SVD of the column-scaled Γ.
 
     A singular value counts when it exceeds :data:`RANK_RTOL` times the largest. Column scaling
@@ -189,12 +198,12 @@ def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=
     >>> int(core.observable_rank([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100], [15, 0, 100]]))
     7
     """
-    g = gamma(states, stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+    g = gamma(states, stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps, known=known)
     (_, s, _), _ = _scaled_svd(g)
     return np.sum(s > RANK_RTOL * s[..., :1], axis=-1)
 
 
-def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact", steps=None,
+def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None,
                            known=()):
     """Unit vector n (in state units) with Γ n ≈ 0: the direction the data cannot resolve.
 
@@ -208,7 +217,7 @@ def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact",
     -------
     ndarray, shape (..., n)
     """
-    g = gamma(states, stations, T=T, sigma=sigma, model=model, steps=steps, known=known)
+    g = gamma(states, stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps, known=known)
     (_, _, vt), norms = _scaled_svd(g)
     v = vt[..., -1, :] / norms[..., 0, :]  # back from scaled coordinates to state units
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)

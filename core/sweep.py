@@ -141,6 +141,8 @@ def evaluate(params, settings):
                                    h=params["h"])
     measure, steps, model = settings["measure"], settings["steps"], settings["model"]
     opts["model"] = model
+    if settings.get("sea_depth") is not None:  # the layered sea of core.sea (z is depth)
+        opts["sea"] = core.Sea(settings["sea_depth"], settings.get("seabed_sigma", 0.0))
     if SWEEP_MEASURES[measure][2]:
         (xr, yr, n) = settings["region"]
         region = core.Plane("xy", xr, yr, float(params["z"]), n)
@@ -267,6 +269,11 @@ def build_parser():
                    help="station layout scaled by d (default: line, the paper's dual for N=2)")
     p.add_argument("--stations", type=int, default=2, help="number of stations N, 1..8 (default 2)")
     p.add_argument("--model", default="exact", choices=["exact", "paper"])
+    p.add_argument("--sea-depth", type=float, default=None, metavar="D",
+                   help="layered sea of depth D (m; z is depth, stations and targets in 0..D); "
+                        "default: the whole space")
+    p.add_argument("--seabed-sigma", type=float, default=1.0,
+                   help="seabed conductivity (S/m, ≥ 0) with --sea-depth (default 1.0)")
     p.add_argument("--steps", type=int, default=3, help="instants N of the all-rows Γ (default 3)")
     p.add_argument("--region", default="-300:300:-300:300:21",
                    help="region measures: --region=XMIN:XMAX:YMIN:YMAX:N (m, points) at target depth z")
@@ -299,7 +306,8 @@ def main(argv=None):
         if args.workers < 1:
             raise ValueError(f"--workers must be ≥ 1; got {args.workers}")
         settings = {"measure": args.measure, "layout": args.layout, "stations": args.stations,
-                    "model": args.model, "steps": args.steps,
+                    "model": args.model, "steps": args.steps, "sea_depth": args.sea_depth,
+                    "seabed_sigma": args.seabed_sigma,
                     "region": parse_region(args.region), "threshold": args.threshold}
         # Check one cell here, so that bad input fails fast with its message, not in a worker.
         evaluate(dict(base, **{xaxis[0]: xaxis[1][0], yaxis[0]: yaxis[1][0]}), settings)
