@@ -125,7 +125,7 @@ def _invert(J):
     return cov, ok
 
 
-def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None):
+def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, prior_info=None):
     """Posterior Cramér–Rao bound at every step of a track.
 
     Parameters
@@ -140,8 +140,12 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None):
         Sample interval (s), DWNA acceleration σ (m/s²), moment random walk ((A·m)² per step)
         of :func:`core.dwna_model`. ``sigma_a = alpha = 0``: a deterministic track.
     prior_cov : array_like, shape (7, 7), or None
-        Covariance of the prior at step 0 (state units squared); ``None`` is a flat prior
-        (J_prior = 0: no information but the measurements).
+        Covariance of the prior at step 0 (state units squared); ``None`` (and no
+        ``prior_info``) is a flat prior (J_prior = 0: no information but the measurements).
+    prior_info : array_like, shape (7, 7), or None
+        The prior as an information matrix instead (1 / state units squared), symmetric
+        positive *semi*-definite: zero rows are states with a flat prior (e.g. a filter bank that
+        knows only the depth and Pv roughly). Not together with ``prior_cov``.
 
     Returns
     -------
@@ -165,7 +169,14 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None):
         raise ValueError(f"sensors must be a core.SensorModel; got {type(sensors).__name__}")
     tracks = _tracks(track)
     F, Q = dwna_model(T, sigma_a, alpha)
-    if prior_cov is None:
+    if prior_cov is not None and prior_info is not None:
+        raise ValueError("give the prior as prior_cov or as prior_info, not both")
+    if prior_info is not None:
+        J = _matrix("prior_info", prior_info, (7, 7))
+        J = 0.5 * (J + J.T)
+        if np.linalg.eigvalsh(J)[0] < -1e-12 * max(np.abs(J).max(), 1e-300):
+            raise ValueError("prior_info must be symmetric positive semi-definite (1 / state units²)")
+    elif prior_cov is None:
         J = np.zeros((7, 7))
     else:
         P0 = _matrix("prior_cov", prior_cov, (7, 7))

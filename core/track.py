@@ -25,10 +25,11 @@ Cases (our frame: x, y, z = depth positive down; seed 001's z-up frame is mapped
     10 A × 10 m = 100 A·m. Simulated measurements (the trial's recordings are not published).
 
 Truth: the nominal straight track (``truth_noise=False``, as seed 001's simulated straight
-course), or DWNA tracks sampled with the filter's own Q. The EKF and PUEKF start from a prior
-N(x̂₀, P₀) about the nominal start, and the true start of each run is drawn from that prior; the
-bank starts without one (flat-prior PCRLB). The PCRLB averages the measurement information over
-the runs' true tracks.
+course), or DWNA tracks sampled with the filter's own Q. The EKF and PUEKF start from a mean drawn
+from N(truth₀, P₀) with covariance P₀ (PCRLB prior J₀ = P₀⁻¹); the bank starts from its
+hypotheses, and its PCRLB knows only what every hypothesis assumes (depth ξ_z and Pv; flat in
+x, y, velocity, Ph). The PCRLB averages the measurement information over the runs' true tracks
+(all equal to the nominal track unless ``truth_noise``).
 
 Parallelism: runs are split into chunks; chunk results do not depend on the chunking (run r
 draws its noise from ``numpy.random.default_rng([seed, r])``). Chunks run in this process,
@@ -90,8 +91,10 @@ class TrackCase:
     alpha: float = 0.001
     #: Prior σ of the EKF/PUEKF start (x, y, z, vx, vy, Ph, Pv).
     prior_std: tuple = (20.0, 20.0, 0.5, 0.5, 0.5, 20.0, 5.0)
-    #: Hypothesised source depth of the bank (m).
+    #: Hypothesised source depth of the bank (m), its σ ξ_z (m) and the σ of Pv (A·m).
     bank_depth: float = 0.2
+    bank_depth_std: float = 1.0
+    bank_pv_std: float = 10.0
     description: str = field(default="", compare=False)
 
     def sensors(self):
@@ -116,7 +119,16 @@ class TrackCase:
                               Ph=self.Ph, Pv=self.Pv)
 
     def prior_cov(self):
+        """Prior covariance of the EKF / PUEKF start (7, 7)."""
         return np.diag(np.asarray(self.prior_std, float) ** 2)
+
+    def bank_prior_info(self):
+        """What every bank hypothesis knows a priori, as information (7, 7): the depth (ξ_z)
+        and Pv; flat in x, y, velocity and Ph (those are what the hypotheses guess)."""
+        info = np.zeros((7, 7))
+        info[2, 2] = 1.0 / self.bank_depth_std**2
+        info[6, 6] = 1.0 / self.bank_pv_std**2
+        return info
 
 
 _SEED_GEOMETRY = dict(
@@ -133,6 +145,7 @@ CASES = {
     ),
     "seed001-trial": TrackCase(
         name="seed001-trial", axes=2, sea_depth=8.4, seabed_sigma=0.4, **_SEED_GEOMETRY,
+        prior_std=(20.0, 20.0, 0.1, 0.5, 0.5, 20.0, 5.0), bank_depth_std=0.2,
         description="seed 001 sea-trial geometry: D = 8.4 m, σb = 0.4 S/m, two 2-axis seabed sensors",
     ),
 }
@@ -171,23 +184,23 @@ def _run_seed(seed, run):
 
 
 def _truths_and_x0(case, filter_name, run_ids, seed, truth_noise):
-    """True tracks (n, K, 7) and filter start means (n, 7) of the given runs."""
+    """True tracks (n, K, 7) and filter start means (n, 7) of the given runs.
+
+    Every run's truth starts at the nominal start; an EKF / PUEKF starts from a mean drawn from
+    N(truth₀, P₀) (so that P₀ is its honest prior and the PCRLB's J₀ = P₀⁻¹), kept in the water.
+    """
     nominal = case.nominal_track()
     F, Q = dwna_model(case.T, case.sigma_a, case.alpha)
+    lo, hi = (0.0, case.sea_depth) if case.sea_depth is not None else (-np.inf, np.inf)
     truths = np.empty((len(run_ids), case.steps, 7))
     x0 = np.broadcast_to(nominal[0], (len(run_ids), 7)).copy()
     root = np.asarray(case.prior_std, float)
     for n, r in enumerate(run_ids):
         rng = _run_seed(seed, r)
-        start = nominal[0].copy()
-        if filter_name != "bank":  # the true start is a draw from the filters' prior
-            start = start + root * rng.standard_normal(7)
-        if truth_noise:
-            truths[n] = sample_tracks(start, F, Q, case.steps, rng)
-        else:
-            truths[n] = straight_track(start[:3], np.arctan2(start[4], start[3]),
-                                       np.hypot(start[3], start[4]), case.steps, T=case.T,
-                                       Ph=start[5], Pv=start[6])
+        if filter_name != "bank":
+            x0[n] += root * rng.standard_normal(7)
+            x0[n, 2] = np.clip(x0[n, 2], lo, hi)
+        truths[n] = sample_tracks(nominal[0], F, Q, case.steps, rng) if truth_noise else nominal
     return truths, x0
 
 
@@ -208,7 +221,7 @@ def _chunk(case, filter_name, run_ids, seed, n_pu, truth_noise, keep_tracks=0, p
     out = {"run_ids": np.asarray(run_ids)}
     if filter_name == "bank":
         res = run_bank(ys, sensors, F, Q, depth=case.bank_depth, n_pu=n_pu, truth=truths,
-                       progress=progress)
+                       progress=progress, depth_std=case.bank_depth_std, pv_std=case.bank_pv_std)
         est, nees, selected = res.x, res.nees, res.selected[:, -1]
         out["selected"] = selected
         out["loglik"] = res.loglik[:keep_tracks]
@@ -376,9 +389,12 @@ def _collect(case, filter_name, n_pu, seed, runs, truth_noise, sensors, results,
     nees = np.concatenate([r["nees"] for r in results])
     run_ids = np.concatenate([r["run_ids"] for r in results])
     truths, _ = _truths_and_x0(case, filter_name, run_ids, seed, truth_noise)
-    prior = None if filter_name == "bank" else case.prior_cov()
+    if filter_name == "bank":
+        prior = dict(prior_info=case.bank_prior_info())
+    else:
+        prior = dict(prior_cov=case.prior_cov())
     bound = pcrlb(truths, sensors, T=case.T, sigma_a=case.sigma_a, alpha=case.alpha,
-                  prior_cov=prior).position_std
+                  **prior).position_std
     trmse = np.sqrt(np.mean(error**2, axis=0))
     limit = max(5.0 * bound[-1], 10.0) if np.isfinite(bound[-1]) else np.inf
     diverged = error[:, -1] > limit

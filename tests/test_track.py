@@ -30,16 +30,22 @@ def _well_observed_track(steps=40):
 # ------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("axes", [3, 2])
-def test_measurement_is_core_field_rows(axes):
+@pytest.mark.parametrize("layered", [False, True])
+def test_measurement_is_core_field_rows(axes, layered):
+    sea = core.Sea(30.0, 0.4) if layered else None
     track = _well_observed_track(7)
-    s = _sensors(axes)
+    s = core.SensorModel(STATIONS, axes=axes, sea=sea)
     h, H = s.h_and_jacobian(track)
-    E = core.dipole_field(track, STATIONS)[..., :axes].reshape(7, -1)
-    J = core.field_jacobian(track, STATIONS)[..., :axes, :].reshape(7, -1, 7)
+    kw = {"sea": sea} if layered else {}
+    E = core.dipole_field(track, STATIONS, **kw)[..., :axes].reshape(7, -1)
+    J = core.field_jacobian(track, STATIONS, **kw)[..., :axes, :].reshape(7, -1, 7)
     # h is rebuilt from the moment columns (linearity in the moments): round-off only
     np.testing.assert_allclose(h, E, rtol=1e-13, atol=1e-13 * np.abs(E).max())
     np.testing.assert_array_equal(H, J)
     assert s.n_meas == 2 * axes and s.R.shape == (2 * axes, 2 * axes)
+    if layered:
+        assert s.depth_range == (0.0, 30.0)
+        assert not np.allclose(E, core.dipole_field(track, STATIONS)[..., :axes].reshape(7, -1))
 
 
 # ------------------------------------------------------------------------------------------
@@ -236,6 +242,17 @@ def test_bank_on_seed001_simulation_nearest_hypothesis_wins():
     assert max(s["winners"], key=s["winners"].get) == "F7 p=100 ψ=5π/4"
     assert s["diverged"] <= 0.1
     assert sum(s["winners"].values()) == 40
+
+
+def test_trial_case_layered_sea_ekf_follows_its_pcrlb():
+    # seed 001's trial geometry in the layered sea (D = 8.4 m, σb = 0.4 S/m, 2-axis seabed
+    # sensors): EKFs from a prior about the truth stay consistent and near the bound
+    res = tr.monte_carlo("seed001-trial", filter="ekf", runs=30, seed=4)
+    last = slice(240, 300)
+    ratio = res.trmse_m[last] / res.pcrlb_m[last]
+    assert np.all((ratio > 0.6) & (ratio < 1.5)), ratio  # 30 runs: the RMS itself scatters ~13 %
+    assert res.summary["diverged"] <= 0.1
+    assert 5.0 < res.summary["nees"] < 9.0
 
 
 def _small_case():
