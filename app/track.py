@@ -137,15 +137,16 @@ def plan_view(out):
     if res.summary["filter"] == "bank":
         for track in res.tracks["x_all"][0]:
             layers.append(hv.Path([track[:, :2]], kdims=[x, y], label="bank filters, run 1").opts(
-                color="#aaaaaa", line_width=1, alpha=0.6))
+                color="#aaaaaa", line_width=1, alpha=0.6, show_legend=True))
         layers.append(hv.Path([est[0, :, :2]], kdims=[x, y], label="ML selection, run 1").opts(
-            color=WINNER, line_width=3))
+            color=WINNER, line_width=3, show_legend=True))
         others = est[1:]
     else:
         others = est
     if len(others):
         layers.append(hv.Path([e[:, :2] for e in others], kdims=[x, y],
-                              label="estimates, other runs").opts(color="#1f77b4", line_width=1, alpha=0.7))
+                              label="estimates, other runs").opts(color="#1f77b4", line_width=1, alpha=0.7,
+                                                                  show_legend=True))
     layers.append(pts)
     if breaks.any():
         layers.append(hv.Points((truth[breaks, 0], truth[breaks, 1]), kdims=[x, y],
@@ -214,9 +215,10 @@ def track_tab(scenario: Scenario):
     def bound(what):
         return pn.bind(lambda *_: _view(scenario, what), *deps)
 
-    widgets = pn.Param(scenario, parameters=list(TRACK_PARAMS), show_name=False,
-                       widgets={name: {"throttled": True} for name in TRACK_PARAMS
-                                if isinstance(scenario.param[name], param.Number)})
+    options = {name: {"throttled": True} for name in TRACK_PARAMS
+               if isinstance(scenario.param[name], param.Number)}
+    options["track_alpha"] = {"type": pn.widgets.FloatInput, "step": 1e-4, "format": "0.[0000]"}
+    widgets = pn.Param(scenario, parameters=list(TRACK_PARAMS), show_name=False, widgets=options)
     note = pn.pane.Markdown(
         "A straight track over the design tab's stations at the target depth z, with the "
         "target's moments and the sensor noise set above. The PCRLB (Tichavský) is the best "
