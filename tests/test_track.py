@@ -191,6 +191,20 @@ def test_puekf_equals_ekf_when_linear_and_differs_when_not():
     assert np.linalg.norm(x8[0, :3] - x1[0, :3]) > 0.1
 
 
+def test_update_linearises_inside_the_water_column():
+    # an estimate above the surface (z < 0) of a layered sea: the core refuses such a state,
+    # the filter linearises at the surface instead and stays finite
+    sea = core.Sea(30.0, 0.4)
+    sensors = core.SensorModel(STATIONS, sea=sea)
+    truth = core.straight_track([-30.0, -20.0, 1.0], 0.6, 1.0, 1, Ph=100.0, Pv=0.0)[0]
+    y = sensors.h(truth)[None]
+    above = (truth + [0.0, 0.0, -3.0, 0, 0, 0, 0])[None]
+    with pytest.raises(ValueError):
+        sensors.h(above)
+    x, P, ll = core.ekf_update(above, np.diag([4.0, 4.0, 4.0, 0.1, 0.1, 100.0, 100.0])[None], y, sensors)
+    assert np.all(np.isfinite(x)) and np.all(np.isfinite(P)) and np.isfinite(ll[0])
+
+
 def test_ekf_at_truth_is_efficient_and_consistent():
     # Well observed and nearly linear, truth sampled from the filter's own model: the EKF should
     # reach the PCRLB. Nearly linear needs (i) SNR ~100, not ~1000 (the heading enters the field
