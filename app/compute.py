@@ -23,7 +23,7 @@ _KERNEL_LOCK = threading.Lock()
 
 #: Values that define the comparison maps; everything else in Scenario is presentation or design.
 FIELDS = tuple(sorted(set(ACCEPTED) - {"threshold"} | {"plane", "layout", "comparison", "difference",
-                                                       "measure", "model", "state_set"}))
+                                                       "measure", "model", "state_set", "sea_model"}))
 #: Values that define the layout-design tab.
 DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure", "layout", "k", "Ph_b",
                                             "Pv_b", "d_ref"} | {"stations", "criterion", "threshold",
@@ -122,7 +122,7 @@ def unobservable_note(s: Scenario, results, stations):
             probe = np.array([sx + s.extent / 3, sy + s.extent / 3, s.z if s.plane == "x–y" else
                               0.5 * (s.z_min + s.z_max), *s.velocity(), s.Ph, s.Pv])
             n = core.unobservable_direction(probe, st, T=s.T, sigma=s.sigma,
-                                            model=s.core_options()["model"])
+                                            model=s.core_options()["model"], sea=s.core_options()["sea"])
             nice = ", ".join(f"{v:+.3f}" for v in n)
             lines.append(
                 f"{name}: one station, source strength unknown: rank Γ = 6 < 7 at every point "

@@ -38,6 +38,8 @@ ACCEPTED = {
     "z_max": (-5000.0, 5000.0, "m"),
     "resolution": (20, 400, "points per axis"),
     "threshold": (0.01, 1e5, "m"),
+    "sea_depth": (0.5, 10000.0, "m"),
+    "seabed_sigma": (0.0, 1000.0, "S/m"),
 }
 
 MEASURE_LABELS = {
@@ -69,9 +71,13 @@ MAX_STATIONS = 8
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
 MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
 STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
+SEA_MODELS = ("whole space", "layered")
+#: Depth parameters that must lie in the water column [0, D] in a layered sea.
+_COLUMN = ("z", "h", "z_min", "z_max")
 
 _COMMON = dict(Ph=100.0, Pv=20.0, h=100.0, z=120.0, speed=2.0 * math.sqrt(2.0), heading=45.0,
-               T=1.0, plane="x–y", extent=300.0, measure="log10|det Γ| (paper)")
+               T=1.0, plane="x–y", extent=300.0, measure="log10|det Γ| (paper)",
+               sea_model="whole space")
 #: The paper's figures (spec §5) as parameter sets.
 PRESETS = {
     "Fig. 1": dict(_COMMON, layout="single", comparison="Dual − single (Fig. 5)", d=15.0),
@@ -83,6 +89,14 @@ PRESETS = {
     "Fig. 5": dict(_COMMON, layout="dual", comparison="Dual − single (Fig. 5)", d=15.0),
     "Fig. 6": dict(_COMMON, layout="dual", comparison="Spacing d − reference d (Fig. 6)",
                    d=50.0, d_ref=10.0),
+    # seed 001's sea trial (spec §8): 8.4 m of water, sensors 10 m apart on the seabed,
+    # a 100 A·m horizontal source 0.2 m deep; its speed is not printed (2 m/s assumed)
+    "Seed 001 sea trial": dict(sea_model="layered", sea_depth=8.4, seabed_sigma=0.4, sigma=4.0,
+                               h=8.4, d=10.0, z=0.2, Ph=100.0, Pv=0.0, speed=2.0, heading=90.0,
+                               T=1.0, plane="x–y", extent=300.0, layout="dual",
+                               comparison="Dual − single (Fig. 5)", z_min=0.0, z_max=8.4,
+                               measure="log10|det Γ| (paper)",
+                               stations=[[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]]),
 }
 
 
@@ -149,6 +163,13 @@ class Scenario(param.Parameterized):
                                doc="Number of stations of the layout to optimise, 1 to 8.")
     threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
                      "For 'area within threshold': position error (1σ, m) that counts as good.")
+    # -- the sea (spec §7)
+    sea_model = param.Selector(objects=list(SEA_MODELS), default="whole space", label="Sea",
+                               doc="Whole space (the paper) or layered: insulating air above, a "
+                                   "seabed below; z and h are then depths in [0, D].")
+    sea_depth = _num(200.0, (1, 500), "Sea depth D (m)", "Water depth D of the layered sea, m.")
+    seabed_sigma = _num(1.0, (0, 10), "Seabed conductivity σb (S/m)",
+                        "Conductivity of the seabed half-space, S/m (0: insulating).")
     # -- track tab (app/track.py): a straight track over the design tab's stations, at the
     # target depth z, with the target's moments, the sensor noise, σ and T above. Hard bounds
     # (param refuses anything outside); not in ACCEPTED, so the maps never recompute for them.
@@ -196,20 +217,76 @@ class Scenario(param.Parameterized):
         if self._restoring:
             return
         notes = [p for p in (self.problem(ev.name, ev.new) for ev in events) if p]
+        moved = {}  # stations on the seabed stay there when D changes
+        for ev in events:
+            if ev.name == "sea_depth" and not notes and self.sea_model == "layered":
+                moved = self._follow_seabed(ev.old, ev.new)
+                self._quietly(**moved)
         if not notes and self.z_min >= self.z_max:
             notes.append("x–z plane: 'z to' must be deeper than 'z from'")
         if not notes:
+            notes = self.column_problems()
+        if not notes:
             self.message = ""
             return
-        self._restoring = True
-        try:
-            self.param.update({ev.name: ev.old for ev in events})
-        finally:
-            self._restoring = False
+        back = {ev.name: ev.old for ev in events}
+        old_depth = back.get("sea_depth")
+        if moved:
+            back.update(self._follow_seabed(self.sea_depth, old_depth))
+        self._quietly(**back)
         self.message = "; ".join(notes) + ". Kept the last good value."
 
+    def column_problems(self, stations=None, names=_COLUMN):
+        """In a layered sea, why depths (and custom stations) are outside [0, D]; else []."""
+        if self.sea_model != "layered":
+            return []
+        D = self.sea_depth
+        notes = [f"{Scenario.param[n].label} = {getattr(self, n):g} m is outside the water column "
+                 f"0 … {D:g} m" for n in names if not 0.0 <= getattr(self, n) <= D]
+        notes += [f"Station {i + 1} depth {st[2]:g} m is outside the water column 0 … {D:g} m"
+                  for i, st in enumerate(self.stations if stations is None else stations)
+                  if not 0.0 <= st[2] <= D]
+        return notes[:1]
+
+    def _quietly(self, **values):
+        self._restoring = True
+        try:
+            self.param.update(values)
+        finally:
+            self._restoring = False
+
+    @param.depends("sea_model", watch=True)
+    def _to_the_seabed(self):
+        """Switching to a layered sea puts the stations on the seabed (h = D), the target and
+        the x–z plane into the water column, and the field model to the exact dipole (the
+        paper's printed equations have no images)."""
+        if self.sea_model != "layered" or self._restoring:
+            return
+        D = self.sea_depth
+        note = ("Layered sea: the paper's printed equations have no images; using the exact dipole."
+                if self.model != "exact dipole" else "")
+        self._quietly(h=D, z=min(max(self.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
+                      stations=[[st[0], st[1], D] for st in self.stations])
+        self.message = note
+
+    @param.depends("model", watch=True)
+    def _exact_in_a_sea(self):
+        if self.sea_model == "layered" and self.model != "exact dipole" and not self._restoring:
+            self._quietly(model="exact dipole")
+            self.message = "The paper's printed equations have no layered-sea form: use the whole space."
+
+    def _follow_seabed(self, old, new):
+        """Values that sat on the old seabed (h, z_max, custom stations), moved to the new one."""
+        moved = {n: new for n in ("h", "z_max") if getattr(self, n) == old}
+        stations = [[st[0], st[1], new if st[2] == old else st[2]] for st in self.stations]
+        if stations != self.stations:
+            moved["stations"] = stations
+        return moved
+
     def _check_stations(self, event):
-        problem = self.stations_problem(event.new)
+        if self._restoring:
+            return
+        problem = self.stations_problem(event.new) or next(iter(self.column_problems(event.new, ())), None)
         if problem:
             self._restoring = True
             try:
@@ -263,8 +340,10 @@ class Scenario(param.Parameterized):
         return core.velocity_from_heading(self.speed, self.heading)
 
     def core_options(self):
+        sea = core.Sea(self.sea_depth, self.seabed_sigma) if self.sea_model == "layered" else None
         return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
-                    noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure])
+                    noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure],
+                    sea=sea)
 
 
 class ScenarioValues(types.SimpleNamespace):

@@ -4,7 +4,7 @@
 :class:`app.scenario.Scenario`: its ``track_*`` parameters (start, heading, speed, duration,
 sensor axes, process noise, tracker, runs) and, from the rest of the scenario, the design tab's
 ``stations``, the target depth ``z``, the moments ``Ph``/``Pv``, ``noise``, ``sigma`` and ``T``
-(and a layered sea, once the scenario has one: see :func:`sea_of`).
+and the sea (``sea_model``, ``sea_depth``, ``seabed_sigma``: :func:`sea_of`).
 
 It shows
 
@@ -44,7 +44,8 @@ hv.extension("bokeh", logo=False)
 TRACK_PARAMS = ("track_x0", "track_y0", "track_heading", "track_speed", "track_duration",
                 "track_axes", "track_sigma_a", "track_alpha", "track_filter", "track_runs")
 #: Everything the track's numbers depend on.
-INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T")
+INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T", "sea_model",
+                         "sea_depth", "seabed_sigma")
 #: Most steps of a track the tab computes (the duration's bound over the smallest T).
 MAX_STEPS = 2001
 #: Linearisation limit of the flag: CRLB / range above this is not a predicted error.
@@ -55,12 +56,11 @@ TRUTH = "#000000"
 
 
 def sea_of(s):
-    """The scenario's layered sea, if it has one (parameters ``sea_depth`` and
-    ``seabed_sigma``, spec §7), else None: the tab follows whatever medium the maps use."""
-    depth = getattr(s, "sea_depth", None)
-    if depth is None or not getattr(s, "layered_sea", True):
+    """The scenario's medium: ``core.Sea(sea_depth, seabed_sigma)`` when ``sea_model`` is
+    "layered", else None (the whole space) — the same sea the maps use."""
+    if getattr(s, "sea_model", "whole space") != "layered":
         return None
-    return core.Sea(float(depth), float(getattr(s, "seabed_sigma", 0.0)))
+    return core.Sea(float(s.sea_depth), float(s.seabed_sigma))
 
 
 def _key(s):

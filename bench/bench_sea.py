@@ -30,14 +30,17 @@ SEAS = (core.Sea(200.0, 1.0), core.Sea(130.0, 0.1))
 SIGMA = 4.0
 
 
-def median_time(fn, repeat):
-    fn()  # warm-up (compilation, caches)
-    times = []
+def interleaved_medians(fns, repeat):
+    """Median wall time of each function, runs interleaved so that both see the same load."""
+    for fn in fns:
+        fn()  # warm-up (compilation, caches)
+    times = [[] for _ in fns]
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        for fn, t in zip(fns, times):
+            t0 = time.perf_counter()
+            fn()
+            t.append(time.perf_counter() - t0)
+    return [statistics.median(t) for t in times]
 
 
 def empymod_seconds_per_field(sea, states, stations):
@@ -78,8 +81,12 @@ def main(argv=None):
         def layered(sea=sea):
             return core.evaluate_map(plane, STATIONS, velocity=VELOCITY, moments=MOMENTS,
                                      sigma=SIGMA, sea=sea)
-        t_whole = median_time(whole, args.repeat)  # interleaved: both under the same load
-        t_sea = median_time(layered, args.repeat)
+        t_whole, t_sea = interleaved_medians((whole, layered), args.repeat)
+        small = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 200)
+        # a dashboard slider release draws two maps (A: one station, B: two) at 200 × 200
+        t_small = interleaved_medians([lambda sea=sea: [core.evaluate_map(
+            small, st, velocity=VELOCITY, moments=MOMENTS, sigma=SIGMA, sea=sea)
+            for st in (STATIONS[:1], STATIONS)]], args.repeat)[0]
         # images at instant 0 (the other two instants move the target by 2–4 m)
         counts = image_counts(states, STATIONS, sea, sigma=SIGMA)
         t_emp = empymod_seconds_per_field(sea, sample, STATIONS)
@@ -87,6 +94,7 @@ def main(argv=None):
         print(f"\nsea D = {sea.depth:g} m, σb = {sea.seabed_sigma:g} S/m (η = {sea.eta(SIGMA):.3f})")
         print(f"  whole-space map      {1e3 * t_whole:9.1f} ms")
         print(f"  layered map          {1e3 * t_sea:9.1f} ms   ratio {t_sea / t_whole:5.1f}x")
+        print(f"  200 x 200 A + B maps {1e3 * t_small:9.1f} ms (a dashboard slider release's core work)")
         print(f"  images per pair      mean {counts.mean():.1f}, max {counts.max()}")
         print(f"  empymod              {1e3 * t_emp:9.2f} ms per 3-component field; "
               f"{n_fields} fields -> ~{t_emp * n_fields:.0f} s for the map "

@@ -50,10 +50,18 @@ DEFAULT_TOL = 1e-6
 #: Image groups summed at most (a safeguard; reached only for η within ~1e-4 of −1).
 MAX_GROUPS = 100_000
 
-# Gauss–Legendre nodes and weights on [0, 1] for the tail integral.
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
-_TAIL_U = (0.5 * (_GL_X + 1.0)).copy()
-_TAIL_W = (0.5 * _GL_W).copy()
+
+
+def _gauss_legendre01(n):
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
+# Gauss–Legendre nodes and weights on [0, 1] for the tail integral: 8 nodes in general, 4 where
+# the tail is at most SMALL_TAIL of the field (4 nodes are then ample: see docs/sea.md).
+_TAIL_U8, _TAIL_W8 = _gauss_legendre01(8)
+_TAIL_U4, _TAIL_W4 = _gauss_legendre01(4)
+SMALL_TAIL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -200,24 +208,26 @@ def layered_rows(rx, ry, z, sz, vx, vy, ph, pv, kappa, depth, eta, tol):
         if eta < 0.0:
             if math.sqrt(g0 * g0 + g1 * g1 + g2 * g2) <= tol * (1.0 + eta) * total:
                 return acc, n_img
-        elif m >= 2:
-            d0, d1, d2 = g0 - eta * p0, g1 - eta * p1, g2 - eta * p2
-            if math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) <= 12.0 * tol * total:
-                break
-        p0, p1, p2 = g0, g1, g2
+        d0, d1, d2 = g0 - eta * p0, g1 - eta * p1, g2 - eta * p2
+        p0, p1, p2 = g0, g1, g2  # G_m, for the next step and the tail's size
+        if eta > 0.0 and m >= 2 and math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) <= 12.0 * tol * total:
+            break
     if eta < 0.0:
         return acc, n_img
+    # geometric estimate of the tail's share of the field decides the rule's size
+    small = eta < 1.0 and math.sqrt(p0 * p0 + p1 * p1 + p2 * p2) * eta <= SMALL_TAIL * (1.0 - eta) * total
+    nodes, weights = (_TAIL_U4, _TAIL_W4) if small else (_TAIL_U8, _TAIL_W8)
     # 3. the tail Σ_{m > M} G_m as κ ∫_{M+½}^∞ G(t) dt, G(t) = η^t (images at index t)
     a = m + 0.5
     alpha = -math.log(eta)
     b = min(a, 1.0 / alpha) if alpha > 0.0 else a
     kap = 0.5 * alpha / math.sinh(0.5 * alpha) if alpha > 0.0 else 1.0
-    for j in range(_TAIL_U.shape[0]):
-        u = _TAIL_U[j]
+    for j in range(nodes.shape[0]):
+        u = nodes[j]
         t = a + b * u / (1.0 - u)
-        wt = kap * _TAIL_W[j] * b / ((1.0 - u) * (1.0 - u)) * math.exp(-alpha * t)
+        wt = kap * weights[j] * b / ((1.0 - u) * (1.0 - u)) * math.exp(-alpha * t)
         acc = _group(acc, rx, ry, z, sz, vx, vy, ph, pv, kappa * wt, 2.0 * t * depth)
-    return acc, n_img + 4 * _TAIL_U.shape[0]
+    return acc, n_img + 4 * nodes.shape[0]
 
 
 @nb.njit(inline="always", **JIT)

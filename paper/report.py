@@ -10,7 +10,7 @@ import numpy as np
 import core
 
 from . import claims as cl
-from . import precision
+from . import precision, sea
 from . import scenarios as sc
 
 STATUS_MARK = {"holds": "✅ holds", "fails": "❌ fails", "not meaningful": "⚠️ not meaningful", "n/a": "— n/a"}
@@ -168,5 +168,6 @@ def write(doc_path, *, n, command, claims_by_model, evidence_by_model, scan, kno
     w("")
     w("| `exact` | `paper` |\n|---|---|")
     w("| " + " | ".join(_img(doc_dir, pngs[(m, "dscan")], "d scan") for m in sc.MODELS) + " |\n")
+    w(sea.section(doc_dir, n=min(n, 61)))  # the layered sea (spec §7), paper/sea.py
     with open(doc_path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(L))

@@ -13,7 +13,7 @@ from app.scenario import ACCEPTED, PRESETS, Scenario
 
 def test_presets_set_what_the_paper_says():
     s = Scenario()
-    for name in PRESETS:
+    for name in (n for n in PRESETS if n.startswith("Fig.")):  # the paper's figures
         s.apply_preset(name)
         # common parameters (spec §5)
         assert (s.Ph, s.h, s.T) == (PRESETS[name]["Ph"], 100.0, 1.0)

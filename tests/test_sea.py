@@ -347,3 +347,31 @@ def test_maps_and_design_refuse_planes_outside_the_column():
     with pytest.raises(ValueError, match="station depth 150"):
         core.spacing_curve([10.0], region, h=150.0, sea=SEA)
     assert np.isfinite(core.layout_criterion(core.dual_station(100.0, 10.0), region, sea=SEA).value)
+
+
+@pytest.mark.parametrize("sb, rho_over_d, z, sz", [(1.0, 0.3, 3.0, 20.0), (1.0, 1.0, 12.0, 18.0),
+                                                   (0.1, 0.5, 0.1, 20.0), (2.0, 8.0, 19.0, 0.0)])
+def test_truncation_tolerance_near(sb, rho_over_d, z, sz):
+    # Short ranges, where the tail is small and the shorter tail rule is used.
+    depth = 20.0
+    for state in ([rho_over_d * depth, 0.4 * depth, z, 1.0, 0.3, 1.0, 0.0],
+                  [rho_over_d * depth, 0.4 * depth, z, 1.0, 0.3, 0.0, 1.0]):
+        station = [0.0, 0.0, sz]
+        ref = brute_images(np.array(state), station, depth, sb, 20000)
+        assert rel(core.dipole_field(state, [station], sea=Sea(depth, sb))[0], ref) <= 1e-6
+
+
+def test_sweep_takes_the_sea(tmp_path):
+    from core import sweep
+
+    out = tmp_path / "sw"
+    assert sweep.main(["--x", "d=5,20", "--y", "z=2,6", "--measure", "d_optimal", "--sea-depth",
+                       "8.4", "--seabed-sigma", "0.4", "--set", "h=8.4", "--out", str(out),
+                       "--workers", "1", "--no-progress"]) == 0
+    rows = np.loadtxt(out / "sweep.csv", delimiter=",", skiprows=1)
+    state = [30.0, 40.0, 6.0, *core.velocity_from_heading(2 * np.sqrt(2), 45.0), 100.0, 20.0]
+    want = core.fisher_measures(state, core.dual_station(8.4, 20.0), sea=Sea(8.4, 0.4)).d_optimal
+    got = rows[(rows[:, 0] == 20.0) & (rows[:, 1] == 6.0), 2]
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    with pytest.raises(SystemExit):  # the default h = 100 m is below an 8.4 m seabed
+        sweep.main(["--x", "d=5,20", "--y", "z=2,6", "--sea-depth", "8.4", "--out", str(out)])
