@@ -170,6 +170,34 @@ class Scenario(param.Parameterized):
     sea_depth = _num(200.0, (1, 500), "Sea depth D (m)", "Water depth D of the layered sea, m.")
     seabed_sigma = _num(1.0, (0, 10), "Seabed conductivity σb (S/m)",
                         "Conductivity of the seabed half-space, S/m (0: insulating).")
+    # -- track tab (app/track.py): a straight track over the design tab's stations, at the
+    # target depth z, with the target's moments, the sensor noise, σ and T above. Hard bounds
+    # (param refuses anything outside); not in ACCEPTED, so the maps never recompute for them.
+    track_x0 = param.Number(-250.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+                            label="Track start x (m)", doc="x of the track's start, m.")
+    track_y0 = param.Number(-120.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+                            label="Track start y (m)", doc="y of the track's start, m.")
+    track_heading = param.Number(25.0, bounds=(-180.0, 180.0), label="Track heading (°)",
+                                 doc="Course of the straight track, degrees from +x towards +y.")
+    track_speed = param.Number(2.0, bounds=(0.1, 50.0), softbounds=(0.1, 20.0),
+                               label="Track speed (m/s)", doc="Target speed along the track, m/s.")
+    track_duration = param.Number(250.0, bounds=(2.0, 600.0), softbounds=(10.0, 600.0),
+                                  label="Track duration (s)",
+                                  doc="Length of the track in time, s (one measurement every T).")
+    track_axes = param.Selector(objects=[3, 2], default=3, label="Sensor axes",
+                                doc="3: every station measures Ex, Ey, Ez; 2: horizontal Ex, Ey only.")
+    track_sigma_a = param.Number(0.1, bounds=(0.0, 10.0), softbounds=(0.0, 1.0),
+                                 label="Acceleration noise σa (m/s²)",
+                                 doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).")
+    track_alpha = param.Number(0.001, bounds=(0.0, 100.0), softbounds=(0.0, 0.1),
+                               label="Moment random walk α ((A·m)²/step)",
+                               doc="Variance of the moments' random walk per step (seed 001: 0.001).")
+    track_filter = param.Selector(objects=["bank", "ekf", "puekf"], default="bank", label="Tracker",
+                                  doc="bank: seed 001's 12 filters, no prior, ML selection; ekf / "
+                                      "puekf: one filter from a prior about the truth.")
+    track_runs = param.Integer(5, bounds=(1, 20), label="Monte-Carlo runs",
+                               doc="Noise realisations shown and averaged in the TRMSE, 1 to 20.")
+
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
 

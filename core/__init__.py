@@ -4,6 +4,15 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 :func:`observable_rank`; the rest builds on them. No web stack is imported here.
 """
 
+from .bank import (
+    BANK_BEARINGS,
+    BANK_STRENGTHS,
+    SEED_BEARINGS,
+    BankResult,
+    bank_hypotheses,
+    run_bank,
+    start_range,
+)
 from .design import (
     CRITERIA,
     LAYOUTS,
@@ -22,6 +31,7 @@ from .design import (
     station_layout,
 )
 from .fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
+from .filters import FilterRun, ekf_predict, ekf_update, run_filters
 from .fisher import (
     DEFAULT_NOISE,
     DEFAULT_STEPS,
@@ -31,6 +41,8 @@ from .fisher import (
 )
 from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
 from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
+from .measurement import AXES, SensorModel
+from .motion import dwna_model, sample_tracks, straight_track
 from .observability import (
     RANK_RTOL,
     gamma,
@@ -39,6 +51,7 @@ from .observability import (
     observable_rank,
     unobservable_direction,
 )
+from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
 from .sea import Sea
 from .validation import STATE_NAMES
 
@@ -55,6 +68,11 @@ __all__ = [
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
     "layout_criterion", "optimise_layout", "spacing_curve", "station_layout",
+    # tracking (core.motion, core.measurement, core.pcrlb, core.filters, core.bank)
+    "AXES", "BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "FilterRun",
+    "PcrlbResult", "SensorModel", "bank_hypotheses", "dwna_model", "ekf_predict", "ekf_update",
+    "linearisation_breaks", "pcrlb", "run_bank", "run_filters", "sample_tracks", "start_range",
+    "straight_track",
 ]
 
 # Ship magnetometer calibration, seed 004 (core.calibration), loaded on first use (PEP 562) so

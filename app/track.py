@@ -1,0 +1,239 @@
+"""The Track tab: a straight track over the current stations, its PCRLB, and real trackers on it.
+
+``track_tab(scenario)`` returns the tab's layout, a pure function of the shared
+:class:`app.scenario.Scenario`: its ``track_*`` parameters (start, heading, speed, duration,
+sensor axes, process noise, tracker, runs) and, from the rest of the scenario, the design tab's
+``stations``, the target depth ``z``, the moments ``Ph``/``Pv``, ``noise``, ``sigma`` and ``T``
+and the sea (``sea_model``, ``sea_depth``, ``seabed_sigma``: :func:`sea_of`).
+
+It shows
+
+- a plan view: stations, the true track coloured by the PCRLB position σ along it (hover: time,
+  position, bound, range; crosses where the linearised bound stops predicting,
+  :func:`core.linearisation_breaks`), the estimated tracks of the runs (for the bank: every
+  filter of run 1 in grey and the ML-selected track highlighted);
+- TRMSE (seed 001 eq. (18)) against the PCRLB over time, log scale;
+- a line of numbers (diverged share, the bank's winner, NEES).
+
+Everything is computed by :mod:`core.track` (the same Monte-Carlo code as the command line),
+cached per set of inputs.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import holoviews as hv
+import numpy as np
+import panel as pn
+import param
+
+import core
+from core import track as core_track
+
+# The maps' lock on numba's parallel kernels (its workqueue layer must not be entered from two
+# threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
+# import it from there.
+from .compute import _KERNEL_LOCK
+from .scenario import Scenario
+
+hv.extension("bokeh", logo=False)
+
+#: Scenario parameters of this tab (the sidebar of the tab).
+TRACK_PARAMS = ("track_x0", "track_y0", "track_heading", "track_speed", "track_duration",
+                "track_axes", "track_sigma_a", "track_alpha", "track_filter", "track_runs")
+#: Everything the track's numbers depend on.
+INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T", "sea_model",
+                         "sea_depth", "seabed_sigma")
+#: Most steps of a track the tab computes (the duration's bound over the smallest T).
+MAX_STEPS = 2001
+#: Linearisation limit of the flag: CRLB / range above this is not a predicted error.
+LIMIT = 0.3
+
+WINNER = "#d62728"
+TRUTH = "#000000"
+
+
+def sea_of(s):
+    """The scenario's medium: ``core.Sea(sea_depth, seabed_sigma)`` when ``sea_model`` is
+    "layered", else None (the whole space) — the same sea the maps use."""
+    if getattr(s, "sea_model", "whole space") != "layered":
+        return None
+    return core.Sea(float(s.sea_depth), float(s.seabed_sigma))
+
+
+def _key(s):
+    return tuple((name, tuple(map(tuple, getattr(s, name))) if name == "stations" else getattr(s, name))
+                 for name in INPUTS)
+
+
+def case_of(s):
+    """The :class:`core.track.TrackCase` of a scenario's values."""
+    steps = int(round(s.track_duration / s.T)) + 1
+    if steps > MAX_STEPS:
+        raise ValueError(f"the track has {steps} steps (duration / T + 1); at most {MAX_STEPS}: "
+                         "shorten it or lengthen T")
+    sea = sea_of(s)
+    return core_track.TrackCase(
+        name="track tab", stations=tuple(map(tuple, s.stations)), axes=int(s.track_axes),
+        start=(float(s.track_x0), float(s.track_y0), float(s.z)),
+        heading=math.radians(s.track_heading), speed=float(s.track_speed), steps=max(steps, 2),
+        T=float(s.T), Ph=float(s.Ph), Pv=float(s.Pv), noise=float(s.noise), sigma=float(s.sigma),
+        sea_depth=None if sea is None else sea.depth,
+        seabed_sigma=None if sea is None else sea.seabed_sigma,
+        sigma_a=float(s.track_sigma_a), alpha=float(s.track_alpha), bank_depth=float(s.z),
+        bank_pv_std=max(30.0, 2.0 * abs(float(s.Pv))),
+    )
+
+
+@functools.lru_cache(maxsize=16)
+def _compute(key):
+    s = _Values(dict(key))
+    case = case_of(s)
+    with _KERNEL_LOCK:
+        res = core_track.monte_carlo(case, filter=s.track_filter, runs=int(s.track_runs), seed=0,
+                                     workers=1, keep_tracks=int(s.track_runs))
+    truth = case.nominal_track()
+    stations = np.asarray(case.stations, float)
+    rng = np.min(np.linalg.norm(truth[:, None, :3] - stations[None], axis=-1), axis=1)
+    breaks = core.linearisation_breaks(res.pcrlb_m, rng, limit=LIMIT)
+    return dict(case=case, res=res, truth=truth, range_m=rng, breaks=breaks, stations=stations)
+
+
+class _Values:
+    def __init__(self, values):
+        self.__dict__.update(values)
+        self.stations = [list(v) for v in values["stations"]]
+
+
+def compute(s):
+    """The tab's numbers for a scenario (cached): dict with the case, the
+    :class:`core.track.MonteCarloResult`, the true track, range to the nearest station (m) and
+    the linearisation flag at every step."""
+    return _compute(_key(s))
+
+
+def plan_view(out):
+    """Plan view (x–y, m): stations, the true track coloured by the PCRLB, estimates."""
+    res, truth, breaks = out["res"], out["truth"], out["breaks"]
+    t = res.time_s
+    bound = np.where(np.isfinite(res.pcrlb_m), res.pcrlb_m, np.nan)
+    x, y = hv.Dimension("x", unit="m"), hv.Dimension("y", unit="m")
+    pts = hv.Points(
+        {"x": truth[:, 0], "y": truth[:, 1], "time": t, "pcrlb": bound,
+         "log10_pcrlb": np.log10(bound), "range": out["range_m"],
+         "trusted": np.where(breaks, "no: bound > 0.3 × range", "yes")},
+        kdims=[x, y],
+        vdims=[hv.Dimension("log10_pcrlb", label="log10 PCRLB", unit="log10 m"),
+               hv.Dimension("time", unit="s"), hv.Dimension("pcrlb", label="PCRLB σ", unit="m"),
+               hv.Dimension("range", label="range to nearest station", unit="m"),
+               hv.Dimension("trusted", label="bound predicts errors")],
+        label="true track (colour: PCRLB)",
+    ).opts(color="log10_pcrlb", cmap="viridis", colorbar=True, size=5, tools=["hover"],
+           clabel="log10 PCRLB position σ (m)")
+    layers = [hv.Path([truth[:, :2]], kdims=[x, y]).opts(color=TRUTH, line_width=1)]
+    est = res.tracks["estimate"]
+    if res.summary["filter"] == "bank":
+        for track in res.tracks["x_all"][0]:
+            layers.append(hv.Path([track[:, :2]], kdims=[x, y], label="bank filters, run 1").opts(
+                color="#aaaaaa", line_width=1, alpha=0.6, show_legend=True))
+        layers.append(hv.Path([est[0, :, :2]], kdims=[x, y], label="ML selection, run 1").opts(
+            color=WINNER, line_width=3, show_legend=True))
+        others = est[1:]
+    else:
+        others = est
+    if len(others):
+        layers.append(hv.Path([e[:, :2] for e in others], kdims=[x, y],
+                              label="estimates, other runs").opts(color="#1f77b4", line_width=1, alpha=0.7,
+                                                                  show_legend=True))
+    layers.append(pts)
+    if breaks.any():
+        layers.append(hv.Points((truth[breaks, 0], truth[breaks, 1]), kdims=[x, y],
+                                label="linearised bound not predictive").opts(
+            marker="x", color="#7f7f7f", size=9))
+    layers.append(hv.Points((out["stations"][:, 0], out["stations"][:, 1]), kdims=[x, y],
+                            label="stations").opts(marker="triangle", color="black", size=12))
+    span = np.ptp(truth[:, :2], axis=0).max() + 60.0
+    c = truth[:, :2].mean(axis=0)
+    return hv.Overlay(layers).opts(
+        title="Track, PCRLB along it, and the trackers' estimates", aspect="equal",
+        xlim=(c[0] - span / 2, c[0] + span / 2), ylim=(c[1] - span / 2, c[1] + span / 2),
+        legend_position="top_left", responsive=True, min_height=420)
+
+
+def error_view(out):
+    """TRMSE and PCRLB (m, log scale) against time (s)."""
+    res, breaks = out["res"], out["breaks"]
+    t = hv.Dimension("time", unit="s")
+    err = hv.Dimension("error", label="position error", unit="m")
+    bound = np.where(np.isfinite(res.pcrlb_m), res.pcrlb_m, np.nan)
+    trusted = np.where(breaks, np.nan, bound)
+    untrusted = np.where(breaks, bound, np.nan)
+    n = res.summary["runs"]
+    return hv.Overlay([
+        hv.Curve((res.time_s, res.trmse_m), t, err, label=f"TRMSE, {n} runs").opts(
+            color=WINNER, tools=["hover"]),
+        hv.Curve((res.time_s, trusted), t, err, label="PCRLB position σ").opts(
+            color="black", line_dash="dashed", tools=["hover"]),
+        hv.Curve((res.time_s, untrusted), t, err, label="PCRLB (> 0.3 × range: not predictive)").opts(
+            color="#7f7f7f", line_dash="dotted", tools=["hover"]),
+    ]).opts(logy=True, title="TRMSE vs PCRLB", legend_position="top_right", responsive=True,
+            min_height=300)
+
+
+def summary_text(out):
+    """One line of numbers for the tab (markdown)."""
+    s = out["res"].summary
+    parts = [f"**{s['filter']}**, {s['runs']} runs: diverged {100 * s['diverged']:.0f} % "
+             f"(final error > max(5 × PCRLB, 10 m)); final TRMSE {s['trmse_final_m']:.3g} m vs PCRLB "
+             f"{s['pcrlb_final_m']:.3g} m"]
+    if s.get("nees") is not None:
+        parts.append(f"mean NEES {s['nees']:.3g} (7 states: 7 if consistent)")
+    if s["filter"] == "bank":
+        best = max(s["winners"], key=s["winners"].get)
+        parts.append(f"final ML winner most often: {best} ({s['winners'][best]} of {s['runs']})")
+    if out["breaks"].any():
+        share = 100 * out["breaks"].mean()
+        parts.append(f"the linearised bound is not predictive on {share:.0f} % of the track "
+                     "(PCRLB > 0.3 × range: far-field runaway along range–strength)")
+    return "; ".join(parts) + "."
+
+
+def _view(s, what):
+    try:
+        out = compute(s)
+    except ValueError as exc:  # e.g. a track through a station, or outside the sea
+        return pn.pane.Alert(f"Track not computed: {exc}", alert_type="warning")
+    return what(out)
+
+
+def track_tab(scenario: Scenario):
+    """The Track tab's layout for a shared :class:`Scenario` (a Panel layout)."""
+    deps = [scenario.param[name] for name in INPUTS]
+
+    def bound(what):
+        return pn.bind(lambda *_: _view(scenario, what), *deps)
+
+    options = {name: {"throttled": True} for name in TRACK_PARAMS
+               if isinstance(scenario.param[name], param.Number)}
+    options["track_alpha"] = {"type": pn.widgets.FloatInput, "step": 1e-4, "format": "0.[0000]"}
+    widgets = pn.Param(scenario, parameters=list(TRACK_PARAMS), show_name=False, widgets=options)
+    note = pn.pane.Markdown(
+        "A straight track over the design tab's stations at the target depth z, with the "
+        "target's moments and the sensor noise set above. The PCRLB (Tichavský) is the best "
+        "achievable position σ along it; the trackers are run on simulated measurements.",
+        sizing_mode="stretch_width")
+    return pn.Row(
+        pn.Column(widgets, width=320),
+        pn.Column(
+            note,
+            pn.panel(bound(summary_text), loading_indicator=True, sizing_mode="stretch_width"),
+            pn.panel(bound(plan_view), loading_indicator=True, sizing_mode="stretch_both",
+                     min_height=420),
+            pn.panel(bound(error_view), loading_indicator=True, sizing_mode="stretch_both",
+                     min_height=300),
+            sizing_mode="stretch_both",
+        ),
+        sizing_mode="stretch_both",
+    )

@@ -1,0 +1,181 @@
+"""Target motion for tracking: the DWNA process model and straight tracks (spec §8).
+
+State
+-----
+The tracker's state is the core's 7-state ``X = [x, y, z, vx, vy, Ph, Pv]`` (m, m/s, A·m), the
+state of :func:`core.dipole_field`: the horizontal moment ``Ph`` points along the heading
+θ = atan2(vy, vx), ``Pv`` is vertical, there is no vertical motion.
+
+Seed 001 (its eq. (5)) models the ship as a *horizontal* electric dipole of strength p along the
+keel, state ``[x, y, z, vx, vy, p]``. That maps onto ours as ``Ph = p`` and ``Pv = 0``: its
+horizontal dipole *is* our heading-aligned ``Ph``; we keep ``Pv`` as a state (true value 0 in
+seed 001's cases) so that filters, bounds and maps share one state and one measurement model.
+Its prior (``ξ_p``) and random walk (α) are those of the strength.
+
+Motion
+------
+Discrete white-noise acceleration (DWNA, Bar-Shalom, *Estimation with Applications to Tracking*,
+§6.3.2) on each horizontal axis, with acceleration standard deviation σa (m/s²) held over each
+interval T; ``z`` is constant; both moments are random walks of variance α ((A·m)² per step,
+seed 001's ``Q = diag(Γ Σ Γᵀ, α I)``)::
+
+    F = I₇ with F[0, 3] = F[1, 4] = T
+    Q[x, x] = σa² T⁴/4, Q[x, vx] = σa² T³/2, Q[vx, vx] = σa² T²   (same for y, vy)
+    Q[Ph, Ph] = Q[Pv, Pv] = α,  Q[z, z] = 0
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import validation
+
+__all__ = ["dwna_model", "sample_tracks", "straight_track"]
+
+
+def _nonnegative(name, value, unit):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number ≥ 0 ({unit}); got {value!r}") from None
+    if not np.isfinite(v) or v < 0.0:
+        raise ValueError(f"{name} must be a finite number ≥ 0 ({unit}); got {value!r}")
+    return v
+
+
+def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001):
+    """Transition matrix F and process-noise covariance Q of the DWNA model.
+
+    Parameters
+    ----------
+    T : float
+        Sample interval (s), > 0.
+    sigma_a : float
+        Standard deviation of the white acceleration on each horizontal axis (m/s²), ≥ 0
+        (seed 001: 0.1).
+    alpha : float
+        Variance of the moment random walk per step ((A·m)²), ≥ 0, on ``Ph`` and ``Pv``
+        (seed 001: 0.001).
+
+    Returns
+    -------
+    F : ndarray, shape (7, 7)
+        ``X_{k+1} = F X_k + w_k``.
+    Q : ndarray, shape (7, 7)
+        Covariance of ``w_k`` in state units squared (m², m²/s, m²/s², (A·m)²). Singular in z
+        (no vertical motion), and everywhere but the moments when σa = 0.
+
+    Examples
+    --------
+    >>> import core
+    >>> F, Q = core.dwna_model(T=2.0, sigma_a=0.1, alpha=0.001)
+    >>> float(F[0, 3]), round(float(Q[0, 0]), 12), round(float(Q[3, 3]), 12), float(Q[5, 5])
+    (2.0, 0.04, 0.04, 0.001)
+    """
+    T = validation.positive("T", T, "s")
+    sa2 = _nonnegative("sigma_a", sigma_a, "m/s²") ** 2
+    alpha = _nonnegative("alpha", alpha, "(A·m)² per step")
+    F = np.eye(7)
+    F[0, 3] = F[1, 4] = T
+    Q = np.zeros((7, 7))
+    for p, v in ((0, 3), (1, 4)):  # Γ Σ Γᵀ with Γ = (T²/2, T)ᵀ on (position, velocity)
+        Q[p, p] = sa2 * T**4 / 4.0
+        Q[p, v] = Q[v, p] = sa2 * T**3 / 2.0
+        Q[v, v] = sa2 * T**2
+    Q[5, 5] = Q[6, 6] = alpha
+    return F, Q
+
+
+def _steps(value):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"steps must be an integer ≥ 1 (instants on the track); got {value!r}")
+    return int(value)
+
+
+def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0):
+    """States along a straight constant-velocity track.
+
+    Parameters
+    ----------
+    start : array_like, shape (3,)
+        Position at step 0 (m), ``(x, y, z)`` with z the depth (positive down, spec §7).
+    heading : float
+        Course θ (rad) from +x towards +y.
+    speed : float
+        Speed (m/s), > 0.
+    steps : int
+        Number of instants, ≥ 1.
+    T : float
+        Sample interval (s), > 0.
+    Ph, Pv : float
+        Moments (A·m), constant along the track.
+
+    Returns
+    -------
+    ndarray, shape (steps, 7)
+        ``X_k = F^k X_0`` for k = 0 … steps − 1.
+
+    Examples
+    --------
+    >>> import core
+    >>> core.straight_track([0, 0, 5], 0.0, 2.0, 3)[:, 0].tolist()
+    [0.0, 2.0, 4.0]
+    """
+    start = validation._array("start", start)
+    if start.shape != (3,):
+        raise ValueError(f"start must be a position (x, y, z) in m, shape (3,); got shape {start.shape}")
+    validation._finite("start", start)
+    heading = float(heading)
+    if not np.isfinite(heading):
+        raise ValueError(f"heading must be a finite angle (rad); got {heading!r}")
+    speed = validation.positive("speed", speed, "m/s")
+    steps = _steps(steps)
+    T = validation.positive("T", T, "s")
+    for name, v in (("Ph", Ph), ("Pv", Pv)):
+        if not np.isfinite(float(v)):
+            raise ValueError(f"{name} must be a finite moment (A·m); got {v!r}")
+    t = T * np.arange(steps)
+    vx, vy = speed * np.cos(heading), speed * np.sin(heading)
+    out = np.empty((steps, 7))
+    out[:, 0] = start[0] + vx * t
+    out[:, 1] = start[1] + vy * t
+    out[:, 2] = start[2]
+    out[:, 3], out[:, 4], out[:, 5], out[:, 6] = vx, vy, float(Ph), float(Pv)
+    return out
+
+
+def sample_tracks(x0, F, Q, steps, rng):
+    """Random tracks of the linear-Gaussian model ``X_{k+1} = F X_k + w_k``, ``w_k ~ N(0, Q)``.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (..., 7)
+        States at step 0 (one track per leading index).
+    F, Q : array_like, shape (7, 7)
+        From :func:`dwna_model`; Q symmetric positive semi-definite.
+    steps : int
+        Number of instants, ≥ 1.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray, shape (..., steps, 7)
+    """
+    x0 = validation._array("x0", x0)
+    if x0.ndim < 1 or x0.shape[-1] != 7:
+        raise ValueError(f"x0 must have shape (..., 7); got shape {x0.shape}")
+    F, Q = np.asarray(F, float), np.asarray(Q, float)
+    if F.shape != (7, 7) or Q.shape != (7, 7):
+        raise ValueError(f"F and Q must be 7 × 7; got {F.shape} and {Q.shape}")
+    steps = _steps(steps)
+    # Q may be singular (z, or σa = 0): factor by eigen-decomposition instead of Cholesky.
+    w, V = np.linalg.eigh(0.5 * (Q + Q.T))
+    if w.min() < -1e-12 * max(w.max(), 1.0):
+        raise ValueError("Q must be positive semi-definite")
+    root = V * np.sqrt(np.clip(w, 0.0, None))  # (7, 7): root @ rootᵀ = Q
+    out = np.empty(x0.shape[:-1] + (steps, 7))
+    out[..., 0, :] = x0
+    noise = rng.standard_normal(x0.shape[:-1] + (steps - 1, 7)) @ root.T
+    for k in range(1, steps):
+        out[..., k, :] = out[..., k - 1, :] @ F.T + noise[..., k - 1, :]
+    return out
