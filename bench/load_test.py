@@ -19,8 +19,10 @@ are destroyed within seconds, then:
    session, a refused value (P_h < 0: the server answers with a message, no map computation), i.e.
    how long a cheap event of one session waits behind the others' computations. The same
    cheap event is also timed on the idle server, just before the load: its own cost;
-4. at a quarter, half and three quarters of the load, a new session connects (websocket, its
-   page built by the server, the document pulled): how long a newcomer waits while the others work;
+4. ``--newcomers`` times (default 3: at a quarter, half and three quarters of the load) a new
+   session connects (websocket, its page built by the server, the document pulled): how long a
+   newcomer waits while the others work. Each page build holds its server's event loop, so the
+   other figures are measured with ``--newcomers 0`` too;
 5. after the sessions close: the server's RSS (the sum over the replicas) must come back within
    10 % of the baseline.
 
@@ -209,10 +211,11 @@ class Probe(threading.Thread):
         self.join(60)
 
 
-def newcomers(url, stop_at, duration, out):
-    """At 1/4, 1/2 and 3/4 of the load, time one new session until its document is pulled and
-    announced (:class:`Client`), then close it; append the seconds (inf if it failed)."""
-    for frac in (0.25, 0.5, 0.75):
+def newcomers(url, stop_at, duration, out, n=3):
+    """At ``n`` evenly spread moments of the load (1/4, 1/2, 3/4 for 3), time one new session
+    until its document is pulled and announced (:class:`Client`), then close it; append the
+    seconds (inf if it failed)."""
+    for frac in [(k + 1) / (n + 1) for k in range(n)]:
         time.sleep(max(0.0, stop_at - duration * (1 - frac) - time.perf_counter()))
         t0 = time.perf_counter()
         try:
@@ -293,14 +296,16 @@ def main(argv=None):
     ap.add_argument("--think", type=float, default=0.0,
                     help="seconds a session waits after each answer before its next change (0: back to back)")
     ap.add_argument("--cleanup", type=float, default=30.0, help="seconds to wait for memory to return")
+    ap.add_argument("--newcomers", type=int, default=3,
+                    help="new sessions opened during the load, evenly spread (0-10)")
     ap.add_argument("--replicas", type=int, default=0,
                     help="N ≥ 1: N replicas behind nginx (app.cluster), the load through the proxy; "
                          "0: one panel serve, directly")
     args = ap.parse_args(argv)
     if not 1 <= args.sessions <= 50 or not 0 < args.duration <= 600 or not 0 <= args.think <= 60:
         ap.error("--sessions must be 1–50, --duration 0–600 s and --think 0–60 s")
-    if not 0 <= args.replicas <= 8:
-        ap.error("--replicas must be 0–8")
+    if not 0 <= args.replicas <= 8 or not 0 <= args.newcomers <= 10:
+        ap.error("--replicas must be 0–8 and --newcomers 0–10")
 
     one_map = map_time()
     print(f"one map computation (A and B, 200×200, in-process, idle): median {one_map * 1e3:.0f} ms")
@@ -371,7 +376,8 @@ def main(argv=None):
         results, newcomer = {}, []
         stop_at = time.perf_counter() + args.duration
         probe.active.set()
-        arrivals = threading.Thread(target=newcomers, args=(url, stop_at, args.duration, newcomer), daemon=True)
+        arrivals = threading.Thread(target=newcomers, args=(url, stop_at, args.duration, newcomer, args.newcomers),
+                                    daemon=True)
         arrivals.start()
         # Paced sessions start spread over one pause, as people do, not all in the same instant.
         workers = [threading.Thread(target=hammer, daemon=True,
