@@ -14,10 +14,8 @@ from functools import partial
 import holoviews as hv
 import pandas as pd
 import panel as pn
-from bokeh.models import CustomJS
 from bokeh.models.widgets.tables import NumberFormatter
 from panel.io.state import set_curdoc
-from panel.links import Callback
 
 from . import compute, map_figures, views
 from .compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot
@@ -45,58 +43,6 @@ Triangles: stations. Hover for values. All logarithms are base 10.
 """
 
 
-class _Typed:
-    """Editable slider without Panel's browser callback that stretches the slider to a typed value.
-
-    That callback is not wanted (a value outside the accepted range is refused and restored, so
-    the stretched slider would stay wrong) and each one cost ~150 ms of Bokeh document scans when
-    a session starts, blocking every other session.
-    """
-
-    def __init__(self, **params):
-        super().__init__(**params)
-        Callback.registry.pop(self._value_edit, None)
-
-
-class _PromptFloatSlider(pn.widgets.FloatSlider):
-    """The release (``value_throttled``) is handled at once, not after Panel's 50 ms debounce of
-    browser changes. The drag's own values are too (they are dropped at once: throttled): else
-    the release would wait for the last of them, which is still being debounced."""
-
-    _priority_changes = ["value", "value_throttled"]
-
-
-class _PromptIntSlider(pn.widgets.IntSlider):
-    _priority_changes = ["value", "value_throttled"]
-
-
-class TypedFloatSlider(_Typed, pn.widgets.EditableFloatSlider):
-    _slider_widget = _PromptFloatSlider
-
-
-class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
-    _slider_widget = _PromptIntSlider
-
-
-#: BokehJS rewrites a <style> element of every renderer (its position) on every paint, even when
-#: the text is unchanged; each rewrite makes the browser re-collect the page's style sheets at the
-#: next colour lookup (several per renderer: BokehJS reads CSS variables for them), ~1 ms each,
-#: about a third of the time the three maps took to paint. Identical text is not written again.
-SKIP_UNCHANGED_STYLES_JS = """
-let proto = null;
-try {  // BokehJS internals: another Bokeh version without them is left alone
-  proto = Bokeh.require("core/dom").InlineStyleSheet.prototype;
-} catch (e) {}
-if (proto && typeof proto._update === "function" && !proto.__skips_unchanged) {
-  const update = proto._update;
-  proto._update = function (css) {
-    if (this.el.textContent !== css)
-      update.call(this, css);
-  };
-  proto.__skips_unchanged = true;
-}
-"""
-
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
 
@@ -121,15 +67,6 @@ def _release_freed_memory():
         pass
 
 
-class TextHTML(pn.pane.HTML):
-    """An HTML pane whose new object re-sends only its text. Panel's own works out and
-    re-validates every property of the model again, its theme's style sheets included: ~6 % of
-    the server's time under the load test (the note below the maps changes with most maps)."""
-
-    def _update(self, ref, model):
-        model.text = self._transform_object(self.object)["object"]
-
-
 def _alert(text, kind):
     """Plain text in a Bootstrap alert box: escaped, never interpreted as HTML or Markdown."""
     fg, bg = {"danger": ("#842029", "#f8d7da"), "warning": ("#664d03", "#fff3cd")}[kind]
@@ -140,8 +77,8 @@ def _alert(text, kind):
 
 def _widgets():
     """Editable sliders (type a value or drag) for every number; a text box for the noise."""
-    numeric = {"type": TypedFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
-    integer = {"type": TypedIntSlider, "sizing_mode": "stretch_width"}
+    numeric = {"type": pn.widgets.EditableFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
+    integer = {"type": pn.widgets.EditableIntSlider, "sizing_mode": "stretch_width"}
     spec = {name: dict(numeric) for name in ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k",
                                                 "Ph_b", "Pv_b", "d_ref", "T", "sigma", "extent",
                                                 "z_min", "z_max", "threshold")}
@@ -314,7 +251,7 @@ def create_app():
                           on_click=lambda e, n=name: scenario.apply_preset(n))
         for name in PRESETS
     ], sizing_mode="stretch_width")
-    message = TextHTML(pn.bind(_alert, scenario.param.message, "danger"), sizing_mode="stretch_width",
+    message = pn.pane.HTML(pn.bind(_alert, scenario.param.message, "danger"), sizing_mode="stretch_width",
                            visible=scenario.param.message.rx.bool(), css_classes=["w-message"])
     sections = [
         pn.Card(pn.Param(scenario, parameters=names, widgets=_widgets(), show_name=False,
@@ -336,7 +273,7 @@ def create_app():
     first = cache.get(Snapshot.of(scenario))
     # Written by redraw together with the maps (not bound to the scenario: a binding would compute
     # the maps once more, synchronously, before redraw could start).
-    note = TextHTML(_alert(first.note, "warning"), visible=bool(first.note), sizing_mode="stretch_width")
+    note = pn.pane.HTML(_alert(first.note, "warning"), visible=bool(first.note), sizing_mode="stretch_width")
 
     fix_buttons = pn.Row(
         pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
@@ -346,8 +283,6 @@ def create_app():
                           on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)")),
     )
     doc = pn.state.curdoc  # the session document this app is built for
-    if doc is not None:
-        doc.js_on_event("document_ready", CustomJS(code=SKIP_UNCHANGED_STYLES_JS))
     figs = map_figures.build()
     map_figures.fill(figs, first)
     #: Spins while a change slower than BUSY_AFTER computes. In the header, a Bokeh root of its own:
