@@ -16,14 +16,16 @@ import param
 import core
 
 #: Hard limits: name -> (lowest, highest, unit). Enforced by Scenario; sliders span less.
+#: Depths (spec §7: z positive down, the sea surface at z = 0) are never negative: there is no sea
+#: above the surface, whatever the field model.
 ACCEPTED = {
     "Ph": (0.0, 1e5, "A·m"),
     "Pv": (0.0, 1e5, "A·m"),
     "Ph_b": (0.0, 1e5, "A·m"),
     "Pv_b": (0.0, 1e5, "A·m"),
     "k": (1e-3, 1e3, ""),
-    "h": (-5000.0, 5000.0, "m"),
-    "z": (-5000.0, 5000.0, "m"),
+    "h": (0.0, 5000.0, "m"),
+    "z": (0.0, 5000.0, "m"),
     "y": (-5000.0, 5000.0, "m"),
     "speed": (0.01, 100.0, "m/s"),
     "heading": (-180.0, 180.0, "°"),
@@ -34,8 +36,8 @@ ACCEPTED = {
     "noise": (1e-12, 1e-2, "V/m"),
     "steps": (1, 20, "instants"),
     "extent": (1.0, 10000.0, "m"),
-    "z_min": (-5000.0, 5000.0, "m"),
-    "z_max": (-5000.0, 5000.0, "m"),
+    "z_min": (0.0, 5000.0, "m"),
+    "z_max": (0.0, 5000.0, "m"),
     "resolution": (20, 400, "points per axis"),
     "threshold": (0.01, 1e5, "m"),
 }
@@ -66,6 +68,8 @@ ERROR_QUANTITIES = {
 }
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
+#: Parameters that are depths below the sea surface (m): a negative value is above the surface.
+DEPTHS = ("h", "z", "z_min", "z_max")
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
 MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
 STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
@@ -83,6 +87,16 @@ PRESETS = {
     "Fig. 5": dict(_COMMON, layout="dual", comparison="Dual − single (Fig. 5)", d=15.0),
     "Fig. 6": dict(_COMMON, layout="dual", comparison="Spacing d − reference d (Fig. 6)",
                    d=50.0, d_ref=10.0),
+}
+
+#: Which map shows each paper figure: preset -> (map index 0 A, 1 B, 2 difference, caption).
+PAPER_MAPS = {
+    "Fig. 1": ((0,), "map A is the paper's Fig. 1: log10|det Γ| of one station over x–y"),
+    "Fig. 2": ((0, 1), "maps A and B are the paper's Fig. 2(a) (P_h > P_v) and 2(b) (P_h = P_v), x–z"),
+    "Fig. 3": ((2,), "the difference map is the paper's Fig. 3: moments × 10 minus the original"),
+    "Fig. 4": ((2,), "the difference map is the paper's Fig. 4(a): (70.7, 70.7) − (100, 0) A·m"),
+    "Fig. 5": ((2,), "the difference map is the paper's Fig. 5(b): dual (d = 15 m) minus single"),
+    "Fig. 6": ((2,), "the difference map is the paper's Fig. 6: dual d = 50 m minus d = 10 m"),
 }
 
 
@@ -151,6 +165,9 @@ class Scenario(param.Parameterized):
                      "For 'area within threshold': position error (1σ, m) that counts as good.")
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
+    refused = param.List([], item_type=str,
+                         doc="The parameters the message is about (shown next to their inputs); "
+                             "empty for a message about the page's link.")
 
     def __init__(self, **params):
         # Hard limits hold from the start: a bad value given here falls back to the default.
@@ -171,14 +188,16 @@ class Scenario(param.Parameterized):
         if not notes and self.z_min >= self.z_max:
             notes.append("x–z plane: 'z to' must be deeper than 'z from'")
         if not notes:
-            self.message = ""
+            if self.message:
+                self.param.update(message="", refused=[])
             return
+        names = [ev.name for ev in events]
         self._restoring = True
         try:
             self.param.update({ev.name: ev.old for ev in events})
         finally:
             self._restoring = False
-        self.message = "; ".join(notes) + ". Kept the last good value."
+        self.param.update(message="; ".join(notes) + ". Kept the last good value.", refused=names)
 
     def _check_stations(self, event):
         problem = self.stations_problem(event.new)
@@ -188,14 +207,15 @@ class Scenario(param.Parameterized):
                 self.stations = event.old
             finally:
                 self._restoring = False
-            self.message = problem + ". Kept the last good layout."
+            self.param.update(message=problem + ". Kept the last good layout.", refused=["stations"])
         elif not self._restoring and self.message:
-            self.message = ""
+            self.param.update(message="", refused=[])
 
     @staticmethod
     def stations_problem(value):
-        """None if ``value`` is 1–8 finite (x, y, z) positions within the accepted range, else why."""
-        lo, hi, _ = ACCEPTED["h"]
+        """None if ``value`` is 1–8 finite (x, y, z) positions within the accepted range (z: a depth,
+        0 … 5000 m), else why."""
+        lo, hi, _ = ACCEPTED["y"]
         if not 1 <= len(value) <= MAX_STATIONS:
             return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
         for i, st in enumerate(value):
@@ -204,6 +224,9 @@ class Scenario(param.Parameterized):
             if not ok:
                 return (f"Station {i + 1} must be three numbers (x, y, z) in {lo:g} … {hi:g} m; "
                         f"got {str(st)[:60]!r}")
+            if st[2] < 0:
+                return (f"Station {i + 1}: depth z = {st[2]:g} m is above the sea surface; depths are "
+                        f"measured down from the surface (z ≥ 0)")
         return None
 
     @staticmethod
@@ -216,6 +239,9 @@ class Scenario(param.Parameterized):
         if isinstance(value, bool) or not ok_type or not math.isfinite(value):
             kind = "a whole number" if is_int else "a number"
             return f"{label} must be {kind}; got {str(value)[:40]!r}"
+        if name in DEPTHS and value < 0:
+            return (f"{label} = {value:g} is above the sea surface: depths are measured down from "
+                    f"the surface, {lo:g} … {hi:g} {unit}")
         if not lo <= value <= hi:
             return f"{label} = {value:g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
         return None
@@ -223,6 +249,10 @@ class Scenario(param.Parameterized):
     def apply_preset(self, name):
         """Set the parameters of one of the paper's figures (:data:`PRESETS`)."""
         self.param.update(PRESETS[name])
+
+    def active_preset(self):
+        """The paper figure (a :data:`PRESETS` name) whose parameters the scenario holds, or None."""
+        return preset_of(self)
 
     # -- what the core needs
     def core_plane(self):
@@ -237,6 +267,14 @@ class Scenario(param.Parameterized):
     def core_options(self):
         return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
                     noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure])
+
+
+def preset_of(values):
+    """The first :data:`PRESETS` name whose parameters ``values`` (attributes) all hold, or None."""
+    for name, preset in PRESETS.items():
+        if all(getattr(values, k) == v for k, v in preset.items()):
+            return name
+    return None
 
 
 class ScenarioValues(types.SimpleNamespace):
