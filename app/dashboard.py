@@ -164,13 +164,17 @@ def _section(scenario, tabs, title, names, collapsed):
     def visible(name):
         return pn.bind(lambda *_: applies(name, scenario, tabs.active), *watched)
 
-    rows = [pn.Column(pn.Param(scenario.param[name], widgets={name: _widgets()[name]}, show_name=False,
-                               sizing_mode="stretch_width"),
-                      visible=visible(name), sizing_mode="stretch_width", margin=0)
-            for name in names]
+    def widget(name):
+        spec = dict(_widgets()[name])
+        cls = spec.pop("type", pn.widgets.Select)
+        return cls.from_param(scenario.param[name], visible=visible(name), **spec)
+
+    rows = [widget(name) for name in names]
     any_visible = pn.bind(lambda *_: any(applies(n, scenario, tabs.active) for n in names), *watched)
-    return pn.Card(_message_pane(scenario, names, f"w-message-{names[0]}"), *rows, title=title,
-                   collapsed=collapsed, sizing_mode="stretch_width", visible=any_visible)
+    card = pn.Card(_message_pane(scenario, names, f"w-message-{names[0]}"), *rows, title=title,
+                   collapsed=collapsed, sizing_mode="stretch_width")
+    # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
+    return pn.Column(card, visible=any_visible, sizing_mode="stretch_width", margin=0)
 
 
 def create_app():

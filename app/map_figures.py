@@ -85,7 +85,7 @@ class MapFigures:
 def _figure(x_range, y_range):
     from bokeh.plotting import figure
 
-    fig = figure(x_range=x_range, y_range=y_range, width=420, height=400, sizing_mode="scale_width",
+    fig = figure(x_range=x_range, y_range=y_range, width=420, height=440, sizing_mode="scale_width",
                  tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
                  min_border_right=8, toolbar_location="above")
@@ -197,6 +197,19 @@ def veil_codes(observable, values):
     return out.astype(np.float32)
 
 
+def _wrapped(text, width=62):
+    """``text`` in lines of at most ``width`` characters, broken after commas (a Bokeh title
+    does not wrap by itself: a long caption was cut at the plot's edge)."""
+    lines, line = [], ""
+    for part in text.split(", "):
+        if line and len(line) + 2 + len(part) > width:
+            lines.append(line + ",")
+            line = part
+        else:
+            line = f"{line}, {part}" if line else part
+    return "\n".join(lines + [line])
+
+
 def _changed(model, values):
     """The items of ``values`` that differ from ``model``'s (validating a palette costs time)."""
     return {k: v for k, v in values.items() if getattr(model, k) != v}
@@ -277,7 +290,7 @@ def set_maps(figs: MapFigures, p: Panels):
         if args != fmt.args:
             fmt.args = args
         figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{custom}")]
-        figs.captions[which].text = p.caption
+        figs.captions[which].text = _wrapped(p.caption)
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
     view = (p.plane, view_box(p))
     if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom

@@ -243,7 +243,7 @@ def test_every_layer_of_a_map_covers_the_maps_rectangle(first, then):
 
 def test_the_xz_plane_has_depth_increasing_downwards_and_shows_every_station():
     figs = map_figures.build()
-    p = _fill(figs, plane="x–z", z_min=100.0, z_max=400.0, h=100.0)
+    _fill(figs, plane="x–z", z_min=100.0, z_max=400.0, h=100.0)
     y = figs.figures[0].y_range
     assert y.start > y.end  # the top of the plot is the shallow end
     marker = 13 / 400 * (400 - 100)  # the triangle's size, in metres of a ~400 px high plot
@@ -320,3 +320,50 @@ def test_the_paper_figure_is_identified_and_the_png_is_named_after_the_scenario(
             assert figs.figures[which].border_fill_color == "white"  # an opaque PNG
     s.Ph = 123.0  # no longer a paper figure
     assert compute(Snapshot.of(s)).preset == ""
+
+
+def _design_plot(overlay):
+    import holoviews as hv
+    from bokeh.models import HoverTool
+
+    fig = hv.render(overlay, backend="bokeh")
+    return fig, [t for t in fig.tools if isinstance(t, HoverTool)]
+
+
+def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
+    # defect 6: the server logged "Tool of type 'point_draw' could not be found" (the spacing
+    # maps' stations asked for an active point-draw tool they do not have), and a station showed
+    # two overlapping tooltips
+    from app import compute as c
+
+    s = Scenario(resolution=21)
+    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    with caplog.at_level("WARNING"):
+        fig, hovers = _design_plot(views.error_map(d, "t") * views.station_layer(d.stations))
+    assert not [r for r in caplog.records if "could not be found" in r.getMessage()]
+    assert len(hovers) == 1
+
+
+def test_best_and_paper_maps_share_one_colour_range():
+    from app import compute as c
+
+    s = Scenario(resolution=21)
+    sp = c.best_spacing(Snapshot.of(s, c.DESIGN_FIELDS))
+    clim = views.common_clim(sp.best, sp.paper)
+    for design in (sp.best, sp.paper):
+        lo, hi = views.error_clim(design)
+        assert clim[0] <= lo and hi <= clim[1]
+    a, b = (_design_plot(views.error_map(x, "t", clim=clim))[0] for x in (sp.best, sp.paper))
+    mappers = [next(r.glyph.color_mapper for r in f.renderers if hasattr(r.glyph, "color_mapper"))
+               for f in (a, b)]
+    assert (mappers[0].low, mappers[0].high) == (mappers[1].low, mappers[1].high) == clim
+
+
+def test_a_station_added_by_a_click_sits_at_the_station_depth():
+    from app.design import drawn_stations
+
+    old = [[0.0, 0.0, 100.0], [15.0, 0.0, 90.0]]
+    data = {"x": [0.0, 20.0, 50.0], "y": [0.0, 0.0, 30.0], "z": [100.0, 90.0, 0.0]}  # z: empty_value
+    assert drawn_stations(data, old, 100.0) == [[0.0, 0.0, 100.0], [20.0, 0.0, 90.0], [50.0, 30.0, 100.0]]
+    # a deletion keeps the others' depths
+    assert drawn_stations({"x": [15.0], "y": [0.0], "z": [90.0]}, old, 100.0) == [[15.0, 0.0, 90.0]]
