@@ -10,9 +10,7 @@ import ctypes
 import gc
 
 import panel as pn
-from bokeh.models import CustomJS
 from bokeh.models.formatters import PrintfTickFormatter
-from panel.links import Callback
 
 from . import maps, url
 from .compute import PanelCache
@@ -31,58 +29,6 @@ SECTIONS = (
 MAPS_TAB, DESIGN_TAB = 0, 1
 
 
-class _Typed:
-    """Editable slider without Panel's browser callback that stretches the slider to a typed value.
-
-    That callback is not wanted (a value outside the accepted range is refused and restored, so
-    the stretched slider would stay wrong) and each one cost ~150 ms of Bokeh document scans when
-    a session starts, blocking every other session.
-    """
-
-    def __init__(self, **params):
-        super().__init__(**params)
-        Callback.registry.pop(self._value_edit, None)
-
-
-class _PromptFloatSlider(pn.widgets.FloatSlider):
-    """The release (``value_throttled``) is handled at once, not after Panel's 50 ms debounce of
-    browser changes. The drag's own values are too (they are dropped at once: throttled): else
-    the release would wait for the last of them, which is still being debounced."""
-
-    _priority_changes = ["value", "value_throttled"]
-
-
-class _PromptIntSlider(pn.widgets.IntSlider):
-    _priority_changes = ["value", "value_throttled"]
-
-
-class TypedFloatSlider(_Typed, pn.widgets.EditableFloatSlider):
-    _slider_widget = _PromptFloatSlider
-
-
-class TypedIntSlider(_Typed, pn.widgets.EditableIntSlider):
-    _slider_widget = _PromptIntSlider
-
-
-#: BokehJS rewrites a <style> element of every renderer (its position) on every paint, even when
-#: the text is unchanged; each rewrite makes the browser re-collect the page's style sheets at the
-#: next colour lookup (several per renderer: BokehJS reads CSS variables for them), ~1 ms each,
-#: about a third of the time the three maps took to paint. Identical text is not written again.
-SKIP_UNCHANGED_STYLES_JS = """
-let proto = null;
-try {  // BokehJS internals: another Bokeh version without them is left alone
-  proto = Bokeh.require("core/dom").InlineStyleSheet.prototype;
-} catch (e) {}
-if (proto && typeof proto._update === "function" && !proto.__skips_unchanged) {
-  const update = proto._update;
-  proto._update = function (css) {
-    if (this.el.textContent !== css)
-      update.call(this, css);
-  };
-  proto.__skips_unchanged = true;
-}
-"""
-
 def _release_freed_memory():
     """Hand memory freed by closed sessions back to the OS (glibc keeps it in its arenas)."""
     try:
@@ -91,22 +37,13 @@ def _release_freed_memory():
         pass
 
 
-class TextHTML(pn.pane.HTML):
-    """An HTML pane whose new object re-sends only its text. Panel's own works out and
-    re-validates every property of the model again, its theme's style sheets included: ~6 % of
-    the server's time under the load test (the note below the maps changes with most maps)."""
-
-    def _update(self, ref, model):
-        model.text = self._transform_object(self.object)["object"]
-
-
 _alert = maps.alert
 
 
 def _widgets():
     """Editable sliders (type a value or drag) for every number; a text box for the noise."""
-    numeric = {"type": TypedFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
-    integer = {"type": TypedIntSlider, "sizing_mode": "stretch_width"}
+    numeric = {"type": pn.widgets.EditableFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
+    integer = {"type": pn.widgets.EditableIntSlider, "sizing_mode": "stretch_width"}
     spec = {name: dict(numeric) for name in ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k",
                                                 "Ph_b", "Pv_b", "d_ref", "T", "sigma", "extent",
                                                 "z_min", "z_max", "threshold")}
@@ -192,9 +129,6 @@ def create_app():
     if pn.state.location is not None:
         flush_url = url.sync_url(scenario, pn.state.location, pn.state.session_args or {})
 
-    doc = pn.state.curdoc  # the session document this app is built for
-    if doc is not None:
-        doc.js_on_event("document_ready", CustomJS(code=SKIP_UNCHANGED_STYLES_JS))
     #: Spins while a change slower than BUSY_AFTER computes, hidden otherwise (an idle ring
     #: looked stalled). In the header, a Bokeh root of its own: its changes re-lay out only
     #: itself, not the maps. throttle=0: it stops when the maps are ready, not later.

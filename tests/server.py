@@ -56,8 +56,9 @@ def served_app(*extra, port=None, timeout=120):
         proc.terminate()
         try:
             proc.wait(10)
-        except subprocess.TimeoutExpired:
+        except subprocess.TimeoutExpired:  # a busy machine: Tornado's shutdown can take longer
             proc.kill()
+            proc.wait()  # reaped: a Popen left running warns (ResourceWarning) in a later test
 
 
 async def close_websocket(conn, timeout=10.0):

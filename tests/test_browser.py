@@ -157,20 +157,6 @@ def test_page_loads_with_three_maps_and_units(page):
     assert veiled[1] == 0  # the dual map nowhere
 
 
-def test_unchanged_style_rewrites_are_skipped(page):
-    # app.dashboard.SKIP_UNCHANGED_STYLES_JS: an identical rewrite of a BokehJS <style> keeps its
-    # text node (the browser has nothing to re-collect); a changed one is still written.
-    kept, text = page.evaluate("""() => {
-      const sheet = new (Bokeh.require("core/dom").InlineStyleSheet)(":host { left: 1px; }");
-      const node = sheet.el.firstChild;
-      sheet.replace(":host { left: 1px; }");
-      const kept = sheet.el.firstChild === node;
-      sheet.replace(":host { left: 2px; }");
-      return [kept, sheet.el.textContent];
-    }""")
-    assert kept and text == ":host { left: 2px; }"
-
-
 def test_dragging_the_ph_slider_changes_the_maps(page):
     before = maps(page)
     handle = page.locator(".w-Ph .noUi-handle").first

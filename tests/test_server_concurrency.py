@@ -94,9 +94,11 @@ def test_a_refused_value_sends_no_maps(server):
         _on_thread(_close, client)
 
 
+@pytest.mark.xfail(strict=True, reason="Bokeh builds a new page on the event loop; the patch that "
+                   "moved it to a thread is gone (issue 15): not yet regained by public means")
 def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server):
-    """A page takes ~2 s of Python to build (app/server_threads.py: build_pages_off_loop); Bokeh
-    built it on the event loop, and every open session waited. Another session's cheap event must
+    """A page takes ~2 s of Python to build; Bokeh builds it on the event loop, and every open
+    session waits. Another session's cheap event must
     be answered while the page is still being built, in under a third of the page's time."""
     other = _on_thread(Client, server)
     try:
