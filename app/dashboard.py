@@ -15,7 +15,7 @@ from bokeh.models.formatters import PrintfTickFormatter
 from . import maps, url
 from .compute import PanelCache
 from .design import design_tab
-from .scenario import COMPARISONS, MEASURE_LABELS, PRESETS, Scenario
+from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, Scenario
 
 #: Sidebar sections: (title, parameters, collapsed?).
 SECTIONS = (
@@ -94,7 +94,7 @@ def _message_pane(scenario, names, css):
 
 def _section(scenario, tabs, title, names, collapsed):
     """A sidebar card of ``names``' inputs; an input that does not apply is hidden, and so is the
-    card when none does. A refused value's message shows at the top of its card."""
+    card when none does. A refused value's message shows under its input."""
     watched = [scenario.param.plane, scenario.param.comparison, scenario.param.measure,
                scenario.param.layout, tabs.param.active]
 
@@ -106,9 +106,17 @@ def _section(scenario, tabs, title, names, collapsed):
         cls = spec.pop("type", pn.widgets.Select)
         return cls.from_param(scenario.param[name], visible=visible(name), **spec)
 
-    rows = [widget(name) for name in names]
+    def row(name):
+        if name not in ACCEPTED:  # a selector: nothing it offers is refused
+            return widget(name)
+        # A refused value is said right under its input, where the user typed it (at the top of
+        # the sidebar it was out of sight when typing in Stations or Advanced).
+        return pn.Column(widget(name), _message_pane(scenario, [name], f"w-message-{name}"),
+                         visible=visible(name), sizing_mode="stretch_width", margin=0)
+
+    rows = [row(name) for name in names]
     any_visible = pn.bind(lambda *_: any(applies(n, scenario, tabs.active) for n in names), *watched)
-    card = pn.Card(_message_pane(scenario, names, f"w-message-{names[0]}"), *rows, title=title,
+    card = pn.Card(*rows, title=title,
                    collapsed=collapsed, sizing_mode="stretch_width")
     # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
     return pn.Column(card, visible=any_visible, sizing_mode="stretch_width", margin=0)
@@ -127,7 +135,8 @@ def create_app():
 
     flush_url = None  # no page URL outside a served page
     if pn.state.location is not None:
-        flush_url = url.sync_url(scenario, pn.state.location, pn.state.session_args or {})
+        flush_url = url.sync_url(scenario, pn.state.location, pn.state.session_args or {},
+                                onload=pn.state.onload)
 
     #: Spins while a change slower than BUSY_AFTER computes, hidden otherwise (an idle ring
     #: looked stalled). In the header, a Bokeh root of its own: its changes re-lay out only
@@ -159,7 +168,8 @@ def create_app():
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "
                                   "figure's map gets a red frame)"), presets,
                  _message_pane(scenario, None, "w-message"), *sections,
-                 pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"), downloads],
+                 pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"),
+                           downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
         main=[tabs],
         sidebar_width=360,
         header_background="#1f5f8b",

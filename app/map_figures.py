@@ -46,13 +46,14 @@ VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000")
 NAN_COLOUR = "#ffffff"
 STRIPE = 6  # pixels of the map grid per stripe of the veil
 
-#: Turns a normalised image value back into the map's value (``low``, ``high``: its colour range)
-#: and says what a point without one is (``veil``: the veil's data source; ``texts``: per code).
+#: The hover of a map, on its veil layer (a veil code is never NaN: Bokeh shows a NaN value as
+#: "NaN" without asking the formatter): what the point is, or its value, the normalised image
+#: value (``img``: the map's data source) turned back with the colour range ``low``, ``high``.
 _HOVER_JS = """
-const code = veil.data.image[0][special_vars.image_index.flat_index];
-if (code == 1 || code == 2) return texts.unobservable;
-if (value == null || !isFinite(value)) return texts.none;
-const v = low + value * (high - low);
+if (value == 1 || value == 2) return texts.unobservable;
+const s = img.data.image[0][special_vars.image_index.flat_index];
+if (s == null || !isFinite(s)) return texts.none;
+const v = low + s * (high - low);
 if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m"; }
 return v.toFixed(3);
 """
@@ -88,7 +89,7 @@ def _figure(x_range, y_range):
     fig = figure(x_range=x_range, y_range=y_range, width=420, height=440, sizing_mode="scale_width",
                  tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
-                 min_border_right=8, toolbar_location="above")
+                 min_border_right=4, toolbar_location="right")
     fig.title.text_font_size = "11pt"
     fig.toolbar.autohide = True
     return fig
@@ -113,18 +114,18 @@ def build():
         veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]),
                                 name="map-veil")
         st = ColumnDataSource(dict(x=[], y=[], name=[]))
-        r = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
-        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
+        v = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
         s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
                         line_color="black", line_width=1.5)
-        fmt = CustomJSHover(code=_HOVER_JS, args=dict(veil=veil, low=0.0, high=1.0, log=False,
+        fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, low=0.0, high=1.0, log=False,
                                                       texts=dict(unobservable="", none="")))
-        hover = HoverTool(renderers=[r], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
+        hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
                                                    ("value", "@image{custom}")],
-                          formatters={"@image": fmt})
+                          formatters={"@image": fmt}, visible=False)  # no toolbar icon: room for save
         save = SaveTool(filename="observability_map")
-        fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")]),
-                      save)
+        fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
+                                       visible=False), save)
         bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", width=12,
                        title_text_font_size="9pt", formatter=plain)
         fig.add_layout(bar, "right")

@@ -44,13 +44,16 @@ def without(search, names):
     return "?" + urlencode(kept) if kept else ""
 
 
-def sync_url(scenario, location, args):
+def sync_url(scenario, location, args, onload=None):
     """Read a pasted link's values (``args``, as pn.state.session_args) into ``scenario`` once,
     and write later changes into ``location`` (a panel Location).
 
     Returns ``flush``: a change of the maps' values waits in the URL until the maps are drawn
     (redraw calls ``flush``). Each URL update costs the browser ~10 ms and the server an echo of
-    the new address to process: ~18 ms of every slider change when it went first."""
+    the new address to process: ~18 ms of every slider change when it went first.
+
+    ``onload``: pn.state.onload in a served page: refused values leave the address bar once the
+    page is up (set before, the browser's own address replaced the cleaned one)."""
     good, problems = {}, {}
     for name in NAMES:
         if name in args:
@@ -60,7 +63,10 @@ def sync_url(scenario, location, args):
             good.update({} if problem else {name: value})
     scenario.param.update(good)
     if problems:  # out of the address bar: a copied link must not carry them on
-        location.search = without(location.search or "", set(problems))
+        def clean():
+            location.search = without(location.search or "", set(problems))
+
+        clean() if onload is None else onload(clean)
     pending, lock = {}, threading.Lock()
 
     def flush():
