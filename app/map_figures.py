@@ -48,12 +48,14 @@ STRIPE = 6  # pixels of the map grid per stripe of the veil
 
 #: The hover of a map, on its veil layer (a veil code is never NaN: Bokeh shows a NaN value as
 #: "NaN" without asking the formatter): what the point is, or its value, the normalised image
-#: value (``img``: the map's data source) turned back with the colour range ``low``, ``high``.
+#: value (``img``: the map's data source) turned back with the colour range of its colour bar's
+#: mapper ``bar`` (kept current with the range: the args themselves change only with the texts:
+#: setting args, which refer to models, makes Bokeh re-walk the document, ~0.1 s each).
 _HOVER_JS = """
 if (value == 1 || value == 2) return texts.unobservable;
 const s = img.data.image[0][special_vars.image_index.flat_index];
 if (s == null || !isFinite(s)) return texts.none;
-const v = low + s * (high - low);
+const v = bar.low + s * (bar.high - bar.low);
 if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m"; }
 return v.toFixed(3);
 """
@@ -118,8 +120,8 @@ def build():
         v = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
         s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
                         line_color="black", line_width=1.5)
-        fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, low=0.0, high=1.0, log=False,
-                                                      texts=dict(unobservable="", none="")))
+        fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
+                                                      log=False, texts=dict(unobservable="", none="")))
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
                                                    ("value", "@image{custom}")],
                           formatters={"@image": fmt}, visible=False)  # no toolbar icon: room for save
@@ -287,9 +289,8 @@ def set_maps(figs: MapFigures, p: Panels):
                      "undefined: A or B unobservable (rank-deficient)",
                      none="undefined: on a station" if which < 2 else p.blank)
         fmt = figs.formatters[which]
-        args = dict(fmt.args, low=float(low), high=float(high), log=log, texts=texts)
-        if args != fmt.args:
-            fmt.args = args
+        if fmt.args["log"] != log or fmt.args["texts"] != texts:  # rare: a new measure or layout
+            fmt.args = dict(fmt.args, log=log, texts=texts)
         figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{custom}")]
         figs.captions[which].text = _wrapped(p.caption)
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"

@@ -269,7 +269,7 @@ def test_crlb_maps_are_coloured_by_log10_metres_and_say_why_a_value_is_missing()
     map_figures.fill(figs, p)
     for which in range(2):
         fmt = figs.formatters[which].args
-        assert fmt["log"] and (fmt["low"], fmt["high"]) == p.clim
+        assert fmt["log"] and (fmt["bar"].low, fmt["bar"].high) == p.clim
         assert "log scale" in figs.colorbars[which].title
     assert figs.formatters[0].args["texts"]["unobservable"].startswith("unobservable (rank 6)")
     assert "unobservable" in figs.formatters[2].args["texts"]["unobservable"]
