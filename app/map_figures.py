@@ -241,29 +241,59 @@ def view_box(p: Panels):
     return (*box_u, *((hi, lo) if p.plane.kind == "xz" else (lo, hi)))
 
 
-def set_ranges(figs: MapFigures, p: Panels):
-    """The colour bars' ranges and palettes (they draw no image: nothing is repainted but them)."""
-    for bar, (low, high, palette) in zip(figs.bar_mappers, ranges(p)[1:]):
+@dataclass(frozen=True)
+class Prepared:
+    """The arrays :func:`set_maps` sends, worked out beforehand (on a worker thread: no numpy work
+    on the server's event loop while maps are drawn)."""
+
+    panels: Panels
+    maps: list  # [(values shown, observable, stations (S, 2), title)] of A, B, difference
+    axes: tuple  # ("x", "y" or "z")
+    ranges: list  # [(low, high, palette)] of each map
+    images: tuple  # float32, normalised to each map's range
+    veils: tuple  # float32 veil codes
+
+
+def prepare(p: Panels) -> Prepared:
+    """Everything numeric that drawing ``p`` needs (pure; thread-safe)."""
+    maps, axes = _maps(p)
+    scales = ranges(p)
+    images = tuple(normalised(values, low, high) for (values, *_), (low, high, _) in zip(maps, scales))
+    veils = tuple(veil_codes(observable, values) for values, observable, *_ in maps)
+    return Prepared(panels=p, maps=maps, axes=axes, ranges=scales, images=images, veils=veils)
+
+
+def _prepared(p):
+    return p if isinstance(p, Prepared) else prepare(p)
+
+
+def set_ranges(figs: MapFigures, p):
+    """The colour bars' ranges and palettes (they draw no image: nothing is repainted but them).
+    ``p``: Panels or their :func:`prepare`."""
+    for bar, (low, high, palette) in zip(figs.bar_mappers, _prepared(p).ranges[1:]):
         bar.update(**_changed(bar, dict(low=low, high=high, palette=palette)))
 
 
 def fill(figs: MapFigures, p: Panels):
     """Write one scenario's maps into the figures, in place."""
-    set_ranges(figs, p)
-    set_maps(figs, p)
+    d = prepare(p)
+    set_ranges(figs, d)
+    set_maps(figs, d)
 
 
-def set_maps(figs: MapFigures, p: Panels):
+def set_maps(figs: MapFigures, prepared):
     """Everything but the colour bars' ranges: images, veils, stations, titles, labels, tooltips,
-    captions (the scenario's parameters, also in a saved PNG), PNG file names."""
-    maps, (xname, vname) = _maps(p)
+    captions (the scenario's parameters, also in a saved PNG), PNG file names. ``prepared``:
+    Panels or their :func:`prepare`."""
+    d = _prepared(prepared)
+    p, maps, (xname, vname) = d.panels, d.maps, d.axes
     where = geometry(p.plane)
-    for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, ranges(p))):
+    for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, d.ranges)):
         fig = figs.figures[which]
-        figs.images[which].data = dict(image=[normalised(values, low, high)], **where)
+        figs.images[which].data = dict(image=[d.images[which]], **where)
         mapper = fig.renderers[0].glyph.color_mapper
         mapper.update(**_changed(mapper, dict(palette=palette)))
-        veil = veil_codes(observable, values)
+        veil = d.veils[which]
         old = figs.veils[which].data
         same_rect = all(old[k] == v for k, v in where.items())
         if not (same_rect and old["image"][0].shape == veil.shape and np.array_equal(old["image"][0], veil)):

@@ -114,7 +114,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         if snapshot == latest[0]:
             return
         latest[0] = snapshot
-        computing = _COMPUTE.submit(cache.get, snapshot)
+        computing = _COMPUTE.submit(lambda: map_figures.prepare(cache.get(snapshot)))
         with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
             pn.state.execute(partial(draw, snapshot, computing))
 
@@ -128,6 +128,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
     async def show_maps(snapshot, computing):
         maps = asyncio.wrap_future(computing)
+        # ``panels``: the maps and the arrays to send (map_figures.prepare), from the worker
         try:  # the spinner only for a slow change: for a fast one it costs more than it says
             panels = await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
         except asyncio.TimeoutError:
@@ -146,9 +147,10 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             await asyncio.sleep(0)  # events queued meanwhile go first
             with pn.io.hold():
                 map_figures.set_maps(figs, panels)
-                note.param.update(object=alert(panels.note, "warning"), visible=bool(panels.note))
-                paper.param.update(object=_paper_line(panels), visible=bool(panels.preset))
-                now = remedies(panels)
+                p = panels.panels
+                note.param.update(object=alert(p.note, "warning"), visible=bool(p.note))
+                paper.param.update(object=_paper_line(p), visible=bool(p.preset))
+                now = remedies(p)
                 known.visible, crlb.visible = now["known"], now["crlb"]
 
     scenario.param.watch(redraw, list(FIELDS))

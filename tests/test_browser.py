@@ -488,7 +488,9 @@ def test_controls_that_do_not_apply_are_hidden(page):
 
 def test_the_idle_spinner_is_not_shown(page):
     # defect 8: a permanent hollow ring looked stalled
-    assert not page.locator(".w-busy").first.is_visible()
+    shown = page.evaluate("""() => Array.from(Bokeh.documents[0].all_models)
+        .filter(m => (m.css_classes || []).includes('w-busy')).map(m => m.visible)""")
+    assert shown == [False]
 
 
 def test_a_saved_png_is_named_after_the_scenario_opaque_with_labels_and_caption(page):
