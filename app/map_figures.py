@@ -22,7 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from bokeh.models import (
-    BasicTickFormatter,
     ColorBar,
     ColumnDataSource,
     CustomJSHover,
@@ -59,8 +58,10 @@ const v = bar.low + s * (bar.high - bar.low);
 if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m"; }
 return v.toFixed(3);
 """
-#: Colour bar ticks of a log10-metre scale, in metres.
-_METRES_TICK_JS = """
+#: Colour bar ticks: in metres on a log10-metre scale (``log``), else the plain number. One
+#: formatter per bar, switched by its args (BokehJS keeps a colour bar's first formatter).
+_TICK_JS = """
+if (!log) return String(Number(tick.toPrecision(6))).replace("-", "\u2212");
 const m = Math.pow(10, tick);
 return m >= 1e4 || m < 1e-2 ? m.toExponential(0) : String(Number(m.toPrecision(2)));
 """
@@ -81,7 +82,6 @@ class MapFigures:
     formatters: tuple  # CustomJSHover of each map's value
     captions: tuple
     saves: tuple
-    tick_formatters: tuple  # of the colour bars: (plain numbers, metres of a log10 scale)
     view: object = None  # the (plane, view box) last drawn: a new one resets zoom and pan
 
 
@@ -92,7 +92,8 @@ def _figure(x_range, y_range):
                  tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
                  min_border_right=4, toolbar_location="right")
-    fig.title.text_font_size = "11pt"
+    fig.title.text_font_size = "10pt"
+    fig.xaxis.ticker.desired_num_ticks = 5  # labels of a narrow map (1280 px screen) must not run together
     fig.toolbar.autohide = True
     return fig
 
@@ -103,7 +104,6 @@ def build():
     value_bar, diff_bar = (LinearColorMapper(palette=Viridis256, low=0, high=1, nan_color=NAN_COLOUR)
                            for _ in range(2))
     veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=3)
-    plain, metres = BasicTickFormatter(), CustomJSTickFormatter(code=_METRES_TICK_JS)
     out = {k: [] for k in ("figs", "images", "veils", "stations", "bars", "hovers", "formatters",
                            "captions", "saves")}
     for which in range(3):
@@ -129,7 +129,8 @@ def build():
         fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
                                        visible=False), save)
         bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", width=12,
-                       title_text_font_size="9pt", formatter=plain)
+                       title_text_font_size="9pt", formatter=CustomJSTickFormatter(code=_TICK_JS,
+                                                                                   args=dict(log=False)))
         fig.add_layout(bar, "right")
         caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
         fig.add_layout(caption, "below")
@@ -139,8 +140,7 @@ def build():
                       veils=tuple(out["veils"]), stations=tuple(out["stations"]),
                       bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
                       hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
-                      captions=tuple(out["captions"]), saves=tuple(out["saves"]),
-                      tick_formatters=(plain, metres))
+                      captions=tuple(out["captions"]), saves=tuple(out["saves"]))
 
 
 def _symmetric(values):
@@ -161,7 +161,7 @@ def _maps(p: Panels):
     col = 1 if p.plane.kind == "xy" else 2
     maps = []
     for which, res in enumerate((p.a, p.b)):
-        title = p.titles[which] + (" — round-off only" if not res.observable.any() else "")
+        title = p.titles[which] + (" — round-off" if not res.observable.any() else "")
         maps.append((p.shown(which), res.observable, p.stations[which][:, [0, col]], title))
     both = np.unique(np.vstack(p.stations), axis=0)
     maps.append((p.diff, p.a.observable & p.b.observable, both[:, [0, col]], p.titles[2]))
@@ -304,7 +304,7 @@ def set_maps(figs: MapFigures, prepared):
             figs.stations[which].data = dict(x=stations[:, 0], y=stations[:, 1],
                                              name=[f"station {i + 1}" for i in range(len(stations))])
         paper = which in p.paper[0]
-        fig.title.text = title + (f" — paper {p.preset}" if paper else "")
+        fig.title.text = title + (" (paper)" if paper else "")
         fig.title.text_color = "#b03a2e" if paper else "#222222"
         fig.outline_line_color, fig.outline_line_width = ("#b03a2e", 3) if paper else ("#e5e5e5", 1)
         fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
@@ -312,9 +312,8 @@ def set_maps(figs: MapFigures, prepared):
         log = which < 2 and p.log_scale
         bar = figs.colorbars[which]
         bar.title = f"{label}, log scale" if log else label
-        formatter = figs.tick_formatters[1 if log else 0]
-        if bar.formatter is not formatter:
-            bar.formatter = formatter
+        if bar.formatter.args["log"] != log:
+            bar.formatter.args = dict(log=log)
         texts = dict(unobservable=p.unobservable[which] if which < 2 else
                      "undefined: A or B unobservable (rank-deficient)",
                      none="undefined: on a station" if which < 2 else p.blank)

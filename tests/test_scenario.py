@@ -271,6 +271,8 @@ def test_crlb_maps_are_coloured_by_log10_metres_and_say_why_a_value_is_missing()
         fmt = figs.formatters[which].args
         assert fmt["log"] and (fmt["bar"].low, fmt["bar"].high) == p.clim
         assert "log scale" in figs.colorbars[which].title
+        assert figs.colorbars[which].formatter.args["log"]  # ticks in metres
+    assert not figs.colorbars[2].formatter.args["log"]
     assert figs.formatters[0].args["texts"]["unobservable"].startswith("unobservable (rank 6)")
     assert "unobservable" in figs.formatters[2].args["texts"]["unobservable"]
     # the same kind of scale as the design tab: low error is the good end (reversed viridis)
@@ -314,7 +316,8 @@ def test_the_paper_figure_is_identified_and_the_png_is_named_after_the_scenario(
         map_figures.fill(figs, p)
         for which in range(3):
             framed = which in p.paper[0]
-            assert (f"paper {name}" in figs.figures[which].title.text) == framed
+            assert ("(paper)" in figs.figures[which].title.text) == framed
+            assert (figs.figures[which].outline_line_color == "#b03a2e") == framed
             assert figs.saves[which].filename.startswith(f"fig_{name[-1]}_")
             assert f"h = {s.h:g} m" in figs.captions[which].text
             assert figs.figures[which].border_fill_color == "white"  # an opaque PNG
