@@ -8,6 +8,7 @@ import os
 import socket
 import subprocess
 import sys
+import threading
 import time
 import urllib.request
 from pathlib import Path
@@ -69,6 +70,23 @@ async def close_websocket(conn, timeout=10.0):
     deadline = time.monotonic() + timeout
     while stream is not None and not stream.closed() and time.monotonic() < deadline:
         await asyncio.sleep(0.01)
+
+
+def on_thread(fn, *args, timeout=300):
+    """``fn(*args)`` on a thread of its own: a websocket client (bench.load_test.Client) made
+    there has an event loop of its own, which its close closes (one made on the main thread
+    would share the main thread's, left open)."""
+    out = []
+    t = threading.Thread(target=lambda: out.append(fn(*args)))
+    t.start()
+    t.join(timeout)
+    return out[0] if out else None
+
+
+def close_client(client):
+    """Close a bench.load_test.Client (call with :func:`on_thread`)."""
+    asyncio.set_event_loop(client.conn._loop.asyncio_loop)  # the client's own, for its last writes
+    client.close()
 
 
 @contextlib.contextmanager

@@ -8,7 +8,6 @@ than a third of A's round trip: were the computation on the event loop or holdin
 B's event would wait for it.
 """
 
-import asyncio
 import os
 import threading
 import time
@@ -17,7 +16,7 @@ import urllib.request
 import pytest
 
 from bench.load_test import Client
-from tests.server import served_app
+from tests.server import close_client, on_thread, served_app
 
 SLOW = {"measure": "CRLB position error (m)", "resolution": "400", "steps": "10"}  # as URL arguments
 
@@ -29,23 +28,8 @@ def server():
         yield url
 
 
-def _on_thread(fn, *args):
-    """``fn(*args)`` on a thread of its own: a client made there has an event loop of its own
-    (as the load test's)."""
-    out = []
-    t = threading.Thread(target=lambda: out.append(fn(*args)))
-    t.start()
-    t.join(120)
-    return out[0] if out else None
-
-
-def _close(client):
-    asyncio.set_event_loop(client.conn._loop.asyncio_loop)  # the client's own, for its last writes
-    client.close()
-
-
 def test_a_slow_map_does_not_hold_up_another_sessions_events(server):
-    slow, other = _on_thread(Client, server, SLOW), _on_thread(Client, server)
+    slow, other = on_thread(Client, server, SLOW), on_thread(Client, server)
     try:
         assert slow.change(slow.ph, "value_throttled", 111.0, slow.maps_done) is not None  # warm
         for attempt in range(3):  # the machine may be busy: the claim must hold in one clean try
@@ -72,14 +56,14 @@ def test_a_slow_map_does_not_hold_up_another_sessions_events(server):
             pytest.fail(f"B's cheap event took {quick * 1e3:.0f} ms, A's slow map {slow_rtt * 1e3:.0f} ms "
                         f"(B answered {'before' if quick_end < slow_end else 'after'} A's maps arrived)")
     finally:
-        _on_thread(_close, slow)
-        _on_thread(_close, other)
+        on_thread(close_client, slow)
+        on_thread(close_client, other)
 
 
 def test_a_refused_value_sends_no_maps(server):
     """A refused value is restored at once: the maps still show the restored scenario, so none
     are computed or sent again (they were: 0.5 MB and ~100 ms before the message showed)."""
-    client = _on_thread(Client, server)
+    client = on_thread(Client, server)
     try:
         start = len(client.events)
         bad = -7.5
@@ -91,7 +75,7 @@ def test_a_refused_value_sends_no_maps(server):
         sent = [mid for attr, mid, _ in events if attr == "data" and mid in client.images]
         assert not sent, f"{len(sent)} map images sent again for refused values"
     finally:
-        _on_thread(_close, client)
+        on_thread(close_client, client)
 
 
 @pytest.mark.xfail(strict=True, reason="Bokeh builds a new page on the event loop; the patch that "
@@ -100,7 +84,7 @@ def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server)
     """A page takes ~2 s of Python to build; Bokeh builds it on the event loop, and every open
     session waits. Another session's cheap event must
     be answered while the page is still being built, in under a third of the page's time."""
-    other = _on_thread(Client, server)
+    other = on_thread(Client, server)
     try:
         for attempt in range(3):  # the machine may be busy: the claim must hold in one clean try
             page = {}
@@ -127,4 +111,4 @@ def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server)
             pytest.fail(f"the cheap event took {quick * 1e3:.0f} ms, the page {page['time'] * 1e3:.0f} ms "
                         f"(answered {'before' if quick_end < page['end'] else 'after'} the page)")
     finally:
-        _on_thread(_close, other)
+        on_thread(close_client, other)
