@@ -6,6 +6,7 @@ per-session cache so that three views of one scenario compute it once.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -14,12 +15,21 @@ import numpy as np
 
 import core
 
-from .scenario import ACCEPTED, COMPARISONS, CRITERIA, DIFFERENCES, Scenario, ScenarioValues
+from .scenario import (
+    ACCEPTED,
+    COMPARISONS,
+    CRITERIA,
+    DIFFERENCES,
+    PAPER_MAPS,
+    Scenario,
+    ScenarioValues,
+    preset_of,
+)
 
 #: Numba's fallback threading layer (workqueue) must not be entered from two threads at once,
 #: and one map already keeps both cores busy: kernels run one at a time. A map takes tens of ms,
 #: so no session waits longer than one map for another (issue: server never blocks a session).
-_KERNEL_LOCK = threading.Lock()
+KERNEL_LOCK = threading.Lock()
 
 #: Values that define the comparison maps; everything else in Scenario is presentation or design.
 FIELDS = tuple(sorted(set(ACCEPTED) - {"threshold"} | {"plane", "layout", "comparison", "difference",
@@ -66,8 +76,26 @@ class Panels:
     value_label: str
     value_unit: str
     diff_label: str
-    clim: tuple  # shared colour range of A and B
+    clim: tuple  # shared colour range of A and B (of log10 metres for the CRLB)
     note: str  # plain text; empty if every point is observable
+    log_scale: bool = False  # A and B are drawn as log10 of their values (the CRLB, metres)
+    unobservable: tuple = ("unobservable", "unobservable")  # hover text of a veiled point of A, B
+    paper: tuple = ((), "")  # (which maps are a paper figure: 0 A, 1 B, 2 difference; caption)
+    preset: str = ""  # the paper figure whose parameters these are, or ""
+    blank: str = ""  # hover text of a difference-map point with no value that is not veiled
+    caption: str = ""  # the scenario's parameters, one line (under each map, and in its PNG)
+    filename: str = "observability_map"  # of a saved PNG, after the scenario
+
+    def shown(self, which):
+        """The values map ``which`` (0 A, 1 B, 2 difference) is coloured by; NaN where none."""
+        if which == 2:
+            return self.diff
+        values = (self.a, self.b)[which].value
+        if not self.log_scale:
+            return values
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = np.log10(values)
+        return np.where(np.isfinite(out), out, np.nan)
 
 
 def scenarios_ab(s: Scenario):
@@ -90,14 +118,33 @@ def scenarios_ab(s: Scenario):
 
 
 def difference(a, b, measure, mode):
-    """B compared with A: (values, label). Never subtracts determinants (spec §5)."""
+    """B compared with A: (values, label, short label for a title). Never subtracts determinants
+    (spec §5). NaN where the comparison has no finite value (see :func:`blank_reason`)."""
     if measure == "crlb_position":
         with np.errstate(divide="ignore", invalid="ignore"):
             out = np.log10(b.value / a.value)
-        return np.where(np.isfinite(out), out, np.nan), "log10(σ_B / σ_A) (< 0: B locates better)"
+        return (np.where(np.isfinite(out), out, np.nan), "log10(σ_B / σ_A) (< 0: B locates better)",
+                "log10(σB / σA)")
     if DIFFERENCES[mode] == "paper" and measure in ("log10_det", "d_optimal"):
-        return core.log10_positive_difference(b.value, a.value), "log10(|B| − |A|), blank where ≤ 0"
-    return core.log10_ratio(b.value, a.value), "log10(B / A) (signed log-ratio)"
+        return (core.log10_positive_difference(b.value, a.value), "log10(|B| − |A|), blank where ≤ 0",
+                "log10(|B| − |A|)")
+    return core.log10_ratio(b.value, a.value), "log10(B / A) (signed log-ratio)", "log10(B / A)"
+
+
+def blank_reason(measure, mode):
+    """Why a point of the difference map that is not veiled has no value (hover text)."""
+    if measure != "crlb_position" and DIFFERENCES[mode] == "paper" and measure in ("log10_det",
+                                                                                    "d_optimal"):
+        return "blank: Δ ≤ 0 (B no more observable than A), or on a station"
+    return "undefined: on a station"
+
+
+def unobservable_text(s, stations):
+    """Hover text of a veiled point: the rank where it is known (one station with the moments
+    unknown: rank 6 at every point, spec §4), else only that Γ is rank-deficient."""
+    if len(stations) == 1 and not s.core_options()["known"]:
+        return "unobservable (rank 6): colours are round-off"
+    return f"unobservable (rank < {7 - len(s.core_options()['known'])}, η < {core.ETA_TOL:g})"
 
 
 def colour_range(*arrays):
@@ -144,6 +191,23 @@ def unobservable_note(s: Scenario, results, stations):
     return "\n".join(lines)
 
 
+def caption(s):
+    """The parameters of a scenario's maps as one line of plain text."""
+    vx, vy = s.velocity()
+    where = (f"target depth z = {s.z:g} m" if s.plane == "x–y"
+             else f"x–z plane at y = {s.y:g} m, z {s.z_min:g}–{s.z_max:g} m")
+    return (f"P = ({s.Ph:g}, {s.Pv:g}) A·m, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, "
+            f"stations at depth h = {s.h:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, "
+            f"noise {s.noise:.3g} V/m, N = {s.steps}, {s.model}, {s.state_set}")
+
+
+def filename(s, preset=""):
+    """A saved map's file name (no extension): the paper figure, or the comparison, and the plane."""
+    stem = preset or COMPARISONS[s.comparison]
+    slug = "".join(c if c.isalnum() else "_" for c in f"{stem}_{s.plane}_{s.measure.split(' ')[0]}")
+    return "_".join(part for part in slug.lower().split("_") if part)
+
+
 def compute(snapshot: Snapshot) -> Panels:
     """The maps for one scenario. Pure: same snapshot, same numbers."""
     s = snapshot.scenario()
@@ -152,17 +216,23 @@ def compute(snapshot: Snapshot) -> Panels:
     plane = s.core_plane()
     (st_a, mom_a, title_a), (st_b, mom_b, title_b) = scenarios_ab(s)
     vel = s.velocity()
-    with _KERNEL_LOCK:
+    with KERNEL_LOCK:
         a = core.evaluate_map(plane, st_a, velocity=vel, moments=mom_a, measure=measure, **opts)
         b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure, **opts)
-    diff, diff_label = difference(a, b, measure, s.difference)
+    diff, diff_label, diff_short = difference(a, b, measure, s.difference)
     label, unit, _ = core.MEASURES[measure]
     note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b))
-    return Panels(
-        plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_label),
+    log_scale = measure == "crlb_position"  # metres over decades: coloured by log10 (as the design tab)
+    preset = preset_of(s) or ""
+    p = Panels(
+        plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_short),
         stations=(st_a, st_b), measure=measure, value_label=label, value_unit=unit,
-        diff_label=diff_label, clim=colour_range(a.value, b.value), note=note,
+        diff_label=diff_label, clim=(0.0, 1.0), note=note, log_scale=log_scale,
+        unobservable=(unobservable_text(s, st_a), unobservable_text(s, st_b)),
+        paper=PAPER_MAPS[preset] if preset else ((), ""), preset=preset,
+        blank=blank_reason(measure, s.difference), caption=caption(s), filename=filename(s, preset),
     )
+    return dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
 
 
 def _fisher_options(s: Scenario):
@@ -189,7 +259,7 @@ def design(snapshot: Snapshot) -> Design:
     s = snapshot.scenario()
     stations = np.array(s.stations, dtype=float)
     plane = xy_region(s, int(s.resolution))
-    with _KERNEL_LOCK:
+    with KERNEL_LOCK:
         errors = core.crlb_maps(plane, stations, velocity=s.velocity(), moments=(s.Ph, s.Pv),
                                 **_fisher_options(s))
     return Design(plane=plane, stations=stations, errors=errors)
@@ -222,14 +292,14 @@ def best_spacing(snapshot: Snapshot) -> Spacing:
     key = CRITERIA[s.criterion]
     region = xy_region(s, REGION_RESOLUTION)
     common = dict(velocity=s.velocity(), moments=(s.Ph, s.Pv), **_fisher_options(s))
-    with _KERNEL_LOCK:
+    with KERNEL_LOCK:
         result = core.best_spacing(region, d_range=SPACING_RANGE, n_curve=SPACING_POINTS, h=s.h,
                                    criterion=key, threshold=s.threshold, **common)
 
     def at(d):
         stations = core.dual_station(s.h, d)
         plane = xy_region(s, min(int(s.resolution), 150))
-        with _KERNEL_LOCK:
+        with KERNEL_LOCK:
             return Design(plane, stations, core.crlb_maps(plane, stations, **common))
 
     return Spacing(result=result, criterion=key, label=core.CRITERIA[key][0], best=at(result.d),
@@ -239,7 +309,7 @@ def best_spacing(snapshot: Snapshot) -> Spacing:
 def optimised_layout(snapshot: Snapshot):
     """core.optimise_layout for the chosen shape and N over the x–y region: a core.LayoutResult."""
     s = snapshot.scenario()
-    with _KERNEL_LOCK:
+    with KERNEL_LOCK:
         return core.optimise_layout(s.layout_kind, int(s.n_stations), xy_region(s, 31), h=s.h,
                                     velocity=s.velocity(), moments=(s.Ph, s.Pv),
                                     criterion=CRITERIA[s.criterion], threshold=s.threshold,

@@ -2,15 +2,18 @@
 
 HoloViews rebuilt every element on each change and sent each map separately (about a second per
 slider release, measured by bench/bench_browser.py); here the figures are built once and a change
-only replaces the float32 image arrays, colour ranges and titles.
+only replaces the float32 image arrays, the colour bars' ranges and the texts.
 
-Colour ranges. BokehJS colour-maps an image again on *every* change event of its mapper, twice
-(the mapper re-emits ``change`` after rescanning), and with the old image when the range comes
-before the data: 17 maps of 200 × 200 per slider change for 3 images. So the images' mappers
-never get change events from the server. A change first sends the new ranges alone, to two
-mappers that nothing draws (:func:`set_ranges`; no repaint): the browser copies them into the
-images' mappers silently (:data:`_COPY_RANGE_JS`). The next patch (:func:`set_maps`) brings the
-images, mapped once each with the new range, and the colour bars' own mappers: 3 maps per change.
+Colour ranges. BokehJS colour-maps an image again on every change event of its colour mapper
+(twice: the mapper re-emits ``change`` after rescanning), and with the old image when the range
+comes before the data. So the images' mappers never change range: an image is sent *normalised*
+to its colour range (0 at the low end, 1 at the high end; :func:`normalised`) and its mapper
+spans 0 … 1 for good. Only the colour bars' mappers, which draw no image, get the real range; the
+hover turns a normalised value back into the real one with the same range. One colour-mapping
+per image per change, through public Bokeh only.
+
+Every layer of a map (value, veil) always covers the same rectangle as the map (issue 16, defect
+1: the veil was re-sent only when its image or x changed, and stayed where the last plane had it).
 """
 
 from __future__ import annotations
@@ -18,104 +21,126 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from bokeh.layouts import gridplot
 from bokeh.models import (
     ColorBar,
     ColumnDataSource,
-    CustomJS,
+    CustomJSHover,
+    CustomJSTickFormatter,
     HoverTool,
     LinearColorMapper,
     Range1d,
+    SaveTool,
+    Title,
 )
 from bokeh.palettes import RdBu11, Viridis256
-from bokeh.plotting import figure
 
 from .compute import Panels, colour_range
 
-VEIL = "#7f7f7f"
-FRAME = 270  # px, each map's plotting area
+#: Veil codes of a pixel (the veil image): 0 observable, 1 and 2 unobservable (the two colours of
+#: its stripes), 3 no value (on a station, or blank where the paper's Δ ≤ 0): see VEIL_PALETTE.
+OK, VEIL_DARK, VEIL_LIGHT, NO_VALUE = 0, 1, 2, 3
+#: Unobservable points are striped grey, opaque enough that the round-off beneath is not read as
+#: colour; points with no value are left to the image's own white (NaN). Distinct by design.
+VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000")
+NAN_COLOUR = "#ffffff"
+STRIPE = 6  # pixels of the map grid per stripe of the veil
+
+#: The hover of a map, on its veil layer (a veil code is never NaN: Bokeh shows a NaN value as
+#: "NaN" without asking the formatter): what the point is, or its value, the normalised image
+#: value (``img``: the map's data source) turned back with the colour range of its colour bar's
+#: mapper ``bar`` (kept current with the range: the args themselves change only with the texts:
+#: setting args, which refer to models, makes Bokeh re-walk the document, ~0.1 s each).
+_HOVER_JS = """
+if (value == 1 || value == 2) return texts.unobservable;
+const s = img.data.image[0][special_vars.image_index.flat_index];
+if (s == null || !isFinite(s)) return texts.none;
+const v = bar.low + s * (bar.high - bar.low);
+if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m"; }
+return v.toFixed(3);
+"""
+#: Colour bar ticks: in metres on a log10-metre scale (``log``), else the plain number. One
+#: formatter per bar, switched by its args (BokehJS keeps a colour bar's first formatter).
+_TICK_JS = """
+if (!log) return String(Number(tick.toPrecision(6))).replace("-", "\u2212");
+const m = Math.pow(10, tick);
+return m >= 1e4 || m < 1e-2 ? m.toExponential(0) : String(Number(m.toPrecision(2)));
+"""
 
 
 @dataclass
 class MapFigures:
     """Bokeh models of the three maps; :func:`fill` writes a :class:`Panels` into them."""
 
-    layout: object
+    layout: tuple  # the three figures, for a row or grid of the caller's
     figures: tuple
     images: tuple  # ColumnDataSource per map: image, x, y, dw, dh
     veils: tuple
     stations: tuple
-    mappers: tuple  # of the images: A and B share mappers[0]; the difference has mappers[1]
-    ranges: tuple  # drawn by nothing, same sharing; the browser copies them into mappers
-    bar_mappers: tuple  # of the colour bars, same sharing
+    bar_mappers: tuple  # of the colour bars: A and B share the first; the difference has the second
     colorbars: tuple
     hovers: tuple
-    plane: object = None  # the plane last drawn: a new one resets zoom and pan
+    formatters: tuple  # CustomJSHover of each map's value
+    captions: tuple
+    saves: tuple
+    view: object = None  # the (plane, view box) last drawn: a new one resets zoom and pan
 
 
 def _figure(x_range, y_range):
-    fig = figure(x_range=x_range, y_range=y_range, frame_width=FRAME, frame_height=FRAME,
-                 tools="pan,wheel_zoom,box_zoom,reset,save",
-                 match_aspect=False, title="")
-    fig.title.text_font_size = "12pt"
+    from bokeh.plotting import figure
+
+    fig = figure(x_range=x_range, y_range=y_range, width=420, height=440, sizing_mode="scale_width",
+                 tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
+                 background_fill_color="white", border_fill_color="white", min_border_left=56,
+                 min_border_right=4, toolbar_location="right")
+    fig.title.text_font_size = "10pt"
+    fig.xaxis.ticker.desired_num_ticks = 5  # labels of a narrow map (1280 px screen) must not run together
+    fig.toolbar.autohide = True
     return fig
-
-
-#: Copies a range carrier into the images' mapper without a change signal (which would colour-map
-#: the old images again), and refreshes the scan the mapper caches on such a signal. Without those
-#: BokehJS internals (another version), a plain assignment: still correct, one map more.
-_COPY_RANGE_JS = """
-const range = {low: src.low, high: src.high, palette: src.palette};
-if (typeof img.scan === "function" && "_scan_data" in img) {
-  img.setv(range, {silent: true});
-  img._scan_data = img.scan([], img.palette.length);
-} else {
-  img.setv(range);
-}
-"""
-
-
-def _mappers():
-    """(images' mapper, range carrier, colour bar's mapper); the carrier's range is copied into
-    the images' mapper in the browser."""
-    img, src, bar = (LinearColorMapper(palette=Viridis256, nan_color="white") for _ in range(3))
-    copy = CustomJS(args=dict(img=img, src=src), code=_COPY_RANGE_JS)
-    for attr in ("low", "high", "palette"):
-        src.js_on_change(attr, copy)
-    return img, src, bar
 
 
 def build():
     """Three empty linked maps (one shared x and y range: zoom and pan together)."""
     x_range, y_range = Range1d(-1, 1), Range1d(-1, 1)
-    (value_mapper, value_src, value_bar), (diff_mapper, diff_src, diff_bar) = _mappers(), _mappers()
-    veil_mapper = LinearColorMapper(palette=["#ffffff00", VEIL], low=0, high=1)
-    figs, images, veils, stations, bars, hovers = [], [], [], [], [], []
+    value_bar, diff_bar = (LinearColorMapper(palette=Viridis256, low=0, high=1, nan_color=NAN_COLOUR)
+                           for _ in range(2))
+    veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=3)
+    out = {k: [] for k in ("figs", "images", "veils", "stations", "bars", "hovers", "formatters",
+                           "captions", "saves")}
     for which in range(3):
         fig = _figure(x_range, y_range)
+        # The images' mapper spans 0 … 1 for good (images come normalised: module docstring).
+        mapper = LinearColorMapper(palette=Viridis256, low=0, high=1, nan_color=NAN_COLOUR)
         # Named for clients that wait for new maps (bench/load_test.py): a veil is sent only when it changes.
         img = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]),
                                name="map-image")
         veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]),
                                 name="map-veil")
         st = ColumnDataSource(dict(x=[], y=[], name=[]))
-        mapper, bar_mapper = (value_mapper, value_bar) if which < 2 else (diff_mapper, diff_bar)
-        r = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
-        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper,
-                  global_alpha=0.55)
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
+        v = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
         s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
                         line_color="black", line_width=1.5)
-        hover = HoverTool(renderers=[r], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"), ("value", "@image")])
-        fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")]))
-        bar = ColorBar(color_mapper=bar_mapper, title="", width=12, title_text_font_size="9pt")
+        fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
+                                                      log=False, texts=dict(unobservable="", none="")))
+        hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
+                                                   ("value", "@image{custom}")],
+                          formatters={"@image": fmt}, visible=False)  # no toolbar icon: room for save
+        save = SaveTool(filename="observability_map")
+        fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
+                                       visible=False), save)
+        bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", width=12,
+                       title_text_font_size="9pt", formatter=CustomJSTickFormatter(code=_TICK_JS,
+                                                                                   args=dict(log=False)))
         fig.add_layout(bar, "right")
-        fig.tags = [value_src if which < 2 else diff_src]  # keeps the range carrier in the document
-        figs.append(fig), images.append(img), veils.append(veil), stations.append(st)
-        bars.append(bar), hovers.append(hover)
-    return MapFigures(layout=gridplot([figs], merge_tools=True, toolbar_location="right"), figures=tuple(figs), images=tuple(images), veils=tuple(veils),
-                      stations=tuple(stations), mappers=(value_mapper, diff_mapper),
-                      ranges=(value_src, diff_src), bar_mappers=(value_bar, diff_bar),
-                      colorbars=tuple(bars), hovers=tuple(hovers))
+        caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
+        fig.add_layout(caption, "below")
+        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save)):
+            out[key].append(model)
+    return MapFigures(layout=tuple(out["figs"]), figures=tuple(out["figs"]), images=tuple(out["images"]),
+                      veils=tuple(out["veils"]), stations=tuple(out["stations"]),
+                      bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
+                      hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
+                      captions=tuple(out["captions"]), saves=tuple(out["saves"]))
 
 
 def _symmetric(values):
@@ -126,21 +151,29 @@ def _symmetric(values):
 
 def _diff_colours(p: Panels):
     """The difference map's colour range, and whether it is the paper's log10(|B| − |A|)
-    (sequential palette) rather than the signed log-ratio (diverging, symmetric range)."""
+    (sequential palette) rather than a signed log-ratio (diverging, symmetric range)."""
     paper_diff = p.diff_label.startswith("log10(|B|")
     return (colour_range(p.diff) if paper_diff else _symmetric(p.diff)), paper_diff
 
 
 def _maps(p: Panels):
-    """[(values, observable, stations (S, 2), title)] of the three maps, and the axis names."""
+    """[(values shown, observable, stations (S, 2), title)] of the three maps, and the axis names."""
     col = 1 if p.plane.kind == "xy" else 2
     maps = []
     for which, res in enumerate((p.a, p.b)):
-        title = p.titles[which] + (" — round-off only" if not res.observable.any() else "")
-        maps.append((res.value, res.observable, p.stations[which][:, [0, col]], title))
+        title = p.titles[which] + (" — round-off" if not res.observable.any() else "")
+        maps.append((p.shown(which), res.observable, p.stations[which][:, [0, col]], title))
     both = np.unique(np.vstack(p.stations), axis=0)
     maps.append((p.diff, p.a.observable & p.b.observable, both[:, [0, col]], p.titles[2]))
     return maps, ("x", "y" if p.plane.kind == "xy" else "z")
+
+
+def ranges(p: Panels):
+    """[(low, high, palette)] of each map's colour scale: A and B share theirs."""
+    diff_range, paper_diff = _diff_colours(p)
+    value = (p.clim[0], p.clim[1], Viridis256[::-1] if p.log_scale else Viridis256)  # CRLB: low good
+    diff = (diff_range[0], diff_range[1], Viridis256 if paper_diff else RdBu11[::-1])
+    return [value, value, diff]
 
 
 def contents(p: Panels):
@@ -153,69 +186,146 @@ def contents(p: Panels):
     return maps, axes, p.clim, diff_range, paper_diff
 
 
+def normalised(values, low, high):
+    """``values`` as sent to the browser: (v − low) / (high − low) in float32, NaN kept."""
+    return ((np.asarray(values, dtype=float) - low) / (high - low)).astype(np.float32)
+
+
+def veil_codes(observable, values):
+    """The veil image (float32 codes, see :data:`VEIL_PALETTE`): diagonal stripes where the point
+    is unobservable, NO_VALUE where it is observable but has no value, OK elsewhere."""
+    n_v, n_u = observable.shape
+    stripes = ((np.arange(n_v)[:, None] + np.arange(n_u)[None, :]) // STRIPE) % 2
+    out = np.where(observable, np.where(np.isfinite(values), OK, NO_VALUE), VEIL_DARK + stripes)
+    return out.astype(np.float32)
+
+
+def _wrapped(text, width=62):
+    """``text`` in lines of at most ``width`` characters, broken after commas (a Bokeh title
+    does not wrap by itself: a long caption was cut at the plot's edge)."""
+    lines, line = [], ""
+    for part in text.split(", "):
+        if line and len(line) + 2 + len(part) > width:
+            lines.append(line + ",")
+            line = part
+        else:
+            line = f"{line}, {part}" if line else part
+    return "\n".join(lines + [line])
+
+
 def _changed(model, values):
     """The items of ``values`` that differ from ``model``'s (validating a palette costs time)."""
     return {k: v for k, v in values.items() if getattr(model, k) != v}
 
 
-def _set_quietly(model, **values):
-    """Set a Python-side Bokeh model's properties without a change event (nothing is sent: the
-    browser sets its copy itself). Kept current so that a re-rendered page gets these values."""
-    for name, value in values.items():
-        model.lookup(name).property.validate(value)
-    model._property_values.update(values)
+def geometry(plane):
+    """x, y, dw, dh of the images: pixel edges, so that pixel centres sit on the plane's grid."""
+    (u0, u1), (v0, v1) = plane.u, plane.v
+    du, dv = (u1 - u0) / (plane.n - 1), (v1 - v0) / (plane.n - 1)
+    return dict(x=[u0 - du / 2], y=[v0 - dv / 2], dw=[u1 - u0 + du], dh=[v1 - v0 + dv])
 
 
-def _ranges(p: Panels):
-    diff_range, paper_diff = _diff_colours(p)
-    return (dict(low=p.clim[0], high=p.clim[1], palette=Viridis256),
-            dict(low=diff_range[0], high=diff_range[1], palette=Viridis256 if paper_diff else RdBu11[::-1]))
+def view_box(p: Panels):
+    """(x start, x end, second-axis start, end) of a new view: the map and every station, with a
+    margin so a station's marker is never cut; the x–z plane has depth increasing downwards."""
+    g = geometry(p.plane)
+    col = 1 if p.plane.kind == "xy" else 2
+    st = np.vstack(p.stations)
+    u0, u1 = min(g["x"][0], st[:, 0].min()), max(g["x"][0] + g["dw"][0], st[:, 0].max())
+    v0, v1 = min(g["y"][0], st[:, col].min()), max(g["y"][0] + g["dh"][0], st[:, col].max())
+    mu, mv = 0.03 * (u1 - u0), 0.03 * (v1 - v0)
+    box_u = (u0 - mu if st[:, 0].min() - mu < g["x"][0] else u0,
+             u1 + mu if st[:, 0].max() + mu > g["x"][0] + g["dw"][0] else u1)
+    lo = v0 - mv if st[:, col].min() - mv < g["y"][0] else v0
+    hi = v1 + mv if st[:, col].max() + mv > g["y"][0] + g["dh"][0] else v1
+    return (*box_u, *((hi, lo) if p.plane.kind == "xz" else (lo, hi)))
 
 
-def set_ranges(figs: MapFigures, p: Panels):
-    """The colour ranges, to the carriers (sent; nothing redrawn) and the images' mappers (set in
-    the browser from the carriers; see the module docstring). Send before :func:`set_maps`, in a
-    patch of its own."""
-    for img, src, values in zip(figs.mappers, figs.ranges, _ranges(p)):
-        src.update(**_changed(src, values))
-        _set_quietly(img, **_changed(img, values))
+@dataclass(frozen=True)
+class Prepared:
+    """The arrays :func:`set_maps` sends, worked out beforehand (on a worker thread: no numpy work
+    on the server's event loop while maps are drawn)."""
+
+    panels: Panels
+    maps: list  # [(values shown, observable, stations (S, 2), title)] of A, B, difference
+    axes: tuple  # ("x", "y" or "z")
+    ranges: list  # [(low, high, palette)] of each map
+    images: tuple  # float32, normalised to each map's range
+    veils: tuple  # float32 veil codes
+
+
+def prepare(p: Panels) -> Prepared:
+    """Everything numeric that drawing ``p`` needs (pure; thread-safe)."""
+    maps, axes = _maps(p)
+    scales = ranges(p)
+    images = tuple(normalised(values, low, high) for (values, *_), (low, high, _) in zip(maps, scales))
+    veils = tuple(veil_codes(observable, values) for values, observable, *_ in maps)
+    return Prepared(panels=p, maps=maps, axes=axes, ranges=scales, images=images, veils=veils)
+
+
+def _prepared(p):
+    return p if isinstance(p, Prepared) else prepare(p)
+
+
+def set_ranges(figs: MapFigures, p):
+    """The colour bars' ranges and palettes (they draw no image: nothing is repainted but them).
+    ``p``: Panels or their :func:`prepare`."""
+    for bar, (low, high, palette) in zip(figs.bar_mappers, _prepared(p).ranges[1:]):
+        bar.update(**_changed(bar, dict(low=low, high=high, palette=palette)))
 
 
 def fill(figs: MapFigures, p: Panels):
-    """Write one scenario's maps into the figures, in place (ranges and maps in one go).
-    :func:`set_maps` alone draws the ranges last given to :func:`set_ranges`."""
-    set_ranges(figs, p)
-    set_maps(figs, p)
+    """Write one scenario's maps into the figures, in place."""
+    d = prepare(p)
+    set_ranges(figs, d)
+    set_maps(figs, d)
 
 
-def set_maps(figs: MapFigures, p: Panels):
-    """Everything but the images' colour ranges: images, veils, stations, titles, labels,
-    tooltips, colour bars."""
-    maps, (xname, vname) = _maps(p)
-    for bar, src in zip(figs.bar_mappers, figs.ranges):  # as set_ranges set them
-        bar.update(**_changed(bar, dict(low=src.low, high=src.high, palette=src.palette)))
-    (u0, u1), (v0, v1) = p.plane.u, p.plane.v
-    du, dv = (u1 - u0) / (p.plane.n - 1), (v1 - v0) / (p.plane.n - 1)
-    geometry = dict(x=[u0 - du / 2], y=[v0 - dv / 2], dw=[u1 - u0 + du], dh=[v1 - v0 + dv])
-    for which, (values, observable, stations, title) in enumerate(maps):
+def set_maps(figs: MapFigures, prepared):
+    """Everything but the colour bars' ranges: images, veils, stations, titles, labels, tooltips,
+    captions (the scenario's parameters, also in a saved PNG), PNG file names. ``prepared``:
+    Panels or their :func:`prepare`."""
+    d = _prepared(prepared)
+    p, maps, (xname, vname) = d.panels, d.maps, d.axes
+    where = geometry(p.plane)
+    for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, d.ranges)):
         fig = figs.figures[which]
-        figs.images[which].data = dict(image=[values.astype(np.float32)], **geometry)
-        veil = (~observable).astype(np.float32)
-        old = figs.veils[which].data["image"][0]
-        if old.shape != veil.shape or not np.array_equal(old, veil) or figs.veils[which].data["x"] != geometry["x"]:
-            figs.veils[which].data = dict(image=[veil], **geometry)  # sent only when it changes
+        figs.images[which].data = dict(image=[d.images[which]], **where)
+        mapper = fig.renderers[0].glyph.color_mapper
+        mapper.update(**_changed(mapper, dict(palette=palette)))
+        veil = d.veils[which]
+        old = figs.veils[which].data
+        same_rect = all(old[k] == v for k, v in where.items())
+        if not (same_rect and old["image"][0].shape == veil.shape and np.array_equal(old["image"][0], veil)):
+            figs.veils[which].data = dict(image=[veil], **where)  # sent only when it changes
         st = figs.stations[which].data
         if len(st["x"]) != len(stations) or not (np.array_equal(st["x"], stations[:, 0])
                                                  and np.array_equal(st["y"], stations[:, 1])):
             figs.stations[which].data = dict(x=stations[:, 0], y=stations[:, 1],
                                              name=[f"station {i + 1}" for i in range(len(stations))])
-        fig.title.text = title
+        paper = which in p.paper[0]
+        fig.title.text = title + (" (paper)" if paper else "")
+        fig.title.text_color = "#b03a2e" if paper else "#222222"
+        fig.outline_line_color, fig.outline_line_width = ("#b03a2e", 3) if paper else ("#e5e5e5", 1)
         fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
         label = p.value_label if which < 2 else p.diff_label
-        unit = f" {p.value_unit}" if which < 2 and p.value_unit == "m" else ""
-        figs.colorbars[which].title = label
-        figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{0.000}" + unit)]
-    if figs.plane != p.plane:  # a new plane resets the view; a new value keeps the zoom
-        figs.figures[0].x_range.update(start=u0 - du / 2, end=u1 + du / 2)
-        figs.figures[0].y_range.update(start=v0 - dv / 2, end=v1 + dv / 2)
-        figs.plane = p.plane
+        log = which < 2 and p.log_scale
+        bar = figs.colorbars[which]
+        bar.title = f"{label}, log scale" if log else label
+        if bar.formatter.args["log"] != log:
+            bar.formatter.args = dict(log=log)
+        texts = dict(unobservable=p.unobservable[which] if which < 2 else
+                     "undefined: A or B unobservable (rank-deficient)",
+                     none="undefined: on a station" if which < 2 else p.blank)
+        fmt = figs.formatters[which]
+        if fmt.args["log"] != log or fmt.args["texts"] != texts:  # rare: a new measure or layout
+            fmt.args = dict(fmt.args, log=log, texts=texts)
+        figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{custom}")]
+        figs.captions[which].text = _wrapped(p.caption)
+        figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
+    view = (p.plane, view_box(p))
+    if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom
+        u0, u1, v0, v1 = view[1]
+        figs.figures[0].x_range.update(start=u0, end=u1)
+        figs.figures[0].y_range.update(start=v0, end=v1)
+        figs.view = view

@@ -16,14 +16,16 @@ import param
 import core
 
 #: Hard limits: name -> (lowest, highest, unit). Enforced by Scenario; sliders span less.
+#: Depths (spec §7: z positive down, the sea surface at z = 0) are never negative: there is no sea
+#: above the surface, whatever the field model.
 ACCEPTED = {
     "Ph": (0.0, 1e5, "A·m"),
     "Pv": (0.0, 1e5, "A·m"),
     "Ph_b": (0.0, 1e5, "A·m"),
     "Pv_b": (0.0, 1e5, "A·m"),
     "k": (1e-3, 1e3, ""),
-    "h": (-5000.0, 5000.0, "m"),
-    "z": (-5000.0, 5000.0, "m"),
+    "h": (0.0, 5000.0, "m"),
+    "z": (0.0, 5000.0, "m"),
     "y": (-5000.0, 5000.0, "m"),
     "speed": (0.01, 100.0, "m/s"),
     "heading": (-180.0, 180.0, "°"),
@@ -34,8 +36,8 @@ ACCEPTED = {
     "noise": (1e-12, 1e-2, "V/m"),
     "steps": (1, 20, "instants"),
     "extent": (1.0, 10000.0, "m"),
-    "z_min": (-5000.0, 5000.0, "m"),
-    "z_max": (-5000.0, 5000.0, "m"),
+    "z_min": (0.0, 5000.0, "m"),
+    "z_max": (0.0, 5000.0, "m"),
     "resolution": (20, 400, "points per axis"),
     "threshold": (0.01, 1e5, "m"),
     "sea_depth": (0.5, 10000.0, "m"),
@@ -68,6 +70,8 @@ ERROR_QUANTITIES = {
 }
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
+#: Parameters that are depths below the sea surface (m): a negative value is above the surface.
+DEPTHS = ("h", "z", "z_min", "z_max")
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
 MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
 STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
@@ -97,6 +101,16 @@ PRESETS = {
                                comparison="Dual − single (Fig. 5)", z_min=0.0, z_max=8.4,
                                measure="log10|det Γ| (paper)",
                                stations=[[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]]),
+}
+
+#: Which map shows each paper figure: preset -> (map index 0 A, 1 B, 2 difference, caption).
+PAPER_MAPS = {
+    "Fig. 1": ((0,), "map A is the paper's Fig. 1: log10|det Γ| of one station over x–y"),
+    "Fig. 2": ((0, 1), "maps A and B are the paper's Fig. 2(a) (P_h > P_v) and 2(b) (P_h = P_v), x–z"),
+    "Fig. 3": ((2,), "the difference map is the paper's Fig. 3: moments × 10 minus the original"),
+    "Fig. 4": ((2,), "the difference map is the paper's Fig. 4(a): (70.7, 70.7) − (100, 0) A·m"),
+    "Fig. 5": ((2,), "the difference map is the paper's Fig. 5(b): dual (d = 15 m) minus single"),
+    "Fig. 6": ((2,), "the difference map is the paper's Fig. 6: dual d = 50 m minus d = 10 m"),
 }
 
 
@@ -200,6 +214,9 @@ class Scenario(param.Parameterized):
 
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
+    refused = param.List([], item_type=str,
+                         doc="The parameters the message is about (shown next to their inputs); "
+                             "empty for a message about the page's link.")
 
     # -- calibration tab (seed 004, app/calibration.py): every name starts with cal_. Hard bounds
     # (the widgets cannot leave them); the headings text is parsed, and refused, by that tab.
@@ -260,14 +277,16 @@ class Scenario(param.Parameterized):
         if not notes:
             notes = self.column_problems()
         if not notes:
-            self.message = ""
+            if self.message:
+                self.param.update(message="", refused=[])
             return
         back = {ev.name: ev.old for ev in events}
         old_depth = back.get("sea_depth")
         if moved:
             back.update(self._follow_seabed(self.sea_depth, old_depth))
         self._quietly(**back)
-        self.message = "; ".join(notes) + ". Kept the last good value."
+        self.param.update(message="; ".join(notes) + ". Kept the last good value.",
+                          refused=[ev.name for ev in events])
 
     def column_problems(self, stations=None, names=_COLUMN):
         """In a layered sea, why depths (and custom stations) are outside [0, D]; else []."""
@@ -300,13 +319,14 @@ class Scenario(param.Parameterized):
                 if self.model != "exact dipole" else "")
         self._quietly(h=D, z=min(max(self.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
                       stations=[[st[0], st[1], D] for st in self.stations])
-        self.message = note
+        self.param.update(message=note, refused=["sea_model"] if note else [])
 
     @param.depends("model", watch=True)
     def _exact_in_a_sea(self):
         if self.sea_model == "layered" and self.model != "exact dipole" and not self._restoring:
             self._quietly(model="exact dipole")
-            self.message = "The paper's printed equations have no layered-sea form: use the whole space."
+            self.param.update(message="The paper's printed equations have no layered-sea form: "
+                                      "use the whole space.", refused=["model"])
 
     def _follow_seabed(self, old, new):
         """Values that sat on the old seabed (h, z_max, custom stations), moved to the new one."""
@@ -326,14 +346,15 @@ class Scenario(param.Parameterized):
                 self.stations = event.old
             finally:
                 self._restoring = False
-            self.message = problem + ". Kept the last good layout."
+            self.param.update(message=problem + ". Kept the last good layout.", refused=["stations"])
         elif not self._restoring and self.message:
-            self.message = ""
+            self.param.update(message="", refused=[])
 
     @staticmethod
     def stations_problem(value):
-        """None if ``value`` is 1–8 finite (x, y, z) positions within the accepted range, else why."""
-        lo, hi, _ = ACCEPTED["h"]
+        """None if ``value`` is 1–8 finite (x, y, z) positions within the accepted range (z: a depth,
+        0 … 5000 m), else why."""
+        lo, hi, _ = ACCEPTED["y"]
         if not 1 <= len(value) <= MAX_STATIONS:
             return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
         for i, st in enumerate(value):
@@ -342,6 +363,9 @@ class Scenario(param.Parameterized):
             if not ok:
                 return (f"Station {i + 1} must be three numbers (x, y, z) in {lo:g} … {hi:g} m; "
                         f"got {str(st)[:60]!r}")
+            if st[2] < 0:
+                return (f"Station {i + 1}: depth z = {st[2]:g} m is above the sea surface; depths are "
+                        f"measured down from the surface (z ≥ 0)")
         return None
 
     @staticmethod
@@ -354,6 +378,9 @@ class Scenario(param.Parameterized):
         if isinstance(value, bool) or not ok_type or not math.isfinite(value):
             kind = "a whole number" if is_int else "a number"
             return f"{label} must be {kind}; got {str(value)[:40]!r}"
+        if name in DEPTHS and value < 0:
+            return (f"{label} = {value:g} is above the sea surface: depths are measured down from "
+                    f"the surface, {lo:g} … {hi:g} {unit}")
         if not lo <= value <= hi:
             return f"{label} = {value:g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
         return None
@@ -361,6 +388,10 @@ class Scenario(param.Parameterized):
     def apply_preset(self, name):
         """Set the parameters of one of the paper's figures (:data:`PRESETS`)."""
         self.param.update(PRESETS[name])
+
+    def active_preset(self):
+        """The paper figure (a :data:`PRESETS` name) whose parameters the scenario holds, or None."""
+        return preset_of(self)
 
     # -- what the core needs
     def core_plane(self):
@@ -377,6 +408,14 @@ class Scenario(param.Parameterized):
         return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
                     noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure],
                     sea=sea)
+
+
+def preset_of(values):
+    """The first :data:`PRESETS` name whose parameters ``values`` (attributes) all hold, or None."""
+    for name, preset in PRESETS.items():
+        if all(getattr(values, k) == v for k, v in preset.items()):
+            return name
+    return None
 
 
 class ScenarioValues(types.SimpleNamespace):

@@ -35,7 +35,7 @@ from core import track as core_track
 # The maps' lock on numba's parallel kernels (its workqueue layer must not be entered from two
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
-from .compute import _KERNEL_LOCK
+from .compute import KERNEL_LOCK
 from .scenario import Scenario
 
 hv.extension("bokeh", logo=False)
@@ -91,7 +91,7 @@ def case_of(s):
 def _compute(key):
     s = _Values(dict(key))
     case = case_of(s)
-    with _KERNEL_LOCK:
+    with KERNEL_LOCK:
         res = core_track.monte_carlo(case, filter=s.track_filter, runs=int(s.track_runs), seed=0,
                                      workers=1, keep_tracks=int(s.track_runs))
     truth = case.nominal_track()

@@ -84,28 +84,46 @@ def to_netcdf(p: Panels, params: dict) -> io.BytesIO:
 
 # -- layout design tab --------------------------------------------------------------------------
 
-def error_map(d, title, quantity="3-D position error (m)"):
-    """A CRLB error (1σ, log colour scale) of a layout over the x–y plane."""
+def _errors(d, quantity):
     values = getattr(d.errors, ERROR_QUANTITIES[quantity])
-    err = np.where(np.isfinite(values), values, np.nan)
+    return np.where(np.isfinite(values), values, np.nan)
+
+
+def error_clim(d, quantity="3-D position error (m)"):
+    """(low, high) of a design's error map: 1–99 % of its finite values; (1, 10) if none."""
+    err = _errors(d, quantity)
+    finite = err[np.isfinite(err)]
+    return (float(np.percentile(finite, 1)), float(np.percentile(finite, 99))) if finite.size else (1, 10)
+
+
+def common_clim(*designs, quantity="3-D position error (m)"):
+    """One colour range covering the error maps of several designs (to compare them side by side)."""
+    lims = [error_clim(d, quantity) for d in designs]
+    return (min(lo for lo, _ in lims), max(hi for _, hi in lims))
+
+
+def error_map(d, title, quantity="3-D position error (m)", clim=None, size=320):
+    """A CRLB error (1σ, log colour scale) of a layout over the x–y plane; ``clim`` the colour
+    range (default :func:`error_clim`), ``size`` the frame's side in pixels."""
+    err = _errors(d, quantity)
     label, unit = quantity.rsplit(" (", 1)
     vdim = hv.Dimension("error", label=label, unit=unit.rstrip(")"))
-    finite = err[np.isfinite(err)]
-    lim = (float(np.percentile(finite, 1)), float(np.percentile(finite, 99))) if finite.size else (1, 10)
     img = map_image(err, d.plane, vdim).opts(
-        cmap="viridis_r", logz=True, clim=lim, colorbar=True, clabel=f"CRLB {quantity}",
-        tools=["hover"], clipping_colors={"NaN": "white"}, frame_width=320, frame_height=320,
-        framewise=True, title=title)
+        cmap="viridis_r", logz=True, clim=clim or error_clim(d, quantity), colorbar=True,
+        clabel=f"CRLB {quantity}, log scale", tools=["hover"], clipping_colors={"NaN": "white"},
+        frame_width=size, frame_height=size, framewise=True, title=title)
     return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane)
 
 
-def station_layer(stations):
-    """Editable station markers (x, y) with their depth z as a value."""
+def station_layer(stations, editable=False):
+    """Station markers (x, y) with their depth z as a value; ``editable``: the point-draw tool
+    (of a PointDraw stream on this layer) is active. No hover of their own: the map's tooltip is
+    the one shown over a station (two overlapped), and the table lists x, y, z."""
     data = {"x": [s[0] for s in stations], "y": [s[1] for s in stations], "z": [s[2] for s in stations]}
-    return hv.Points(data, kdims=[hv.Dimension("x", unit="m"), hv.Dimension("y", unit="m")],
-                     vdims=[hv.Dimension("z", unit="m")]).opts(
-        marker="triangle", size=14, color="white", line_color="black", line_width=1.5,
-        tools=["hover"], active_tools=["point_draw"])
+    points = hv.Points(data, kdims=[hv.Dimension("x", unit="m"), hv.Dimension("y", unit="m")],
+                       vdims=[hv.Dimension("z", unit="m")]).opts(
+        marker="triangle", size=14, color="white", line_color="black", line_width=1.5)
+    return points.opts(active_tools=["point_draw"]) if editable else points
 
 
 def error_ellipse(errors, x, y, extent):

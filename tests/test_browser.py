@@ -5,12 +5,14 @@ import time
 from pathlib import Path
 from urllib.parse import urlencode
 
+import numpy as np
 import pytest
 
 from tests.server import CHROMIUM, chromium_browser, served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 DOCS = Path(__file__).resolve().parents[1] / "docs"
+VIEWPORT = {"width": 1600, "height": 1000}  # the issue's analyst screen (also 1280 × 800 below)
 
 pytestmark = pytest.mark.skipif(
     not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
@@ -33,8 +35,9 @@ MAPS_JS = """() => {
       for (let i = 0; i < a.length; i++) if (!isNaN(a[i])) s += a[i];
       return s; })]);
 }"""
-#: Per plot: [RGBA bytes of the map layer as drawn, how many differ from the image mapped through
-#: the plot's colour bar mapper, the colour bar's low, the image mapper's low].
+#: Per plot: [RGBA bytes of the map layer as drawn, how many differ from the image's real values
+#: (the sent image is normalised to the colour range: app/map_figures.py) mapped through the
+#: plot's colour bar mapper].
 COLOURS_JS = """() => {
   const out = [];
   const walk = (v) => { if (!v) return;
@@ -46,10 +49,21 @@ COLOURS_JS = """() => {
     const canvas = pv.renderer_views.get(r).glyph.image_data[0];
     const px = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
     const bar = pv.model.right.find(m => m.color_mapper).color_mapper;
-    const want = bar.rgba_mapper.v_compute(r.data_source.data.image[0]);
+    const real = Array.from(r.data_source.data.image[0], v => bar.low + v * (bar.high - bar.low));
+    const want = bar.rgba_mapper.v_compute(real);
     let bad = 0; for (let i = 0; i < want.length; i++) if (want[i] !== px[i]) bad++;
-    return [px.length, bad, bar.low, r.glyph.color_mapper.low];
+    return [px.length, bad];
   });
+}"""
+#: Per plot: how many pixels of its veil are unobservable (veil codes 1 and 2: app/map_figures.py).
+VEILED_JS = """() => {
+  const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(p => { const r = p.renderers.filter(r => r.data_source && r.data_source.data.image)[1];
+    let n = 0; for (const c of r.data_source.data.image[0]) if (c == 1 || c == 2) n++; return n; });
 }"""
 AXES_JS = """() => {
   const out = [];
@@ -73,7 +87,7 @@ def chromium():
 
 @pytest.fixture
 def page(chromium, server):
-    pg = chromium.new_page(viewport={"width": 1700, "height": 1100})
+    pg = chromium.new_page(viewport=VIEWPORT)
     errors = []
     pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     pg.on("pageerror", lambda e: errors.append(str(e)))
@@ -139,8 +153,9 @@ def test_page_loads_with_three_maps_and_units(page):
     labels = page.evaluate(AXES_JS)
     assert labels.count("x (m)") == 3 and labels.count("y (m)") == 3
     assert "round-off" in drawn[0][0]  # the single-station map says what it is
-    assert drawn[0][1][1] == 200 * 200  # and is veiled everywhere (rank 6)
-    assert drawn[1][1][1] == 0  # the dual map nowhere
+    veiled = page.evaluate(VEILED_JS)
+    assert veiled[0] == 200 * 200  # and is veiled everywhere (rank 6)
+    assert veiled[1] == 0  # the dual map nowhere
 
 
 def test_dragging_the_ph_slider_changes_the_maps(page):
@@ -153,10 +168,12 @@ def test_dragging_the_ph_slider_changes_the_maps(page):
     page.mouse.up()
     wait_maps(page, changed(before))
     assert float(value_of(page, "Ph")) > 100.0
-    # each image is coloured with its colour bar's range (the browser copies the range into the
-    # images' mapper: app/map_figures.py), pixel for pixel, and the spinner has stopped
-    for n_pixels, bad, bar_low, img_low in page.evaluate(COLOURS_JS):
-        assert n_pixels == 4 * 200 * 200 and bad == 0 and bar_low == img_low
+    # each image is coloured as its colour bar says: its real values (normalised in float32 and
+    # back) through the bar's mapper; a value within float32 round-off (~1e-7 of the range) of a
+    # bin edge of the 256 colours may land in the neighbouring bin: at most 0.1 % of the bytes
+    for n_pixels, bad in page.evaluate(COLOURS_JS):
+        assert n_pixels == 4 * 200 * 200 and bad <= 0.001 * n_pixels
+    # and the spinner has stopped
     page.wait_for_function("""() => { const s = Array.from(Bokeh.documents[0].all_models)
         .filter(m => (m.css_classes || []).includes('loader'));
         return s.length === 1 && !s[0].css_classes.includes('spin'); }""", timeout=5_000)
@@ -187,7 +204,7 @@ def test_slow_change_shows_the_busy_spinner_until_its_maps_are_drawn(chromium, s
     # CRLB maps of 10 instants at 400 × 400 take several tenths of a second (fast changes do not
     # flash the spinner: app/dashboard.py BUSY_AFTER)
     query = urlencode({"measure": "CRLB position error (m)", "steps": 10, "resolution": 400})
-    pg = chromium.new_page(viewport={"width": 1700, "height": 1100})
+    pg = chromium.new_page(viewport=VIEWPORT)
     try:
         pg.goto(f"{server}/app?{query}")
         pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
@@ -231,22 +248,44 @@ def wait_count(locator, n, timeout=30.0):
         time.sleep(0.2)
 
 
-def test_layout_design_click_adds_a_station_and_best_spacing_runs(page):
-    page.get_by_text("Layout design").click()
+def test_layout_design_click_adds_a_station_at_depth_h_and_best_spacing_compares_fairly(page):
+    page.get_by_text("Layout design", exact=True).click()
     rows = page.locator(".w-station-table .tabulator-row")
     wait_count(rows, 2)  # the paper's pair
     canvas = page.locator("canvas").filter(visible=True).first
     box = canvas.bounding_box()
     page.mouse.click(box["x"] + box["width"] * 0.25, box["y"] + box["height"] * 0.3)
-    wait_count(rows, 3)  # a click on the map added a station
+    wait_count(rows, 3)  # a click on the map added a station ...
+    depth = rows.nth(2).locator('.tabulator-cell[tabulator-field="z (m)"]')
+    deadline = time.time() + 10
+    while depth.inner_text().strip() != "100.0":  # ... at the station depth h (was z = 0)
+        assert time.time() < deadline, f"new station at z = {depth.inner_text()}"
+        time.sleep(0.2)
+    # the sensor noise reads as a number (was "+0.000" for 1e-7)
+    page.get_by_text("Advanced", exact=True).click()
+    assert float(value_of(page, "noise")) == 1e-7 and "e-" in value_of(page, "noise")
+    type_value(page, "noise", "2e-7")
+    deadline = time.time() + 10
+    while float(value_of(page, "noise")) != 2e-7:
+        assert time.time() < deadline, f"noise box shows {value_of(page, 'noise')!r}"
+        time.sleep(0.2)
     page.get_by_role("button", name="Find best spacing").click()
     page.wait_for_function(f"() => ({MAPS_JS})().some(([t]) => t.startsWith('Best: d ='))", timeout=60_000)
-    titles = [t for t, _ in maps(page)]
-    assert "Paper: d = 15 m" in titles
+    time.sleep(1.0)
+    plots = {p["title"]: p for p in layers(page)}
+    best = next(p for t, p in plots.items() if t.startswith("Best: d ="))
+    paper = plots["Paper: d = 15 m"]
+    assert best["clim"] == paper["clim"]  # one colour scale: the side-by-side comparison is fair
+    # nothing runs off to the side (the Paper map was cut off; the main area scrolled sideways)
+    overflow = page.evaluate("""() => [document.scrollingElement.scrollWidth - window.innerWidth,
+        ...Array.from(document.querySelectorAll('#main, .main')).map(e => e.scrollWidth - e.clientWidth)]""")
+    assert max(overflow) <= 1, overflow
+    # (a table entry with z < 0 is refused by Scenario.stations: tests/test_scenario.py; typing
+    # into a Tabulator cell from Playwright was not reliable enough to test here)
 
 
 def test_a_pasted_link_reopens_the_view(chromium, server):
-    pg = chromium.new_page(viewport={"width": 1700, "height": 1100})
+    pg = chromium.new_page(viewport=VIEWPORT)
     pg.goto(server + "/app?Ph=300.0&plane=x%E2%80%93z&d=40.0")
     pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
     wait_maps(pg, lambda drawn: len(drawn) == 3 and drawn[1][0] == "B: dual, d = 40 m")
@@ -257,3 +296,219 @@ def test_a_pasted_link_reopens_the_view(chromium, server):
     type_value(pg, "Pv", "55")
     pg.wait_for_function("() => window.location.search.includes('Pv=55')", timeout=15_000)
     pg.close()
+
+
+# -- issue 16: what a new analyst met ------------------------------------------------------------
+
+#: Per plot: the rectangle (x, y, dw, dh) of each image layer (map, veil), the y range, the
+#: colour bar's title, each image's colour-bar low and high.
+LAYERS_JS = """() => {
+  const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(p => {
+    const bar = p.right.find(m => m.color_mapper);
+    return {title: p.title.text,
+      layers: p.renderers.filter(r => r.data_source && r.data_source.data.image).map(r => {
+        const d = r.data_source.data; return [d.x[0], d.y[0], d.dw[0], d.dh[0]]; }),
+      y: [p.y_range.start, p.y_range.end], bar: bar ? bar.title : null,
+      clim: bar ? [bar.color_mapper.low, bar.color_mapper.high] : null};
+  });
+}"""
+
+
+def layers(pg):
+    return pg.evaluate(LAYERS_JS)
+
+
+def test_every_layer_of_a_map_covers_the_same_rectangle_after_plane_changes(page):
+    # defect 1: after x–z, the veil of A and C covered z 100–300 only; back in x–y, y 100–300 only
+    for plane in ("x–z", "x–y", "x–z"):
+        select(page, "plane", plane)
+        page.wait_for_function(f"() => ({AXES_JS})().filter(l => l === '{plane[-1]} (m)').length === 3",
+                               timeout=30_000)
+        time.sleep(0.5)  # the veils come with the maps' patch
+        for plot in layers(page):
+            assert len(plot["layers"]) == 2 and plot["layers"][0] == plot["layers"][1], plot
+    page.get_by_role("button", name="Fig. 2").click()
+    wait_value(page, "Pv_b", 100.0)
+    page.get_by_role("button", name="Fig. 3").click()
+    wait_maps(page, lambda drawn: "moments × 10" in drawn[1][0])
+    time.sleep(0.5)
+    for plot in layers(page):
+        assert plot["layers"][0] == plot["layers"][1], plot
+
+
+def test_x_z_maps_have_depth_increasing_downwards_with_the_stations_in_view(page):
+    select(page, "plane", "x–z")
+    page.wait_for_function(f"() => ({AXES_JS})().filter(l => l === 'z (m)').length === 3", timeout=30_000)
+    bottom, top = layers(page)[0]["y"]  # a Bokeh range starts at the bottom of the plot
+    assert top < 100.0 < 400.0 <= bottom  # deep down; z = 100 m (the stations, h = z from) below the top
+
+
+def _tooltip(pg, plot, fx, fy):
+    """Hover plot number ``plot`` at fractions (fx, fy) of its canvas; the tooltip's text."""
+    canvas = pg.locator("canvas").filter(visible=True).nth(2 * plot)  # a plot has two: primary, overlay
+    box = canvas.bounding_box()
+    pg.mouse.move(box["x"] + fx * box["width"], box["y"] + fy * box["height"], steps=3)
+    tip = pg.locator(".bk-tooltip-content").filter(visible=True).first
+    tip.wait_for(timeout=10_000)
+    return tip.text_content()
+
+
+def test_crlb_maps_are_in_log_metres_and_say_where_a_value_is_missing(page):
+    # defect 2: a linear 0–18 000 m scale, hover "Infinity m" and NaN without explanation
+    select(page, "measure", "CRLB position error (m)")
+    page.wait_for_function(f"() => ({LAYERS_JS})().every(p => (p.bar || '').includes('CRLB') "
+                           "|| (p.bar || '').includes('σ_B'))", timeout=30_000)
+    plots = layers(page)
+    assert all("log scale" in p["bar"] for p in plots[:2])
+    low, high = plots[1]["clim"]
+    assert high - low > 1 and high < 6  # decades of metres (log10), not 0 … 18 000 m
+    assert len(plots[2]["title"]) <= 40  # the difference map's title fits (was cut: "…B locates bette")
+    text = _tooltip(page, 0, 0.45, 0.3)  # map A: one station, unobservable everywhere
+    assert "unobservable (rank 6)" in text and "Infinity" not in text
+    text = _tooltip(page, 1, 0.45, 0.3)  # map B: a distance in metres
+    assert " m" in text and "NaN" not in text and "Infinity" not in text
+
+
+def test_a_veiled_point_hovers_as_unobservable_not_a_number(page):
+    # defect 8: the default view's map A (one station: rank 6) hovered as a number
+    text = _tooltip(page, 0, 0.4, 0.4)
+    assert "unobservable (rank 6)" in text
+
+
+def _message_near(pg, name):
+    """A refusal of ``name``'s input is said right under it, where the user typed (it was at the
+    top of the sidebar, out of sight when typing in Stations or Advanced)."""
+    msg = pg.locator(f".w-message-{name}").filter(visible=True).first
+    msg.wait_for(timeout=15_000)
+    box, inp = msg.bounding_box(), pg.locator(f".w-{name} input").first.bounding_box()
+    assert 0 <= box["y"] - (inp["y"] + inp["height"]) <= 80, (box, inp)  # just below the input
+    msg.scroll_into_view_if_needed()
+    return msg.locator(".alert").text_content()  # the pane's text is in its shadow root
+
+
+def test_a_typed_depth_above_the_surface_is_refused_where_the_user_typed_it(page):
+    # defects 3 and 4: h = -5 was accepted; refusals showed at the top of the sidebar
+    type_value(page, "h", "-5")
+    text = _message_near(page, "h")
+    assert "above the sea surface" in text
+    wait_value(page, "h", 100.0)
+
+
+def test_a_refusal_in_the_advanced_section_shows_next_to_the_input(page):
+    page.get_by_text("Advanced", exact=True).click()
+    box = page.locator(".w-T input").first
+    box.scroll_into_view_if_needed()
+    type_value(page, "T", "1e9")
+    text = _message_near(page, "T")
+    assert "outside the accepted range" in text
+
+
+def test_a_link_with_refused_values_says_so_and_leaves_the_address_bar(chromium, server):
+    # defect 3: ?h=-5 accepted silently; ?resolution=100000 ignored silently; both stayed in the URL
+    pg = chromium.new_page(viewport=VIEWPORT)
+    try:
+        pg.goto(server + "/app?h=-5&resolution=100000&Ph=150.0")
+        pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+        wait_maps(pg, lambda drawn: len(drawn) == 3)
+        msg = pg.locator(".w-message").filter(visible=True).first
+        msg.wait_for(timeout=15_000)
+        text = msg.locator(".alert").text_content()
+        assert "h:" in text and "above the sea surface" in text and "resolution:" in text
+        wait_value(pg, "h", 100.0)
+        wait_value(pg, "Ph", 150.0)
+        pg.wait_for_function("() => !/[?&](h|resolution)=/.test(window.location.search)", timeout=15_000)
+        assert "Ph=150" in pg.evaluate("() => window.location.search")
+    finally:
+        pg.close()
+
+
+def test_maps_fill_the_width_and_widen_when_the_sidebar_collapses(page):
+    # defect 5: fixed 270 px frames, map A's y label clipped, no wider with the sidebar collapsed
+    def widths():  # of the three maps' canvases (each plot has two: primary and overlay)
+        canvases = page.locator("canvas").filter(visible=True)
+        boxes = [canvases.nth(i).bounding_box() for i in range(0, min(canvases.count(), 6), 2)]
+        return [(b["x"], b["width"]) for b in boxes]
+    main = page.locator("#main").bounding_box()
+    before = widths()
+    assert len(before) == 3 and sum(w for _, w in before) >= 0.85 * main["width"]
+    assert min(left for left, _ in before) >= main["x"] - 1  # nothing cut at the left
+    page.locator("#sidebar-toggle").click()
+    deadline = time.time() + 15
+    while sum(w for _, w in widths()) < sum(w for _, w in before) * 1.15:
+        assert time.time() < deadline, f"maps did not widen: {before} -> {widths()}"
+        time.sleep(0.3)
+
+
+def test_fig1_visibly_identifies_the_paper_figure(page):
+    # defect 8: from the default view Fig. 1 changed nothing visible
+    before = [t for t, _ in maps(page)]
+    page.get_by_role("button", name="Fig. 1").click()
+    drawn = wait_maps(page, lambda d: "(paper)" in d[0][0])
+    assert [t for t, _ in drawn] != before
+    assert "Fig. 1" in page.locator(".w-paper").filter(visible=True).first.locator(".alert").text_content()
+
+
+def test_remedy_buttons_show_only_where_they_apply(page):
+    known, crlb = page.locator(".w-remedy-known"), page.locator(".w-remedy-crlb")
+    assert known.first.is_visible() and crlb.first.is_visible()  # map A is veiled
+    crlb.first.locator("button").click()
+    page.wait_for_function(f"() => ({LAYERS_JS})()[1].bar.includes('CRLB')", timeout=30_000)
+    page.wait_for_timeout(500)
+    assert not crlb.first.is_visible()  # CRLB is shown already
+    page.get_by_role("button", name="Fig. 6").click()  # dual vs dual: nothing veiled
+    wait_maps(page, lambda drawn: drawn[1][0] == "B: dual, d = 50 m")
+    page.wait_for_timeout(500)
+    assert not known.first.is_visible() and not crlb.first.is_visible()
+
+
+def test_controls_that_do_not_apply_are_hidden(page):
+    # defect 8: Fixed y in x–y, target depth in x–z, the maps' controls on the Layout design tab
+    assert not page.locator(".w-y").first.is_visible() and page.locator(".w-z").first.is_visible()
+    select(page, "plane", "x–z")
+    page.locator(".w-y").first.wait_for(state="visible", timeout=15_000)
+    page.locator(".w-z").first.wait_for(state="hidden", timeout=15_000)
+    page.get_by_text("Layout design", exact=True).click()
+    page.locator(".w-measure").first.wait_for(state="hidden", timeout=15_000)
+    page.locator(".w-z").first.wait_for(state="visible", timeout=15_000)  # the design maps' depth
+    assert not page.locator(".w-y").first.is_visible()
+
+
+def test_the_idle_spinner_is_not_shown(page):
+    # defect 8: a permanent hollow ring looked stalled
+    shown = page.evaluate("""() => Array.from(Bokeh.documents[0].all_models)
+        .filter(m => (m.css_classes || []).includes('loader')).map(m => m.visible)""")
+    assert shown == [False]
+
+
+def test_a_saved_png_is_named_after_the_scenario_opaque_with_labels_and_caption(page):
+    import io
+
+    from PIL import Image
+
+    canvas = page.locator("canvas").filter(visible=True).first
+    box = canvas.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)  # shows the toolbar
+    save = page.locator(".bk-tool-icon-save").filter(visible=True).first
+    with page.expect_download(timeout=30_000) as info:
+        save.click()
+    download = info.value
+    assert download.suggested_filename == "fig_5_x_y_log10_det_A.png"
+    img = Image.open(io.BytesIO(Path(download.path()).read_bytes())).convert("RGBA")
+    # opaque (it was transparent): the figure's CSS size is fractional when it fills the page,
+    # so pixels at the canvas's edges may be part-covered by the fill (anti-aliasing: alpha a
+    # few units under 255); none is more than slightly see-through, and ≥ 99 % are fully opaque
+    w, h = img.size
+    alpha = np.asarray(img.getchannel("A"))
+    assert alpha[2:-2, 2:-2].min() >= 240, "the PNG has transparent pixels"
+    assert (alpha == 255).mean() >= 0.99
+    grey = img.convert("L")
+    # the y label, rotated, in the leftmost strip; the caption's lines in the bottom strip
+    left = grey.crop((0, h // 4, max(1, w // 25), 3 * h // 4))
+    bottom = grey.crop((w // 10, int(0.9 * h), 9 * w // 10, h))
+    assert left.getextrema()[0] < 128, "no y label in the saved PNG"
+    assert bottom.getextrema()[0] < 128, "no caption in the saved PNG"

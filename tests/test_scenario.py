@@ -8,7 +8,7 @@ import xarray as xr
 
 from app import map_figures, views
 from app.compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot, compute
-from app.scenario import ACCEPTED, PRESETS, Scenario
+from app.scenario import ACCEPTED, DEPTHS, PRESETS, Scenario
 
 
 def test_presets_set_what_the_paper_says():
@@ -42,7 +42,8 @@ def test_out_of_range_values_are_refused_with_a_message(name):
     for bad in (hi * 10 + 10, lo - abs(lo) - 10):
         setattr(s, name, int(bad) if isinstance(before, int) else float(bad))
         assert getattr(s, name) == before, "the last good value is kept"
-        assert "outside the accepted range" in s.message
+        why = "above the sea surface" if name in DEPTHS and bad < 0 else "outside the accepted range"
+        assert why in s.message and s.refused == [name]
     if not isinstance(before, int):
         setattr(s, name, float("nan"))
         assert getattr(s, name) == before and "must be a number" in s.message
@@ -129,7 +130,9 @@ def test_maps_for_every_measure_and_plane():
             map_figures.fill(figs, p)
             assert figs.figures[2].yaxis.axis_label == f"{vname} (m)"
             assert figs.images[1].data["image"][0].dtype == np.float32
-            np.testing.assert_array_equal(figs.images[1].data["image"][0], p.b.value.astype(np.float32))
+            low, high, _ = map_figures.ranges(p)[1]
+            np.testing.assert_array_equal(figs.images[1].data["image"][0],
+                                          map_figures.normalised(p.shown(1), low, high))
 
 
 @pytest.mark.parametrize("bad,why", [
@@ -184,3 +187,186 @@ def test_a_snapshots_values_build_the_same_core_inputs_as_the_scenario(preset):
         v = Snapshot.of(s, fields).scenario()
         assert (v.core_plane(), v.velocity(), v.core_options()) == (s.core_plane(), s.velocity(), s.core_options())
         assert all(getattr(v, name) == getattr(s, name) for name in fields)
+
+
+@pytest.mark.parametrize("name", DEPTHS)
+def test_a_depth_above_the_sea_surface_is_refused_in_every_model(name):
+    # spec §7: z is depth, positive down, surface z = 0; no sea above it, whatever the model
+    for model in Scenario.param.model.objects:
+        s = Scenario(model=model)
+        before = getattr(s, name)
+        setattr(s, name, -5.0)
+        assert getattr(s, name) == before and "above the sea surface" in s.message
+        assert s.refused == [name]
+    assert Scenario(h=-5.0).h == Scenario().h  # given at construction: the default, and said so
+    assert "above the sea surface" in Scenario(h=-5.0).message
+
+
+def test_a_station_above_the_sea_surface_is_refused():
+    s = Scenario()
+    before = s.stations
+    s.stations = [[0.0, 0.0, 100.0], [10.0, 0.0, -5.0]]
+    assert s.stations == before and "Station 2" in s.message and "above the sea surface" in s.message
+    assert s.refused == ["stations"]
+    s.stations = [[0.0, 0.0, 0.0]]  # at the surface: accepted
+    assert s.stations == [[0.0, 0.0, 0.0]] and s.message == "" and s.refused == []
+
+
+def _fill(figs, **params):
+    p = compute(Snapshot.of(Scenario(resolution=21, **params)))
+    map_figures.fill(figs, p)
+    return p
+
+
+@pytest.mark.parametrize("first,then", [
+    (dict(plane="x–y"), dict(plane="x–z")),  # defect 1: A's veil kept y 100–300 of x–y ...
+    (dict(plane="x–z"), dict(plane="x–y")),  # ... and the other way round
+    (dict(), dict(extent=150.0)),
+    (dict(plane="x–z"), dict(plane="x–z", z_max=900.0)),
+])
+def test_every_layer_of_a_map_covers_the_maps_rectangle(first, then):
+    figs = map_figures.build()
+    _fill(figs, **first)
+    p = _fill(figs, **then)
+    (u0, u1), (v0, v1) = p.plane.u, p.plane.v
+    du, dv = (u1 - u0) / (p.plane.n - 1), (v1 - v0) / (p.plane.n - 1)
+    want = dict(x=[u0 - du / 2], y=[v0 - dv / 2], dw=[u1 - u0 + du], dh=[v1 - v0 + dv])  # pixel edges
+    for which in range(3):
+        for layer in (figs.images[which], figs.veils[which]):
+            for key, value in want.items():
+                np.testing.assert_allclose(layer.data[key], value, rtol=1e-12, err_msg=f"{which} {key}")
+        veil = figs.veils[which].data["image"][0]
+        observable = (p.a.observable, p.b.observable, p.a.observable & p.b.observable)[which]
+        assert veil.shape == observable.shape
+        assert np.array_equal(np.isin(veil, (map_figures.VEIL_DARK, map_figures.VEIL_LIGHT)), ~observable)
+
+
+def test_the_xz_plane_has_depth_increasing_downwards_and_shows_every_station():
+    figs = map_figures.build()
+    _fill(figs, plane="x–z", z_min=100.0, z_max=400.0, h=100.0)
+    y = figs.figures[0].y_range
+    assert y.start > y.end  # the top of the plot is the shallow end
+    marker = 13 / 400 * (400 - 100)  # the triangle's size, in metres of a ~400 px high plot
+    assert y.end <= 100.0 - marker / 2, "the stations at h = z_min are not cut at the top"
+    assert y.start >= 400.0 and figs.figures[2].yaxis.axis_label == "z (m)"
+    _fill(figs, plane="x–y")
+    y = figs.figures[0].y_range
+    assert y.start < y.end
+
+
+def test_crlb_maps_are_coloured_by_log10_metres_and_say_why_a_value_is_missing():
+    s = Scenario(resolution=21, measure="CRLB position error (m)")
+    p = compute(Snapshot.of(s))
+    assert p.log_scale
+    b = p.b.value
+    finite = np.isfinite(b)
+    np.testing.assert_allclose(p.shown(1)[finite], np.log10(b[finite]), rtol=1e-12)
+    lo, hi = p.clim  # a range of decades, not 0–18 000 m
+    assert hi - lo > 1 and hi < np.log10(np.nanmax(b[finite])) + 1e-9
+    assert not np.isfinite(p.a.value).any()  # one station: rank 6, CRLB infinite everywhere
+    assert p.unobservable[0] == "unobservable (rank 6): colours are round-off"
+    figs = map_figures.build()
+    map_figures.fill(figs, p)
+    for which in range(2):
+        fmt = figs.formatters[which].args
+        assert fmt["log"] and (fmt["bar"].low, fmt["bar"].high) == p.clim
+        assert "log scale" in figs.colorbars[which].title
+        assert figs.colorbars[which].formatter.args["log"]  # ticks in metres
+    assert not figs.colorbars[2].formatter.args["log"]
+    assert figs.formatters[0].args["texts"]["unobservable"].startswith("unobservable (rank 6)")
+    assert "unobservable" in figs.formatters[2].args["texts"]["unobservable"]
+    # the same kind of scale as the design tab: low error is the good end (reversed viridis)
+    assert map_figures.ranges(p)[0][2][0] == map_figures.Viridis256[-1]
+    # the difference map's title is short enough to fit; the explanation is on its colour bar
+    assert len(figs.figures[2].title.text) <= 40 and "B locates better" in figs.colorbars[2].title
+
+
+def test_images_are_sent_normalised_to_their_colour_range():
+    s = Scenario(resolution=21, layout="dual", comparison="Moments ×k − original (Fig. 3)")
+    p = compute(Snapshot.of(s))
+    figs = map_figures.build()
+    map_figures.fill(figs, p)
+    for which, (low, high, _) in enumerate(map_figures.ranges(p)):
+        sent = figs.images[which].data["image"][0].astype(float)
+        back = low + sent * (high - low)  # what the hover shows, and the colour bar's scale
+        np.testing.assert_allclose(back, p.shown(which), rtol=0, atol=1e-6 * (high - low) + 1e-12)
+        bar = figs.colorbars[which].color_mapper
+        assert (bar.low, bar.high) == (low, high)
+
+
+def test_the_veil_is_striped_and_distinct_from_a_point_without_value():
+    s = Scenario(resolution=41)
+    p = compute(Snapshot.of(s))
+    codes = map_figures.veil_codes(p.a.observable, p.shown(0))
+    assert set(np.unique(codes)) == {map_figures.VEIL_DARK, map_figures.VEIL_LIGHT}  # all unobservable
+    codes = map_figures.veil_codes(p.b.observable, p.shown(1))
+    on_station = ~np.isfinite(p.shown(1)) & p.b.observable
+    assert np.array_equal(codes == map_figures.NO_VALUE, on_station)
+    pal = map_figures.VEIL_PALETTE
+    assert pal[map_figures.NO_VALUE].endswith("00") and not pal[map_figures.VEIL_DARK].endswith("00")
+
+
+def test_the_paper_figure_is_identified_and_the_png_is_named_after_the_scenario():
+    s = Scenario(resolution=21)
+    for name in PRESETS:
+        s.apply_preset(name)
+        p = compute(Snapshot.of(s))
+        assert p.preset == name and p.paper[0]
+        figs = map_figures.build()
+        map_figures.fill(figs, p)
+        for which in range(3):
+            framed = which in p.paper[0]
+            assert ("(paper)" in figs.figures[which].title.text) == framed
+            assert (figs.figures[which].outline_line_color == "#b03a2e") == framed
+            assert figs.saves[which].filename.startswith(f"fig_{name[-1]}_")
+            assert f"h = {s.h:g} m" in figs.captions[which].text
+            assert figs.figures[which].border_fill_color == "white"  # an opaque PNG
+    s.Ph = 123.0  # no longer a paper figure
+    assert compute(Snapshot.of(s)).preset == ""
+
+
+def _design_plot(overlay):
+    import holoviews as hv
+    from bokeh.models import HoverTool
+
+    fig = hv.render(overlay, backend="bokeh")
+    return fig, [t for t in fig.tools if isinstance(t, HoverTool)]
+
+
+def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
+    # defect 6: the server logged "Tool of type 'point_draw' could not be found" (the spacing
+    # maps' stations asked for an active point-draw tool they do not have), and a station showed
+    # two overlapping tooltips
+    from app import compute as c
+
+    s = Scenario(resolution=21)
+    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    with caplog.at_level("WARNING"):
+        fig, hovers = _design_plot(views.error_map(d, "t") * views.station_layer(d.stations))
+    assert not [r for r in caplog.records if "could not be found" in r.getMessage()]
+    assert len(hovers) == 1
+
+
+def test_best_and_paper_maps_share_one_colour_range():
+    from app import compute as c
+
+    s = Scenario(resolution=21)
+    sp = c.best_spacing(Snapshot.of(s, c.DESIGN_FIELDS))
+    clim = views.common_clim(sp.best, sp.paper)
+    for design in (sp.best, sp.paper):
+        lo, hi = views.error_clim(design)
+        assert clim[0] <= lo and hi <= clim[1]
+    a, b = (_design_plot(views.error_map(x, "t", clim=clim))[0] for x in (sp.best, sp.paper))
+    mappers = [next(r.glyph.color_mapper for r in f.renderers if hasattr(r.glyph, "color_mapper"))
+               for f in (a, b)]
+    assert (mappers[0].low, mappers[0].high) == (mappers[1].low, mappers[1].high) == clim
+
+
+def test_a_station_added_by_a_click_sits_at_the_station_depth():
+    from app.design import drawn_stations
+
+    old = [[0.0, 0.0, 100.0], [15.0, 0.0, 90.0]]
+    data = {"x": [0.0, 20.0, 50.0], "y": [0.0, 0.0, 30.0], "z": [100.0, 90.0, 0.0]}  # z: empty_value
+    assert drawn_stations(data, old, 100.0) == [[0.0, 0.0, 100.0], [20.0, 0.0, 90.0], [50.0, 30.0, 100.0]]
+    # a deletion keeps the others' depths
+    assert drawn_stations({"x": [15.0], "y": [0.0], "z": [90.0]}, old, 100.0) == [[15.0, 0.0, 90.0]]

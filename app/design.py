@@ -1,0 +1,117 @@
+"""The Layout design tab: a custom layout's Cramér–Rao errors, the best spacing, optimised layouts."""
+
+from __future__ import annotations
+
+import holoviews as hv
+import pandas as pd
+import panel as pn
+from bokeh.models.widgets.tables import NumberFormatter
+
+from . import compute, views
+from .compute import DESIGN_FIELDS, Snapshot
+from .maps import alert
+from .scenario import MAX_STATIONS
+
+DESIGN_HELP = """
+**Layout design.** Click on the map to add a station (up to 8; it sits at the station depth h),
+drag one to move it, select it and press Backspace to delete it; or edit the table (z is a depth,
+positive down). The map is the Cramér–Rao bound (1σ) on the 3-D position, horizontal, depth or
+speed error of a target at depth z, with the sensor noise and N instants of the Advanced section —
+the numbers an analyst reports — on a log colour scale. Click a point for its horizontal error
+ellipse. *Find best spacing* scans the dual layout's spacing d over this region and refines the
+optimum with scipy; *Optimise N-station layout* does the same for a line, triangle or square of
+N stations (or free positions, ~10 s) and makes it the custom layout.
+"""
+
+#: Parameters of this tab whose refusal is shown here, next to their inputs.
+OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error_quantity")
+
+
+def drawn_stations(data, old, h):
+    """The custom layout after a PointDraw edit: ``data`` (columns x, y, z) against the ``old``
+    layout; a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
+    rows = list(zip(data["x"], data["y"], data["z"]))
+    return [[float(x), float(y), float(z) if i < len(old) else float(h)]
+            for i, (x, y, z) in enumerate(rows)]
+
+
+def design_tab(scenario, cache, widgets):
+    """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
+    widget spec of pn.Param (the sidebar's)."""
+    snap = lambda: Snapshot.of(scenario, DESIGN_FIELDS)
+    watch = [f for f in DESIGN_FIELDS if f != "stations"]
+    points = hv.DynamicMap(lambda **_: views.station_layer(scenario.stations, editable=True),
+                           streams=[hv.streams.Params(scenario, ["stations"])])
+    draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS, empty_value=scenario.h)
+
+    def drawn(data):
+        if data is None or not len(data.get("x", [])):
+            return
+        scenario.stations = drawn_stations(data, scenario.stations, scenario.h)
+
+    draw.add_subscriber(drawn)
+    errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), compute.design),
+                                                       "Custom layout: Cramér–Rao error", scenario.error_quantity),
+                           streams=[hv.streams.Params(scenario, watch + ["stations", "error_quantity"])])
+    tap = hv.streams.Tap(source=errors, x=scenario.extent / 3, y=scenario.extent / 3)
+
+    def ellipse(x, y, **_):
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[0]
+
+    def ellipse_text(x, y, *_):
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[1]
+
+    ell = hv.DynamicMap(ellipse, streams=[tap, hv.streams.Params(scenario, watch + ["stations"])])
+    table = pn.widgets.Tabulator(
+        pn.bind(lambda st: pd.DataFrame(st, columns=["x (m)", "y (m)", "z (m)"]), scenario.param.stations),
+        show_index=False, sizing_mode="stretch_width", height=260, css_classes=["w-station-table"],
+        formatters={c: NumberFormatter(format="0.0") for c in ("x (m)", "y (m)", "z (m)")})
+
+    def edited(event):
+        scenario.stations = table.value.astype(float).values.tolist()
+
+    table.on_edit(edited)
+    message = pn.pane.HTML(pn.bind(lambda m, names: alert(m, "danger") if set(names) & set(OWN) else "",
+                                   scenario.param.message, scenario.param.refused),
+                           visible=pn.bind(lambda m, names: bool(m) and bool(set(names) & set(OWN)),
+                                           scenario.param.message, scenario.param.refused),
+                           sizing_mode="stretch_width", css_classes=["w-design-message"])
+    run = pn.widgets.Button(name="Find best spacing", button_type="primary")
+
+    def spacing(clicks):
+        if not clicks:
+            return pn.pane.Markdown("Press *Find best spacing* (about a second).")
+        sp = cache.get(snap(), compute.best_spacing)
+        clim = views.common_clim(sp.best, sp.paper)  # one scale: the comparison must not mislead
+        best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m", clim=clim, size=260)
+        paper = views.error_map(sp.paper, "Paper: d = 15 m", clim=clim, size=260)
+        return pn.FlexBox(pn.pane.HoloViews(views.spacing_plot(sp)),
+                          pn.pane.HoloViews(best * views.station_layer(sp.best.stations)),
+                          pn.pane.HoloViews(paper * views.station_layer(sp.paper.stations)),
+                          sizing_mode="stretch_width")
+
+    criteria = pn.Param(scenario, parameters=["criterion", "threshold", "layout_kind", "n_stations"],
+                        show_name=False, widgets=widgets, sizing_mode="stretch_width")
+    optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
+
+    def optimise_clicked(event):
+        optimise.loading = True
+        try:
+            result = cache.get(snap(), compute.optimised_layout)
+            scenario.stations = [[float(v) for v in st] for st in result.stations]
+        finally:
+            optimise.loading = False
+
+    optimise.on_click(optimise_clicked)
+    return pn.Column(
+        pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
+        pn.FlexBox(pn.pane.HoloViews(errors * points * ell),
+                   pn.Column(pn.Param(scenario, parameters=["error_quantity"], show_name=False, widgets=widgets),
+                             message, table,
+                             pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
+                             width=380),
+                   sizing_mode="stretch_width"),
+        pn.FlexBox(pn.Column(criteria, run, optimise, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),
+                   sizing_mode="stretch_width"),
+        sizing_mode="stretch_width",
+    )

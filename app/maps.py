@@ -1,0 +1,176 @@
+"""The Maps tab: maps A, B and their difference for the scenario, redrawn in place on a change."""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import html
+from functools import partial
+
+import panel as pn
+from bokeh.layouts import row
+from panel.io.state import set_curdoc
+
+from . import map_figures, views
+from .compute import FIELDS, Snapshot
+
+#: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
+BUSY_AFTER = 0.1
+
+#: Seconds after the maps are sent that ``after_draw`` runs (the URL update: see app.url).
+URL_AFTER = 0.1
+
+#: Computes the maps of every session, off the event loop (core serialises the kernels anyway).
+_COMPUTE = concurrent.futures.ThreadPoolExecutor(max_workers=4, thread_name_prefix="maps")
+
+#: Maps are drawn on the event loop one session at a time, in two steps with a turn of the loop
+#: between them. Maps computed at about the same time used to be drawn in one go (~10-20 ms of
+#: Python each), and every other session's events waited behind all of them.
+_DRAWING = asyncio.Lock()
+
+READING_GUIDE = """
+**Reading the maps.** Each map shows, over target positions, a measure of how well the tracking
+state (position, velocity, source strengths) can be recovered from the stations' electric-field
+measurements. *log10 |det Γ|* is the paper's measure (larger: more observable); it has units and
+only compares like with like. The *observability index* log10 η is scale-free (0 best).
+The *D-optimal* measure uses every measurement over N instants with the sensor noise;
+the *CRLB position error* is the best achievable 1-σ position error in metres, on a log scale
+(as on the Layout design tab). Depth z is measured down from the sea surface. Hover for values;
+the save tool of each map writes a PNG named after the scenario, with its parameters below it.
+All logarithms are base 10.
+"""
+
+#: What the marks on the maps mean (the veil and the blanks are distinct on purpose).
+LEGEND = (
+    '<div class="maps-legend" style="font-size:13px;color:#333;display:flex;flex-wrap:wrap;gap:18px">'
+    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
+    'border:1px solid #888;background:repeating-linear-gradient(45deg,#6b6b6b 0 4px,#b4b4b4 4px 8px)">'
+    '</span> unobservable (rank Γ &lt; 7): the colours beneath are round-off</span>'
+    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
+    'border:1px solid #888;background:#fff"></span> no value: on a station, or Δ ≤ 0 (B no better)'
+    '</span>'
+    '<span>△ station</span>'
+    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
+    'border:3px solid #b03a2e"></span> the paper\'s figure</span></div>'
+)
+
+
+def alert(text, kind):
+    """Plain text in a Bootstrap alert box: escaped, never interpreted as HTML or Markdown."""
+    fg, bg = {"danger": ("#842029", "#f8d7da"), "warning": ("#664d03", "#fff3cd"),
+              "info": ("#084298", "#cfe2ff")}[kind]
+    style = f"color:{fg};background:{bg};border:1px solid {fg}33;border-radius:6px;padding:8px 12px"
+    return (f'<div class="alert alert-{kind}" role="alert" style="{style}">'
+            f'{html.escape(text).replace(chr(10), "<br>")}</div>')
+
+
+def _paper_line(p):
+    if not p.preset:
+        return ""
+    return alert(f"Paper {p.preset}: {p.paper[1]} (red frame).", "info")
+
+
+def maps_tab(scenario, cache, *, busy=None, after_draw=None):
+    """The Maps tab of ``scenario``: its layout, kept current by a watcher on the maps' fields.
+
+    ``busy``: a LoadingSpinner shown while a slow change computes; ``after_draw``: called
+    ``URL_AFTER`` s after a change's maps are sent (the URL update)."""
+    first = cache.get(Snapshot.of(scenario))
+    figs = map_figures.build()
+    map_figures.fill(figs, first)
+    # Written by redraw together with the maps (not bound to the scenario: a binding would compute
+    # the maps once more, synchronously, before redraw could start).
+    note = pn.pane.HTML(alert(first.note, "warning"), visible=bool(first.note),
+                        sizing_mode="stretch_width", css_classes=["w-note"])
+    paper = pn.pane.HTML(_paper_line(first), visible=bool(first.preset), sizing_mode="stretch_width",
+                         css_classes=["w-paper"])
+    known = pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
+                              css_classes=["w-remedy-known"],
+                              on_click=lambda e: scenario.param.update(state_set="moments known (5 states)",
+                                                                       measure="D-optimal ½·log10 det F"))
+    crlb = pn.widgets.Button(name="Show CRLB position error (m)", button_type="warning",
+                             css_classes=["w-remedy-crlb"],
+                             on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)"))
+
+    def remedies(p):
+        """Which remedy buttons apply to maps ``p``: only where a map is veiled."""
+        return dict(known=bool(p.note) and not (scenario.state_set.startswith("moments known")
+                                                and p.measure == "d_optimal"),
+                    crlb=bool(p.note) and p.measure != "crlb_position")
+
+    shown = remedies(first)
+    known.visible, crlb.visible = shown["known"], shown["crlb"]
+
+    #: The scenario of the maps drawn or being drawn: a change that ends where it began (a refused
+    #: value, restored) sends no maps again (0.5 MB, which held up its message by ~30 ms).
+    latest = [Snapshot.of(scenario)]
+    doc = pn.state.curdoc  # the session document this tab is built for
+
+    def redraw(*_):
+        # Start computing at once, on a worker thread (the kernels release the GIL): the server's
+        # event loop keeps serving other sessions meanwhile, and the compute does not wait for
+        # the widget updates already queued on the loop. Then draw, on the loop.
+        snapshot = Snapshot.of(scenario)
+        if snapshot == latest[0]:
+            return
+        latest[0] = snapshot
+        computing = _COMPUTE.submit(lambda: map_figures.prepare(cache.get(snapshot)))
+        with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
+            pn.state.execute(partial(draw, snapshot, computing))
+
+    async def draw(snapshot, computing):
+        try:
+            await show_maps(snapshot, computing)
+        finally:
+            if after_draw is not None:
+                await asyncio.sleep(URL_AFTER)  # the browser paints the maps first
+                after_draw()
+
+    async def show_maps(snapshot, computing):
+        maps = asyncio.wrap_future(computing)
+        # ``panels``: the maps and the arrays to send (map_figures.prepare), from the worker
+        try:  # the spinner only for a slow change: for a fast one it costs more than it says
+            panels = await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
+        except asyncio.TimeoutError:
+            if busy is not None:
+                busy.param.update(value=True, visible=True)
+            try:
+                panels = await maps
+            finally:
+                if busy is not None:
+                    busy.param.update(value=False, visible=False)
+        async with _DRAWING:
+            if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
+                return
+            with pn.io.hold():  # the colour bars first, alone: no image is repainted for them
+                map_figures.set_ranges(figs, panels)
+            await asyncio.sleep(0)  # events queued meanwhile go first
+            with pn.io.hold():
+                map_figures.set_maps(figs, panels)
+                p = panels.panels
+                note.param.update(object=alert(p.note, "warning"), visible=bool(p.note))
+                paper.param.update(object=_paper_line(p), visible=bool(p.preset))
+                now = remedies(p)
+                known.visible, crlb.visible = now["known"], now["crlb"]
+
+    scenario.param.watch(redraw, list(FIELDS))
+    plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+    tab = pn.Column(paper, plots, pn.pane.HTML(LEGEND, sizing_mode="stretch_width"), note,
+                    pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
+                    sizing_mode="stretch_width")
+    tab.figures = figs  # for tests
+    return tab
+
+
+def _current(scenario, cache):
+    return cache.get(Snapshot.of(scenario)), {f: getattr(scenario, f) for f in FIELDS}
+
+
+def to_csv(scenario, cache):
+    """The maps of ``scenario`` as CSV (the download button's file)."""
+    return views.to_csv(*_current(scenario, cache))
+
+
+def to_netcdf(scenario, cache):
+    """The maps of ``scenario`` as NetCDF (the download button's file)."""
+    return views.to_netcdf(*_current(scenario, cache))
