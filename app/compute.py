@@ -142,9 +142,11 @@ def blank_reason(measure, mode):
 def unobservable_text(s, stations):
     """Hover text of a veiled point: the rank where it is known (one station with the moments
     unknown: rank 6 at every point, spec §4), else only that Γ is rank-deficient."""
-    if len(stations) == 1 and not s.core_options()["known"]:
+    options = s.core_options()
+    if len(stations) == 1 and not options["known"] and options["sea"] is None:
         return "unobservable (rank 6): colours are round-off"
-    return f"unobservable (rank < {7 - len(s.core_options()['known'])}, η < {core.ETA_TOL:g})"
+    n = 7 - len(options["known"])
+    return f"unobservable (rank < {n}: σ_min/σ_max ≤ {core.RANK_RTOL:g}): colours are round-off"
 
 
 def colour_range(*arrays):
@@ -223,13 +225,13 @@ def compute(snapshot: Snapshot) -> Panels:
     label, unit, _ = core.MEASURES[measure]
     note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b))
     log_scale = measure == "crlb_position"  # metres over decades: coloured by log10 (as the design tab)
-    preset = preset_of(s) or ""
+    preset = preset_of(s, FIELDS) or ""
     p = Panels(
         plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_short),
         stations=(st_a, st_b), measure=measure, value_label=label, value_unit=unit,
         diff_label=diff_label, clim=(0.0, 1.0), note=note, log_scale=log_scale,
         unobservable=(unobservable_text(s, st_a), unobservable_text(s, st_b)),
-        paper=PAPER_MAPS[preset] if preset else ((), ""), preset=preset,
+        paper=PAPER_MAPS.get(preset, ((), "")), preset=preset,
         blank=blank_reason(measure, s.difference), caption=caption(s), filename=filename(s, preset),
     )
     return dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))

@@ -410,10 +410,11 @@ class Scenario(param.Parameterized):
                     sea=sea)
 
 
-def preset_of(values):
-    """The first :data:`PRESETS` name whose parameters ``values`` (attributes) all hold, or None."""
+def preset_of(values, names=None):
+    """The first :data:`PRESETS` name whose parameters ``values`` (attributes) all hold, or None.
+    ``names``: compare only these parameters (a map snapshot holds only what the maps use)."""
     for name, preset in PRESETS.items():
-        if all(getattr(values, k) == v for k, v in preset.items()):
+        if all(getattr(values, k) == v for k, v in preset.items() if names is None or k in names):
             return name
     return None
 

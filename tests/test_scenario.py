@@ -8,7 +8,7 @@ import xarray as xr
 
 from app import map_figures, views
 from app.compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot, compute
-from app.scenario import ACCEPTED, DEPTHS, PRESETS, Scenario
+from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PRESETS, Scenario
 
 
 def test_presets_set_what_the_paper_says():
@@ -308,7 +308,7 @@ def test_the_veil_is_striped_and_distinct_from_a_point_without_value():
 
 def test_the_paper_figure_is_identified_and_the_png_is_named_after_the_scenario():
     s = Scenario(resolution=21)
-    for name in PRESETS:
+    for name in PAPER_MAPS:
         s.apply_preset(name)
         p = compute(Snapshot.of(s))
         assert p.preset == name and p.paper[0]
@@ -370,3 +370,11 @@ def test_a_station_added_by_a_click_sits_at_the_station_depth():
     assert drawn_stations(data, old, 100.0) == [[0.0, 0.0, 100.0], [20.0, 0.0, 90.0], [50.0, 30.0, 100.0]]
     # a deletion keeps the others' depths
     assert drawn_stations({"x": [15.0], "y": [0.0], "z": [90.0]}, old, 100.0) == [[15.0, 0.0, 90.0]]
+
+
+def test_the_sea_trial_preset_is_recognised_as_active():
+    # The maps' snapshot holds only what the maps use (not the design tab's stations).
+    s = Scenario(resolution=21)
+    s.apply_preset("Seed 001 sea trial")
+    assert s.active_preset() == "Seed 001 sea trial"
+    assert compute(Snapshot.of(s)).preset == "Seed 001 sea trial"
