@@ -13,8 +13,8 @@ import panel as pn
 from bokeh.models.formatters import PrintfTickFormatter
 
 from . import maps, url
-from .compute import PanelCache
 from .calibration import calibration_tab
+from .compute import PanelCache
 from .design import design_tab
 from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, Scenario
 from .track import track_tab

@@ -10,9 +10,8 @@ import numpy as np
 
 import core
 
-from . import beyond, precision
+from . import beyond, precision, sea
 from . import claims as cl
-from . import sea
 from . import scenarios as sc
 
 STATUS_MARK = {"holds": "✅ holds", "fails": "❌ fails", "not meaningful": "⚠️ not meaningful", "n/a": "— n/a"}
