@@ -28,13 +28,19 @@ def free_port():
 
 
 @contextlib.contextmanager
-def served_app(*extra, port=None, timeout=120):
-    """Yield the base URL of a running dashboard; stop it afterwards."""
+def served_app(*extra, port=None, timeout=120, log=None):
+    """Yield the base URL of a running dashboard; stop it afterwards. ``log``: a path that gets
+    the server's output (else it goes to the test's, or nowhere with QUIET_SERVER set)."""
     port = port or free_port()
     cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address", "127.0.0.1",
            "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness", "--num-threads", "4", *extra]
-    quiet = subprocess.DEVNULL if os.environ.get("QUIET_SERVER") else None
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=quiet, stderr=quiet, env={**os.environ, **SERVER_ENV})
+    out = subprocess.DEVNULL if os.environ.get("QUIET_SERVER") else None
+    if log is not None:
+        with open(log, "w") as fh:  # the child keeps its own descriptor
+            proc = subprocess.Popen(cmd, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT,
+                                    env={**os.environ, **SERVER_ENV})
+    else:
+        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=out, stderr=out, env={**os.environ, **SERVER_ENV})
     url = f"http://127.0.0.1:{port}"
     try:
         deadline = time.time() + timeout

@@ -1,18 +1,13 @@
-"""The Calibration tab (app/calibration.py) served alone and used in headless Chromium."""
+"""The dashboard's Calibration tab (app/calibration.py) used in headless Chromium."""
 
 from __future__ import annotations
 
-import contextlib
 import os
-import subprocess
-import sys
-import time
-import urllib.request
 
 import numpy as np
 import pytest
 
-from tests.server import CHROMIUM, ROOT, chromium_browser, free_port
+from tests.server import CHROMIUM, ROOT, chromium_browser, served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 expect = playwright.expect
@@ -31,36 +26,6 @@ AXES_JS = """() => {
 }"""
 
 
-@contextlib.contextmanager
-def served_tab(log_path, timeout=120):
-    port = free_port()
-    cmd = [sys.executable, "-m", "panel", "serve", "tests/calibration_page.py", "--port", str(port),
-           "--address", "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness"]
-    with open(log_path, "w") as log:
-        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
-    url = f"http://127.0.0.1:{port}/calibration_page"
-    try:
-        deadline = time.time() + timeout
-        while True:
-            if proc.poll() is not None:
-                raise RuntimeError(f"panel serve exited with {proc.returncode}")
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/liveness", timeout=2):
-                    break
-            except OSError:
-                if time.time() > deadline:
-                    raise TimeoutError("the tab's server did not answer /liveness") from None
-                time.sleep(0.3)
-        yield url
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(10)
-
-
 def test_calibration_tab_in_chromium(tmp_path):
     from app import calibration as ac
     from app.scenario import Scenario
@@ -69,9 +34,11 @@ def test_calibration_tab_in_chromium(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("B1,B2,psi,theta,phi\n1,2,0,0,0\n")
     table1 = ROOT / "data" / "seed004_table1.csv"
-    with served_tab(log) as url, chromium_browser() as browser:
+    with served_app(timeout=240, log=log) as (url, _), chromium_browser() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 1400})
-        page.goto(url)
+        page.goto(url + "/app")
+        page.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=SLOW)
+        page.get_by_text("Calibration", exact=True).first.click()
         page.wait_for_selector("text=Rank of Γ: 12 of 12", timeout=90_000)
         # every axis says what it shows, with units
         page.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0")

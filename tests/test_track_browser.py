@@ -1,16 +1,14 @@
-"""The Track tab in headless Chromium: it draws, has units, and follows a changed tracker."""
+"""The dashboard's Track tab in headless Chromium: it draws, has units, and follows a changed
+tracker."""
 
 import html
 import os
 import re
-import subprocess
-import sys
 import time
-import urllib.request
 
 import pytest
 
-from tests.server import CHROMIUM, ROOT, SERVER_ENV, chromium_browser, free_port
+from tests.server import CHROMIUM, chromium_browser, served_app
 
 pytest.importorskip("playwright.sync_api")
 pytestmark = pytest.mark.skipif(
@@ -37,30 +35,9 @@ PLOTS_JS = """() => {
 
 @pytest.fixture(scope="module")
 def server():
-    port = free_port()
-    cmd = [sys.executable, "-m", "panel", "serve", "tests/track_page.py", "--port", str(port),
-           "--address", "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}"]
-    proc = subprocess.Popen(cmd, cwd=ROOT, env={**os.environ, **SERVER_ENV},
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    url = f"http://127.0.0.1:{port}/track_page"
-    try:
-        deadline = time.time() + 240
-        while True:
-            try:
-                with urllib.request.urlopen(url, timeout=240) as page:
-                    page.read()
-                break
-            except OSError:
-                if proc.poll() is not None or time.time() > deadline:
-                    raise RuntimeError("the track page was not served") from None
-                time.sleep(0.5)
-        yield url
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+    """The dashboard itself: the tab is tested where users meet it."""
+    with served_app(timeout=240) as (url, _):
+        yield url + "/app"
 
 
 def _wait(pg, predicate, timeout=90.0):
@@ -82,6 +59,7 @@ def test_track_tab_draws_with_units_and_follows_the_tracker(server):
         pg.on("pageerror", lambda e: errors.append(str(e)))
         pg.goto(server)
         pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=120_000)
+        pg.get_by_text("Track", exact=True).first.click()
         (plots, labels, _), text = _wait(pg, lambda got, text: len(got[0]) >= 2 and "bank" in text)
         titles = [t for t, _ in plots]
         assert "TRMSE vs PCRLB" in titles
