@@ -193,13 +193,20 @@ def unobservable_note(s: Scenario, results, stations):
     return "\n".join(lines)
 
 
+def sea_text(s):
+    """The medium, for captions: the whole space, or the layered sea's depth and seabed."""
+    if s.sea_model != "layered":
+        return "whole space, "
+    return f"sea depth D = {s.sea_depth:g} m over a {s.seabed_sigma:g} S/m seabed, "
+
+
 def caption(s):
     """The parameters of a scenario's maps as one line of plain text."""
-    vx, vy = s.velocity()
+    vx, vy = (0.0 if abs(c) < 1e-9 * s.speed else c for c in s.velocity())  # cos 90° is 6e-17
     where = (f"target depth z = {s.z:g} m" if s.plane == "x–y"
              else f"x–z plane at y = {s.y:g} m, z {s.z_min:g}–{s.z_max:g} m")
     return (f"P = ({s.Ph:g}, {s.Pv:g}) A·m, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, "
-            f"stations at depth h = {s.h:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, "
+            f"stations at depth h = {s.h:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, {sea_text(s)}"
             f"noise {s.noise:.3g} V/m, N = {s.steps}, {s.model}, {s.state_set}")
 
 

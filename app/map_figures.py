@@ -93,7 +93,7 @@ def _figure(x_range, y_range):
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
                  min_border_right=4, toolbar_location="right")
     fig.title.text_font_size = "10pt"
-    fig.xaxis.ticker.desired_num_ticks = 5  # labels of a narrow map (1280 px screen) must not run together
+    fig.xaxis.ticker.desired_num_ticks = 4  # labels of a narrow map (1280 px screen) must not run together
     fig.toolbar.autohide = True
     return fig
 

@@ -65,7 +65,7 @@ def alert(text, kind):
 
 
 def _paper_line(p):
-    if not p.preset:
+    if not p.paper[1]:  # no preset, or one that is not a figure of the paper (seed 001's trial)
         return ""
     return alert(f"Paper {p.preset}: {p.paper[1]} (red frame).", "info")
 
