@@ -212,8 +212,11 @@ def track_tab(scenario: Scenario):
     """The Track tab's layout for a shared :class:`Scenario` (a Panel layout)."""
     deps = [scenario.param[name] for name in INPUTS]
 
-    def bound(what):
-        return pn.bind(lambda *_: _view(scenario, what), *deps)
+    def bound(what, **kw):
+        # lazy: not computed until the tab is first shown (each change of the maps' inputs
+        # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release)
+        return pn.panel(pn.bind(lambda *_: _view(scenario, what), *deps), lazy=True,
+                        loading_indicator=True, **kw)
 
     options = {name: {"throttled": True} for name in TRACK_PARAMS
                if isinstance(scenario.param[name], param.Number)}
@@ -228,11 +231,9 @@ def track_tab(scenario: Scenario):
         pn.Column(widgets, width=320),
         pn.Column(
             note,
-            pn.panel(bound(summary_text), loading_indicator=True, sizing_mode="stretch_width"),
-            pn.panel(bound(plan_view), loading_indicator=True, sizing_mode="stretch_both",
-                     min_height=420),
-            pn.panel(bound(error_view), loading_indicator=True, sizing_mode="stretch_both",
-                     min_height=300),
+            bound(summary_text, sizing_mode="stretch_width"),
+            bound(plan_view, sizing_mode="stretch_both", min_height=420),
+            bound(error_view, sizing_mode="stretch_both", min_height=300),
             sizing_mode="stretch_both",
         ),
         sizing_mode="stretch_both",
