@@ -298,7 +298,7 @@ def calibration_tab(scenario):
 
     res = pn.bind(result, upload.param.value, **{f: scenario.param[f] for f in FIELDS})
     presets = pn.FlexBox(*[
-        pn.widgets.Button(label=name, color="primary", variant="outline",
+        pn.widgets.Button(name=name, button_type="primary", button_style="outline",
                           css_classes=[f"w-cal-preset-{i}"],
                           on_click=lambda e, n=name: _load(scenario, n))
         for i, name in enumerate(PRESETS)], sizing_mode="stretch_width")
