@@ -40,6 +40,9 @@ DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure
                                                                 "layout_kind", "n_stations"}))
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
 SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
+#: Largest CRLB / range at which a linearised bound still predicts a tracker's error
+#: (:func:`core.linearisation_breaks`, issue 18): beyond it the maps hatch the point.
+RUNAWAY_LIMIT = 0.3
 
 
 def _frozen(value):
@@ -85,6 +88,8 @@ class Panels:
     blank: str = ""  # hover text of a difference-map point with no value that is not veiled
     caption: str = ""  # the scenario's parameters, one line (under each map, and in its PNG)
     filename: str = "observability_map"  # of a saved PNG, after the scenario
+    runaway: tuple = ()  # CRLB maps: bool (n, n) of A, B, difference where the bound runs away
+    far_note: str = ""  # plain text on the runaway points; empty if none
 
     def shown(self, which):
         """The values map ``which`` (0 A, 1 B, 2 difference) is coloured by; NaN where none."""
@@ -193,6 +198,43 @@ def unobservable_note(s: Scenario, results, stations):
     return "\n".join(lines)
 
 
+def nearest_range(plane, stations):
+    """Distance (m) from each point of ``plane`` (shape (n, n), rows its second axis) to the
+    nearest of ``stations`` (S, 3)."""
+    u, v = plane.axes
+    uu, vv = np.meshgrid(u, v)
+    x, y, z = (uu, plane.fixed, vv) if plane.kind == "xz" else (uu, vv, plane.fixed)
+    out = np.full(uu.shape, np.inf)
+    for sx, sy, sz in np.asarray(stations, dtype=float):
+        out = np.minimum(out, np.sqrt((x - sx) ** 2 + (y - sy) ** 2 + (z - sz) ** 2))
+    return out
+
+
+def runaway(plane, stations, crlb, observable):
+    """Observable points of a CRLB map (m, (n, n)) whose bound exceeds RUNAWAY_LIMIT × the range
+    to the nearest station: there the linearised bound stops predicting a tracker's error."""
+    if len(stations) == 0:
+        return np.zeros(np.shape(crlb), dtype=bool)
+    rng = np.maximum(nearest_range(plane, stations), 1e-9)  # on a station the CRLB is NaN: False
+    return observable & np.isfinite(crlb) & core.linearisation_breaks(crlb, rng, limit=RUNAWAY_LIMIT)
+
+
+def runaway_note(results, masks):
+    """Plain text on the points of the CRLB maps A and B that :func:`runaway` flags, else ''."""
+    lines = []
+    for (name, res), mask in zip(results, masks):
+        if mask.any():
+            lines.append(f"{name}: at {mask.sum() / max(res.observable.sum(), 1):.0%} of the observable "
+                         f"points the CRLB exceeds {RUNAWAY_LIMIT:.0%} of the range to the nearest "
+                         "station (hatched white).")
+    if lines:
+        lines.append("There the linearised bound no longer predicts a tracker's error: the field "
+                     "changes by ~2× across such an error, and an estimator runs away along the "
+                     "range–strength direction or locks onto another solution (see the Track tab). "
+                     "Read those metres as 'not trackable from these stations', not as an error to quote.")
+    return "\n".join(lines)
+
+
 def sea_text(s):
     """The medium, for captions: the whole space, or the layered sea's depth and seabed."""
     if s.sea_model != "layered":
@@ -241,7 +283,13 @@ def compute(snapshot: Snapshot) -> Panels:
         paper=PAPER_MAPS.get(preset, ((), "")), preset=preset,
         blank=blank_reason(measure, s.difference), caption=caption(s), filename=filename(s, preset),
     )
-    return dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
+    p = dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
+    if not log_scale:
+        return p
+    ra, rb = (runaway(plane, st, res.value, res.observable) for st, res in ((st_a, a), (st_b, b)))
+    both = (ra | rb) & a.observable & b.observable & np.isfinite(diff)
+    return dataclasses.replace(p, runaway=(ra, rb, both),
+                               far_note=runaway_note(((title_a, a), (title_b, b)), (ra, rb)))
 
 
 def _fisher_options(s: Scenario):
@@ -322,7 +370,7 @@ def optimised_layout(snapshot: Snapshot):
         return core.optimise_layout(s.layout_kind, int(s.n_stations), xy_region(s, 31), h=s.h,
                                     velocity=s.velocity(), moments=(s.Ph, s.Pv),
                                     criterion=CRITERIA[s.criterion], threshold=s.threshold,
-                                    d_range=SPACING_RANGE, **_fisher_options(s))
+                                    **_fisher_options(s))  # spacing up to what fits in the region
 
 
 class PanelCache:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import holoviews as hv
+import numpy as np
 import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
@@ -17,7 +18,9 @@ DESIGN_HELP = """
 drag one to move it, select it and press Backspace to delete it; or edit the table (z is a depth,
 positive down). The map is the Cramér–Rao bound (1σ) on the 3-D position, horizontal, depth or
 speed error of a target at depth z, with the sensor noise and N instants of the Advanced section —
-the numbers an analyst reports — on a log colour scale. Click a point for its horizontal error
+the numbers an analyst reports — on a log colour scale. White hatching: the 3-D bound exceeds 30 %
+of the range to the nearest station, where a linearised bound no longer predicts a tracker's error
+(far-field runaway; read it as "not trackable from here"). Click a point for its horizontal error
 ellipse. *Find best spacing* scans the dual layout's spacing d over this region and refines the
 optimum with scipy; *Optimise N-station layout* does the same for a line, triangle or square of
 N stations (or free positions, ~10 s) and makes it the custom layout.
@@ -33,6 +36,23 @@ def drawn_stations(data, old, h):
     rows = list(zip(data["x"], data["y"], data["z"]))
     return [[float(x), float(y), float(z) if i < len(old) else float(h)]
             for i, (x, y, z) in enumerate(rows)]
+
+
+#: What a bound of core.LayoutResult.at_bound means, for the result line.
+BOUNDS = {"d_min": "the smallest spacing scanned", "d_max": "the largest spacing that fits in the region",
+          "x_min": "the region's edge x = −extent", "x_max": "the region's edge x = +extent",
+          "y_min": "the region's edge y = −extent", "y_max": "the region's edge y = +extent"}
+
+
+def optimise_text(result, criterion):
+    """One line on an optimised layout (core.LayoutResult): its size, criterion, and a bound hit."""
+    size = f"spacing d = {result.d:.1f} m, " if result.d is not None else ""
+    text = (f"**Optimised {result.kind}** of {len(result.stations)} stations, centred on the region: "
+            f"{size}{criterion} = {result.value:.4g}.")
+    if result.at_bound:
+        text += (" The optimum lies on " + " and ".join(BOUNDS[b] for b in result.at_bound) +
+                 ": a better layout may lie beyond it (widen the region, *extent*).")
+    return text
 
 
 def design_tab(scenario, cache, widgets):
@@ -59,7 +79,10 @@ def design_tab(scenario, cache, widgets):
         return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[0]
 
     def ellipse_text(x, y, *_):
-        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[1]
+        stations = np.array(scenario.stations, dtype=float).reshape(-1, 3)
+        rng = (float(np.min(np.linalg.norm(stations - [x, y, scenario.z], axis=1)))
+               if len(stations) else None)
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent, rng)[1]
 
     ell = hv.DynamicMap(ellipse, streams=[tap, hv.streams.Params(scenario, watch + ["stations"])])
     table = pn.widgets.Tabulator(
@@ -94,11 +117,14 @@ def design_tab(scenario, cache, widgets):
                         show_name=False, widgets=widgets, sizing_mode="stretch_width")
     optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
 
+    outcome = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-optimise-result"])
+
     def optimise_clicked(event):
         optimise.loading = True
         try:
             result = cache.get(snap(), compute.optimised_layout)
             scenario.stations = [[float(v) for v in st] for st in result.stations]
+            outcome.object = optimise_text(result, scenario.criterion)
         finally:
             optimise.loading = False
 
@@ -111,7 +137,7 @@ def design_tab(scenario, cache, widgets):
                              pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(criteria, run, optimise, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),
+        pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )

@@ -34,14 +34,16 @@ from bokeh.models import (
 )
 from bokeh.palettes import RdBu11, Viridis256
 
-from .compute import Panels, colour_range
+from .compute import RUNAWAY_LIMIT, Panels, colour_range
 
 #: Veil codes of a pixel (the veil image): 0 observable, 1 and 2 unobservable (the two colours of
-#: its stripes), 3 no value (on a station, or blank where the paper's Δ ≤ 0): see VEIL_PALETTE.
-OK, VEIL_DARK, VEIL_LIGHT, NO_VALUE = 0, 1, 2, 3
+#: its stripes), 3 no value (on a station, or blank where the paper's Δ ≤ 0), 4 and 5 a CRLB
+#: beyond RUNAWAY_LIMIT of the range (the linearised bound runs away): see VEIL_PALETTE.
+OK, VEIL_DARK, VEIL_LIGHT, NO_VALUE, RUNAWAY, RUNAWAY_GAP = 0, 1, 2, 3, 4, 5
 #: Unobservable points are striped grey, opaque enough that the round-off beneath is not read as
-#: colour; points with no value are left to the image's own white (NaN). Distinct by design.
-VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000")
+#: colour; points with no value are left to the image's own white (NaN); runaway points are
+#: hatched white the other way, the colour beneath still readable. Distinct by design.
+VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000", "#ffffffb0", "#00000000")
 NAN_COLOUR = "#ffffff"
 STRIPE = 6  # pixels of the map grid per stripe of the veil
 
@@ -55,8 +57,9 @@ if (value == 1 || value == 2) return texts.unobservable;
 const s = img.data.image[0][special_vars.image_index.flat_index];
 if (s == null || !isFinite(s)) return texts.none;
 const v = bar.low + s * (bar.high - bar.low);
-if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m"; }
-return v.toFixed(3);
+const far = value >= 4 ? texts.runaway : "";
+if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m" + far; }
+return v.toFixed(3) + far;
 """
 #: Colour bar ticks: in metres on a log10-metre scale (``log``), else the plain number. One
 #: formatter per bar, switched by its args (BokehJS keeps a colour bar's first formatter).
@@ -65,6 +68,12 @@ if (!log) return String(Number(tick.toPrecision(6))).replace("-", "\u2212");
 const m = Math.pow(10, tick);
 return m >= 1e4 || m < 1e-2 ? m.toExponential(0) : String(Number(m.toPrecision(2)));
 """
+
+
+#: Hover text after the value of a runaway point (app.compute.runaway).
+RUNAWAY_TEXT = (f" — over {RUNAWAY_LIMIT:.0%} of the range to the nearest station: the linearised "
+                "bound does not predict a tracker's error here (far-field runaway)")
+RUNAWAY_DIFF_TEXT = f" — A's or B's CRLB is over {RUNAWAY_LIMIT:.0%} of the range (far-field runaway)"
 
 
 @dataclass
@@ -103,7 +112,7 @@ def build():
     x_range, y_range = Range1d(-1, 1), Range1d(-1, 1)
     value_bar, diff_bar = (LinearColorMapper(palette=Viridis256, low=0, high=1, nan_color=NAN_COLOUR)
                            for _ in range(2))
-    veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=3)
+    veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=len(VEIL_PALETTE) - 1)
     out = {k: [] for k in ("figs", "images", "veils", "stations", "bars", "hovers", "formatters",
                            "captions", "saves")}
     for which in range(3):
@@ -121,7 +130,7 @@ def build():
         s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
                         line_color="black", line_width=1.5)
         fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
-                                                      log=False, texts=dict(unobservable="", none="")))
+                                                      log=False, texts=dict(unobservable="", none="", runaway="")))
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
                                                    ("value", "@image{custom}")],
                           formatters={"@image": fmt}, visible=False)  # no toolbar icon: room for save
@@ -191,13 +200,17 @@ def normalised(values, low, high):
     return ((np.asarray(values, dtype=float) - low) / (high - low)).astype(np.float32)
 
 
-def veil_codes(observable, values):
+def veil_codes(observable, values, runaway=None):
     """The veil image (float32 codes, see :data:`VEIL_PALETTE`): diagonal stripes where the point
-    is unobservable, NO_VALUE where it is observable but has no value, OK elsewhere."""
+    is unobservable, NO_VALUE where it is observable but has no value, stripes the other way
+    where ``runaway`` (bool, optional) flags it, OK elsewhere."""
     n_v, n_u = observable.shape
-    stripes = ((np.arange(n_v)[:, None] + np.arange(n_u)[None, :]) // STRIPE) % 2
-    out = np.where(observable, np.where(np.isfinite(values), OK, NO_VALUE), VEIL_DARK + stripes)
-    return out.astype(np.float32)
+    i, j = np.arange(n_v)[:, None], np.arange(n_u)[None, :]
+    stripes = ((i + j) // STRIPE) % 2
+    good = np.where(np.isfinite(values), OK, NO_VALUE)
+    if runaway is not None:
+        good = np.where(runaway & np.isfinite(values), RUNAWAY + ((i - j) // STRIPE) % 2, good)
+    return np.where(observable, good, VEIL_DARK + stripes).astype(np.float32)
 
 
 def _wrapped(text, width=62):
@@ -259,7 +272,8 @@ def prepare(p: Panels) -> Prepared:
     maps, axes = _maps(p)
     scales = ranges(p)
     images = tuple(normalised(values, low, high) for (values, *_), (low, high, _) in zip(maps, scales))
-    veils = tuple(veil_codes(observable, values) for values, observable, *_ in maps)
+    far = p.runaway or (None, None, None)
+    veils = tuple(veil_codes(observable, values, r) for (values, observable, *_), r in zip(maps, far))
     return Prepared(panels=p, maps=maps, axes=axes, ranges=scales, images=images, veils=veils)
 
 
@@ -316,7 +330,8 @@ def set_maps(figs: MapFigures, prepared):
             bar.formatter.args = dict(log=log)
         texts = dict(unobservable=p.unobservable[which] if which < 2 else
                      "undefined: A or B unobservable (rank-deficient)",
-                     none="undefined: on a station" if which < 2 else p.blank)
+                     none="undefined: on a station" if which < 2 else p.blank,
+                     runaway=RUNAWAY_TEXT if which < 2 else RUNAWAY_DIFF_TEXT)
         fmt = figs.formatters[which]
         if fmt.args["log"] != log or fmt.args["texts"] != texts:  # rare: a new measure or layout
             fmt.args = dict(fmt.args, log=log, texts=texts)

@@ -12,7 +12,7 @@ from bokeh.layouts import row
 from panel.io.state import set_curdoc
 
 from . import map_figures, views
-from .compute import FIELDS, Snapshot
+from .compute import FIELDS, RUNAWAY_LIMIT, Snapshot
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
@@ -49,6 +49,10 @@ LEGEND = (
     '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
     'border:1px solid #888;background:#fff"></span> no value: on a station, or Δ ≤ 0 (B no better)'
     '</span>'
+    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
+    'border:1px solid #888;background:repeating-linear-gradient(-45deg,#ffffff 0 4px,#46327e 4px 8px)">'
+    f'</span> CRLB &gt; {RUNAWAY_LIMIT:.0%} of the range to the nearest station: the bound does not predict a '
+    'tracker\'s error (far-field runaway)</span>'
     '<span>△ station</span>'
     '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
     'border:3px solid #b03a2e"></span> the paper\'s figure</span></div>'
@@ -62,6 +66,11 @@ def alert(text, kind):
     style = f"color:{fg};background:{bg};border:1px solid {fg}33;border-radius:6px;padding:8px 12px"
     return (f'<div class="alert alert-{kind}" role="alert" style="{style}">'
             f'{html.escape(text).replace(chr(10), "<br>")}</div>')
+
+
+def _notes(p):
+    """The warnings under the maps: unobservable points, then runaway CRLB points."""
+    return "\n".join(t for t in (p.note, p.far_note) if t)
 
 
 def _paper_line(p):
@@ -80,7 +89,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     map_figures.fill(figs, first)
     # Written by redraw together with the maps (not bound to the scenario: a binding would compute
     # the maps once more, synchronously, before redraw could start).
-    note = pn.pane.HTML(alert(first.note, "warning"), visible=bool(first.note),
+    note = pn.pane.HTML(alert(_notes(first), "warning"), visible=bool(_notes(first)),
                         sizing_mode="stretch_width", css_classes=["w-note"])
     paper = pn.pane.HTML(_paper_line(first), visible=bool(first.preset), sizing_mode="stretch_width",
                          css_classes=["w-paper"])
@@ -148,7 +157,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             with pn.io.hold():
                 map_figures.set_maps(figs, panels)
                 p = panels.panels
-                note.param.update(object=alert(p.note, "warning"), visible=bool(p.note))
+                note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
                 paper.param.update(object=_paper_line(p), visible=bool(p.preset))
                 now = remedies(p)
                 known.visible, crlb.visible = now["known"], now["crlb"]

@@ -10,7 +10,9 @@ import holoviews as hv
 import numpy as np
 import xarray as xr
 
-from .compute import Panels
+from . import compute
+from .compute import RUNAWAY_LIMIT, Panels
+from .map_figures import STRIPE
 from .scenario import ERROR_QUANTITIES
 
 hv.extension("bokeh", logo=False)
@@ -112,7 +114,19 @@ def error_map(d, title, quantity="3-D position error (m)", clim=None, size=320):
         cmap="viridis_r", logz=True, clim=clim or error_clim(d, quantity), colorbar=True,
         clabel=f"CRLB {quantity}, log scale", tools=["hover"], clipping_colors={"NaN": "white"},
         frame_width=size, frame_height=size, framewise=True, title=title)
-    return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane)
+    return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane) * runaway_layer(d)
+
+
+def runaway_layer(d):
+    """White hatching where the design's 3-D position CRLB exceeds RUNAWAY_LIMIT × the range to
+    the nearest station (:func:`app.compute.runaway`; the same marks as the Maps tab's)."""
+    far = compute.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
+    i, j = np.indices(far.shape)
+    hatch = far & (((i - j) // STRIPE) % 2 == 0)
+    label = f"CRLB > {RUNAWAY_LIMIT:.0%} of range"
+    return hv.Image(np.flipud(hatch.astype(float)), bounds=_bounds(d.plane), kdims=list(axes(d.plane)),
+                    vdims=[hv.Dimension("runaway", label=label)]).opts(
+        cmap=["#ffffff00", "#ffffff"], clim=(0, 1), alpha=0.7, colorbar=False, tools=[])
 
 
 def station_layer(stations, editable=False):
@@ -126,8 +140,10 @@ def station_layer(stations, editable=False):
     return points.opts(active_tools=["point_draw"]) if editable else points
 
 
-def error_ellipse(errors, x, y, extent):
-    """The 1-σ horizontal error ellipse at (x, y), drawn ×k so that it is visible; and its text."""
+def error_ellipse(errors, x, y, extent, range_m=None):
+    """The 1-σ horizontal error ellipse at (x, y), drawn ×k so that it is visible; and its text
+    (saying so when the 3-D error exceeds RUNAWAY_LIMIT × ``range_m``, the range to the nearest
+    station, m)."""
     if errors is None or not bool(errors.observable):
         return hv.Ellipse(0, 0, 0).opts(alpha=0), "Click on the map (away from a station) for the error ellipse there."
     a, b = float(errors.semi_major), float(errors.semi_minor)
@@ -137,6 +153,10 @@ def error_ellipse(errors, x, y, extent):
             f"at {float(errors.orientation):.0f}° from +x (drawn ×{k:.3g}); depth error "
             f"{float(errors.sigma_z):.3g} m; speed error {float(errors.sigma_speed):.3g} m/s; "
             f"3-D position error {float(errors.position):.3g} m.")
+    if range_m is not None and float(errors.position) > RUNAWAY_LIMIT * range_m:
+        text += (f" That is over {RUNAWAY_LIMIT:.0%} of the range to the nearest station "
+                 f"({range_m:.3g} m): the linearised bound does not predict a tracker's error here "
+                 "(far-field runaway; hatched on the map).")
     return ell.opts(color="red", line_width=2), text
 
 

@@ -374,6 +374,19 @@ def test_crlb_maps_are_in_log_metres_and_say_where_a_value_is_missing(page):
     assert " m" in text and "NaN" not in text and "Infinity" not in text
 
 
+def test_a_crlb_far_from_the_stations_is_hatched_and_not_quoted_as_an_error(page):
+    # issue 18: where the CRLB exceeds 30 % of the range, the linearised bound runs away
+    select(page, "measure", "CRLB position error (m)")
+    page.wait_for_function(f"() => ({LAYERS_JS})()[1].bar.includes('CRLB')", timeout=30_000)
+    far = _tooltip(page, 1, 0.2, 0.15)  # towards map B's corner: ~340 m from the stations
+    assert " m" in far and "far-field runaway" in far
+    near = _tooltip(page, 1, 0.4, 0.4)  # ~50 m from the stations: a trusted bound
+    assert " m" in near and "runaway" not in near
+    assert page.get_by_text("far-field runaway)").first.is_visible()  # the legend's entry
+    note = page.locator(".w-note").first
+    assert "not trackable from these stations" in note.locator(".alert").text_content()
+
+
 def test_a_veiled_point_hovers_as_unobservable_not_a_number(page):
     # defect 8: the default view's map A (one station: rank 6) hovered as a number
     text = _tooltip(page, 0, 0.4, 0.4)

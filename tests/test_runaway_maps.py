@@ -1,0 +1,97 @@
+"""Issue 18: where the linearised bound stops predicting a tracker's error (CRLB > 30 % of the
+range to the nearest station), the Maps and Layout design tabs say so instead of quoting
+kilometres as errors. Without a browser; the served page is tested in test_browser.py."""
+
+import numpy as np
+import pytest
+
+from app import compute as c
+from app import design, map_figures, views
+from app.compute import Snapshot
+from app.scenario import Scenario
+
+CRLB = "CRLB position error (m)"
+
+
+def _by_hand(plane, stations, crlb, observable):
+    """The flag, point by point from its definition (no shared code with app.compute.runaway)."""
+    u, v = plane.axes
+    out = np.zeros(crlb.shape, dtype=bool)
+    for i, vi in enumerate(v):
+        for j, uj in enumerate(u):
+            point = (uj, vi, plane.fixed) if plane.kind == "xy" else (uj, plane.fixed, vi)
+            rng = min(np.linalg.norm(np.subtract(point, st)) for st in stations)
+            out[i, j] = bool(observable[i, j] and np.isfinite(crlb[i, j]) and crlb[i, j] > 0.3 * rng)
+    return out
+
+
+@pytest.mark.parametrize("plane", ["x–y", "x–z"])
+def test_crlb_maps_hatch_exactly_the_points_whose_bound_exceeds_30_percent_of_the_range(plane):
+    s = Scenario(resolution=31, measure=CRLB, plane=plane)
+    p = c.compute(Snapshot.of(s))
+    ra, rb, rd = p.runaway
+    expected = _by_hand(p.plane, p.stations[1], p.b.value, p.b.observable)
+    np.testing.assert_array_equal(rb, expected)
+    assert 0 < rb.sum() < rb.size  # both cases occur: near the stations the bound is trusted
+    assert not ra.any()  # one station with the moments unknown: unobservable, veiled instead
+    np.testing.assert_array_equal(rd, (ra | rb) & p.a.observable & p.b.observable & np.isfinite(p.diff))
+    veils = map_figures.prepare(p).veils
+    hatched = np.isin(veils[1], (map_figures.RUNAWAY, map_figures.RUNAWAY_GAP))
+    np.testing.assert_array_equal(hatched, rb)
+    assert {map_figures.RUNAWAY, map_figures.RUNAWAY_GAP} <= set(np.unique(veils[1]))  # striped
+    assert f"{rb.sum() / p.b.observable.sum():.0%} of the observable points" in p.far_note
+    assert "not as an error to quote" in p.far_note
+
+
+def test_the_hover_of_a_hatched_point_says_the_bound_does_not_predict_there():
+    p = c.compute(Snapshot.of(Scenario(resolution=21, measure=CRLB)))
+    figs = map_figures.build()
+    map_figures.fill(figs, p)
+    assert "far-field runaway" in figs.formatters[1].args["texts"]["runaway"]
+    assert "runaway" in figs.formatters[2].args["texts"]["runaway"]
+    assert "value >= 4" in figs.formatters[1].code  # the text is added only on hatched codes
+
+
+@pytest.mark.parametrize("measure", ["log10|det Γ| (paper)", "D-optimal ½·log10 det F"])
+def test_maps_of_other_measures_carry_no_runaway_marks(measure):
+    # the flag compares a bound in metres with a range: it has no meaning for the other measures
+    p = c.compute(Snapshot.of(Scenario(resolution=21, measure=measure)))
+    assert p.runaway == () and p.far_note == ""
+    assert all(v.max() <= map_figures.NO_VALUE for v in map_figures.prepare(p).veils)
+
+
+def test_the_layout_design_map_hatches_the_same_points():
+    s = Scenario(resolution=31)
+    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    far = _by_hand(d.plane, d.stations, d.errors.position, d.errors.observable)
+    assert 0 < far.sum() < far.size
+    layer = views.error_map(d, "t").get(2)  # image, veil, runaway hatching
+    hatch = np.flipud(layer.data)  # hv.Image rows run from the top
+    assert hatch.shape == far.shape
+    assert not (hatch.astype(bool) & ~far).any()  # hatched only where flagged …
+    assert hatch[far].mean() == pytest.approx(0.5, abs=0.1)  # … in stripes over all of it
+
+
+def test_a_clicked_far_point_says_its_bound_does_not_predict_an_error():
+    s = Scenario()
+    snap = Snapshot.of(s, c.DESIGN_FIELDS)
+    stations = np.array(s.stations, dtype=float)
+    near, far = (10.0, 10.0), (290.0, 290.0)
+    texts = {}
+    for x, y in (near, far):
+        err = c.error_at(snap, x, y)
+        rng = float(np.min(np.linalg.norm(stations - [x, y, s.z], axis=1)))
+        texts[(x, y)] = (float(err.position) / rng, views.error_ellipse(err, x, y, s.extent, rng)[1])
+    assert texts[near][0] < 0.3 and "runaway" not in texts[near][1]
+    assert texts[far][0] > 0.3 and "does not predict a tracker's error" in texts[far][1]
+
+
+def test_the_optimiser_is_not_capped_below_the_region_and_reports_a_bound_it_hits():
+    # issue 16 defect 7: the app passed a 200 m cap; a square of 4 came back at 200 m, at_bound
+    s = Scenario(layout_kind="square", n_stations=4)
+    r = c.optimised_layout(Snapshot.of(s, c.DESIGN_FIELDS))
+    assert 250.0 < r.d < 2 * s.extent and r.at_bound == ()  # free optimum: side ~298 m (issue 16)
+    np.testing.assert_allclose(r.stations[:, :2].mean(axis=0), 0.0, atol=1e-9)  # centred
+    assert "spacing d = " in design.optimise_text(r, s.criterion)
+    capped = type(r)(**{**r.__dict__, "at_bound": ("d_max",)})
+    assert "largest spacing that fits in the region" in design.optimise_text(capped, s.criterion)
