@@ -35,7 +35,8 @@ from core import track as core_track
 # The maps' lock on numba's parallel kernels (its workqueue layer must not be entered from two
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
-from .compute import KERNEL_LOCK
+from . import views
+from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design
 from .scenario import Scenario
 
 hv.extension("bokeh", logo=False)
@@ -44,12 +45,12 @@ hv.extension("bokeh", logo=False)
 TRACK_PARAMS = ("track_x0", "track_y0", "track_heading", "track_speed", "track_duration",
                 "track_axes", "track_sigma_a", "track_alpha", "track_filter", "track_runs")
 #: Everything the track's numbers depend on.
-INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T", "sea_model",
+INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T", "steps", "sea_model",
                          "sea_depth", "seabed_sigma")
 #: Most steps of a track the tab computes (the duration's bound over the smallest T).
 MAX_STEPS = 2001
-#: Linearisation limit of the flag: CRLB / range above this is not a predicted error.
-LIMIT = 0.3
+#: Points per side of the CRLB map beneath the track.
+MAP_POINTS = 121
 
 WINNER = "#d62728"
 TRUTH = "#000000"
@@ -97,8 +98,22 @@ def _compute(key):
     truth = case.nominal_track()
     stations = np.asarray(case.stations, float)
     rng = np.min(np.linalg.norm(truth[:, None, :3] - stations[None], axis=-1), axis=1)
-    breaks = core.linearisation_breaks(res.pcrlb_m, rng, limit=LIMIT)
-    return dict(case=case, res=res, truth=truth, range_m=rng, breaks=breaks, stations=stations)
+    breaks = core.linearisation_breaks(res.pcrlb_m, rng, limit=RUNAWAY_LIMIT)
+    window = view_window(truth)
+    plane = core.Plane("xy", window[0], window[1], float(s.z), MAP_POINTS)
+    with KERNEL_LOCK:  # the snapshot bound beneath the track: N instants at the track's velocity
+        errors = core.crlb_maps(plane, stations, velocity=tuple(truth[0, 3:5]),
+                                moments=(case.Ph, case.Pv), T=case.T, sigma=case.sigma,
+                                noise=case.noise, steps=int(s.steps), sea=sea_of(s))
+    return dict(case=case, res=res, truth=truth, range_m=rng, breaks=breaks, stations=stations,
+                map=Design(plane=plane, stations=stations, errors=errors), window=window)
+
+
+def view_window(truth):
+    """((x min, x max), (y min, y max)) of the plan view (m): the track with a margin, square."""
+    span = np.ptp(truth[:, :2], axis=0).max() + 60.0
+    c = truth[:, :2].mean(axis=0)
+    return tuple((float(m - span / 2), float(m + span / 2)) for m in c)
 
 
 class _Values:
@@ -132,7 +147,7 @@ def plan_view(out):
         label="true track (colour: PCRLB)",
     ).opts(color="log10_pcrlb", cmap="viridis", colorbar=True, size=5, tools=["hover"],
            clabel="log10 PCRLB position σ (m)")
-    layers = [hv.Path([truth[:, :2]], kdims=[x, y]).opts(color=TRUTH, line_width=1)]
+    layers = [map_layer(out["map"]), hv.Path([truth[:, :2]], kdims=[x, y]).opts(color=TRUTH, line_width=1)]
     est = res.tracks["estimate"]
     if res.summary["filter"] == "bank":
         for track in res.tracks["x_all"][0]:
@@ -154,12 +169,23 @@ def plan_view(out):
             marker="x", color="#7f7f7f", size=9))
     layers.append(hv.Points((out["stations"][:, 0], out["stations"][:, 1]), kdims=[x, y],
                             label="stations").opts(marker="triangle", color="black", size=12))
-    span = np.ptp(truth[:, :2], axis=0).max() + 60.0
-    c = truth[:, :2].mean(axis=0)
+    (x0, x1), (y0, y1) = out["window"]
     return hv.Overlay(layers).opts(
-        title="Track, PCRLB along it, and the trackers' estimates", aspect="equal",
-        xlim=(c[0] - span / 2, c[0] + span / 2), ylim=(c[1] - span / 2, c[1] + span / 2),
-        legend_position="top_left", responsive=True, min_height=420)
+        title="Track, PCRLB along it, and the trackers' estimates, over the snapshot CRLB map",
+        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="top_left", responsive=True,
+        min_height=420)
+
+
+def map_layer(d):
+    """The snapshot CRLB map beneath the track (grey, darker = smaller bound; hover: log10 m),
+    hatched where it exceeds RUNAWAY_LIMIT × the range, as on the Maps and Layout design tabs."""
+    err = np.where(np.isfinite(d.errors.position), d.errors.position, np.nan)
+    with np.errstate(divide="ignore"):
+        log_err = np.log10(err)
+    vdim = hv.Dimension("log10_crlb", label="snapshot CRLB 3-D position σ, log10", unit="log10 m")
+    img = views.map_image(log_err, d.plane, vdim).opts(
+        cmap="Greys", alpha=0.5, colorbar=False, tools=["hover"], clipping_colors={"NaN": "white"})
+    return img * views.runaway_layer(d)
 
 
 def error_view(out):
@@ -225,7 +251,10 @@ def track_tab(scenario: Scenario):
     note = pn.pane.Markdown(
         "A straight track over the design tab's stations at the target depth z, with the "
         "target's moments and the sensor noise set above. The PCRLB (Tichavský) is the best "
-        "achievable position σ along it; the trackers are run on simulated measurements.",
+        "achievable position σ along it; the trackers are run on simulated measurements. "
+        "Beneath: the snapshot CRLB map (3-D position σ over N instants at the track's velocity, "
+        "darker = smaller), hatched white where it exceeds 30 % of the range to the nearest "
+        "station (the linearised bound does not predict there).",
         sizing_mode="stretch_width")
     return pn.Row(
         pn.Column(widgets, width=320),

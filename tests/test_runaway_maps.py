@@ -5,6 +5,7 @@ kilometres as errors. Without a browser; the served page is tested in test_brows
 import numpy as np
 import pytest
 
+import core
 from app import compute as c
 from app import design, map_figures, views
 from app.compute import Snapshot
@@ -95,3 +96,29 @@ def test_the_optimiser_is_not_capped_below_the_region_and_reports_a_bound_it_hit
     assert "spacing d = " in design.optimise_text(r, s.criterion)
     capped = type(r)(**{**r.__dict__, "at_bound": ("d_max",)})
     assert "largest spacing that fits in the region" in design.optimise_text(capped, s.criterion)
+
+
+def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
+    # issue 18: "set or draw a straight track over the current map and stations"
+    from app import track
+
+    s = Scenario(track_runs=2, track_filter="ekf", track_duration=60.0)
+    out = track.compute(s)
+    d = out["map"]
+    (x0, x1), (y0, y1) = out["window"]
+    assert d.plane.u == (x0, x1) and d.plane.v == (y0, y1) and d.plane.fixed == s.z
+    assert x0 <= out["truth"][:, 0].min() and out["truth"][:, 0].max() <= x1  # the track is on it
+    # the map is the core's CRLB at the track's velocity, N instants (checked at one point)
+    u, v = d.plane.axes
+    i, j = 7, 11
+    state = [u[j], v[i], s.z, *out["truth"][0, 3:5], s.Ph, s.Pv]
+    one = core.crlb_maps(core.Plane("xy", (u[j], u[j] + 1), (v[i], v[i] + 1), s.z, 2),
+                           d.stations, velocity=tuple(state[3:5]), moments=(s.Ph, s.Pv), T=s.T,
+                           sigma=s.sigma, noise=s.noise, steps=s.steps)
+    assert d.errors.position[i, j] == pytest.approx(one.position[0, 0], rel=1e-9)
+    layers = track.plan_view(out)
+    image, hatch = layers.get(0), layers.get(1)
+    assert image.vdims[0].unit == "log10 m"
+    np.testing.assert_array_equal(np.flipud(hatch.data) > 0,
+                                  c.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
+                                  & (np.add.outer(np.arange(len(v)), -np.arange(len(u))) // map_figures.STRIPE % 2 == 0))
