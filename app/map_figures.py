@@ -97,7 +97,7 @@ class MapFigures:
 def _figure(x_range, y_range):
     from bokeh.plotting import figure
 
-    fig = figure(x_range=x_range, y_range=y_range, width=420, height=440, sizing_mode="scale_width",
+    fig = figure(x_range=x_range, y_range=y_range, width=420, height=465, sizing_mode="scale_width",
                  tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
                  min_border_right=4, toolbar_location="right")
@@ -213,9 +213,10 @@ def veil_codes(observable, values, runaway=None):
     return np.where(observable, good, VEIL_DARK + stripes).astype(np.float32)
 
 
-def _wrapped(text, width=62):
+def _wrapped(text, width=50):
     """``text`` in lines of at most ``width`` characters, broken after commas (a Bokeh title
-    does not wrap by itself: a long caption was cut at the plot's edge)."""
+    does not wrap by itself: a long caption was cut at the plot's edge; 50 fits a map at a
+    1280 px wide screen with the sidebar open)."""
     lines, line = [], ""
     for part in text.split(", "):
         if line and len(line) + 2 + len(part) > width:
