@@ -172,8 +172,7 @@ def plan_view(out):
     (x0, x1), (y0, y1) = out["window"]
     return hv.Overlay(layers).opts(
         title="Track, PCRLB along it, and the trackers' estimates, over the snapshot CRLB map",
-        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="top_left", responsive=True,
-        min_height=420)
+        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="top_left", responsive=True)
 
 
 def map_layer(d):
@@ -204,8 +203,7 @@ def error_view(out):
             color="black", line_dash="dashed", tools=["hover"]),
         hv.Curve((res.time_s, untrusted), t, err, label="PCRLB (> 0.3 × range: not predictive)").opts(
             color="#7f7f7f", line_dash="dotted", tools=["hover"]),
-    ]).opts(logy=True, title="TRMSE vs PCRLB", legend_position="top_right", responsive=True,
-            min_height=300)
+    ]).opts(logy=True, title="TRMSE vs PCRLB", legend_position="top_right", responsive=True)
 
 
 def summary_text(out):
@@ -261,9 +259,9 @@ def track_tab(scenario: Scenario):
         pn.Column(
             note,
             bound(summary_text, sizing_mode="stretch_width"),
-            bound(plan_view, sizing_mode="stretch_both", min_height=420),
-            bound(error_view, sizing_mode="stretch_both", min_height=300),
-            sizing_mode="stretch_both",
+            bound(plan_view, sizing_mode="stretch_width", height=560),
+            bound(error_view, sizing_mode="stretch_width", height=340),
+            sizing_mode="stretch_width",
         ),
-        sizing_mode="stretch_both",
+        sizing_mode="stretch_width",  # stretch_both made Panel override the Tabs' sizing (logged)
     )
