@@ -32,32 +32,25 @@ from .validation import ON_STATION
 _BLOCK = 256
 
 
-@nb.njit(**JIT)
-def _field_block(states, first, last, stations, kappa, model, medium, e_out, j_out):
-    """:func:`field_and_jacobian` for the points ``first`` … ``last − 1``. (A function of its
-    own, not inlined: numba's parallel array analysis cannot type the series' nested tuples.)"""
-    w = np.empty((PAIR_ROWS, 1))  # the layered series' one-pair workspace
-    for p in range(first, last):
-        x = states[p]
-        for s in range(stations.shape[0]):
-            rows = station_rows(w, x[0] - stations[s, 0], x[1] - stations[s, 1], x[2], stations[s, 2],
-                                x[3], x[4], x[5], x[6], kappa, model, medium)
-            _store_rows(rows, e_out[p, s], j_out[p, s])
-
-
 @nb.njit(parallel=True, nogil=True, **JIT)
 def field_and_jacobian(states, stations, kappa, model, medium, e_out, j_out):
     """E and ∂E/∂X: states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7).
     ``medium`` = [D, η, tol] of :func:`core.sea.medium` (D = 0: whole space)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        _field_block(states, b * _BLOCK, min(npts, (b + 1) * _BLOCK), stations, kappa, model, medium,
-                     e_out, j_out)
+        w = np.empty((PAIR_ROWS, 1))  # the layered series' one-pair workspace
+        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
+            x = states[p]
+            for s in range(stations.shape[0]):
+                rows = station_rows(w, x[0] - stations[s, 0], x[1] - stations[s, 1], x[2],
+                                    stations[s, 2], x[3], x[4], x[5], x[6], kappa, model, medium)
+                _store_rows(rows, e_out[p, s], j_out[p, s])
 
 
 @nb.njit(**JIT)
 def _pairs_run(states, p0, lanes, stations, kappa, medium, e_out, j_out, counts):
-    """:func:`layered_pairs` for the run of ``lanes`` targets from ``p0``."""
+    """:func:`layered_pairs` for the run of ``lanes`` targets from ``p0``. (A function of its
+    own, not inlined there: numba's parallel array analysis fails on the series' nested tuples.)"""
     npts = states.shape[0]
     w = np.empty((PAIR_ROWS, LANES))
     count = min(lanes, npts - p0)
