@@ -26,7 +26,7 @@ import numba as nb
 import numpy as np
 
 from .fields import JIT, _local_jacobian, _store_rows
-from .sea import station_rows
+from .sea import PAIR_ROWS, SEA_ROWS, _load, layered_lanes, station_rows
 from .validation import ON_STATION
 
 _BLOCK = 256
@@ -36,23 +36,55 @@ _BLOCK = 256
 def field_and_jacobian(states, stations, kappa, model, medium, e_out, j_out):
     """E and ∂E/∂X: states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7).
     ``medium`` = [D, η, tol] of :func:`core.sea.medium` (D = 0: whole space)."""
-    for p in nb.prange(states.shape[0]):
-        x = states[p]
-        for s in range(stations.shape[0]):
-            rows = station_rows(x[0] - stations[s, 0], x[1] - stations[s, 1], x[2], stations[s, 2],
-                                x[3], x[4], x[5], x[6], kappa, model, medium)
-            _store_rows(rows, e_out[p, s], j_out[p, s])
+    npts = states.shape[0]
+    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
+        w = np.empty((PAIR_ROWS, 1))  # the layered series' one-pair workspace
+        for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
+            x = states[p]
+            for s in range(stations.shape[0]):
+                rows = station_rows(w, x[0] - stations[s, 0], x[1] - stations[s, 1], x[2],
+                                    stations[s, 2], x[3], x[4], x[5], x[6], kappa, model, medium)
+                _store_rows(rows, e_out[p, s], j_out[p, s])
 
 
 @nb.njit(**JIT)
-def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, g):
+def _pairs_run(states, p0, lanes, stations, kappa, medium, e_out, j_out, counts):
+    """:func:`layered_pairs` for the run of ``lanes`` targets from ``p0``. (A function of its
+    own, not inlined there: numba's parallel array analysis fails on the series' nested tuples.)"""
+    npts = states.shape[0]
+    w = np.empty((PAIR_ROWS, LANES))
+    count = min(lanes, npts - p0)
+    for s in range(stations.shape[0]):
+        for lane in range(lanes):
+            x = states[p0 + lane if lane < count else p0]
+            w[0, lane], w[1, lane] = x[0] - stations[s, 0], x[1] - stations[s, 1]
+            w[2, lane], w[3, lane] = x[2], stations[s, 2]
+            w[4, lane], w[5, lane], w[6, lane], w[7, lane] = x[3], x[4], x[5], x[6]
+        n_img = layered_lanes(w, 0, SEA_ROWS, lanes, kappa, medium[0], medium[1], medium[2])
+        for lane in range(count):
+            _store_rows(_load(w, SEA_ROWS, lane), e_out[p0 + lane, s], j_out[p0 + lane, s])
+            counts[p0 + lane, s] = n_img
+
+
+@nb.njit(parallel=True, nogil=True, **JIT)
+def layered_pairs(states, stations, kappa, medium, lanes, e_out, j_out, counts):
+    """The layered series (medium[0] = D > 0) of every target–station pair, ``lanes`` (≤ LANES)
+    consecutive targets side by side per station, as the map kernels run it (a short last run
+    repeats its first target): e_out (P, S, 3), j_out (P, S, 3, 7), images per pair counts (P, S)."""
+    npts = states.shape[0]
+    for b in nb.prange((npts + lanes - 1) // lanes):
+        _pairs_run(states, b * lanes, lanes, stations, kappa, medium, e_out, j_out, counts)
+
+
+@nb.njit(**JIT)
+def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, w, g):
     """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (7,).
     Returns False, with ``g`` incomplete, if the target comes within ON_STATION of a station.
 
     Rows are time-major, then station-major, then component (Ex, Ey, Ez): the paper's order.
     Row block of instant i is ``(∂h/∂X)(Φ^i x) · Φ^i``; Φ^i adds i·T·(∂/∂x, ∂/∂y) to the
-    velocity columns (constant-velocity motion, no vertical speed). ``e`` (3,) and ``jac``
-    (3, 7) are scratch.
+    velocity columns (constant-velocity motion, no vertical speed). ``e`` (3,), ``jac``
+    (3, 7) and ``w`` (the layered series' one-pair workspace) are scratch.
     """
     n_s = stations.shape[0]
     row = 0
@@ -69,7 +101,7 @@ def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, 
             rz = x[2] - stations[s, 2]
             if rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION:
                 return False
-            _store_rows(station_rows(rx, ry, x[2], stations[s, 2], x[3], x[4], x[5], x[6], kappa,
+            _store_rows(station_rows(w, rx, ry, x[2], stations[s, 2], x[3], x[4], x[5], x[6], kappa,
                                      model, medium), e, jac)
             for comp in range(3):
                 if row >= n_rows:
@@ -94,9 +126,10 @@ def fill_gamma(states, stations, step, kappa, model, medium, free, n_rows, out):
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
         e = np.empty(3)
         jac = np.empty((3, 7))
+        w = np.empty((PAIR_ROWS, 1))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
             if not _gamma_point(states[p], stations, step, kappa, model, medium, free, n_rows, e, jac,
-                                out[p]):
+                                w, out[p]):
                 out[p] = np.nan
 
 
@@ -111,9 +144,14 @@ LANES = 128
 _CHUNKS = 64
 # Workspace rows (each LANES wide): states, the current station's rows (E_i, ∂E_i/∂X) × 3,
 # Γ (7 × 7, row-major; R in the Fisher kernel), squared column norms, a row of Γ (Fisher),
-# per-lane scalars.
+# per-lane scalars, the layered series.
 _X, _J, _G, _SQ, _T = 0, 7, 31, 80, 87
-_NORM2, _DET, _BETA, _DOT, _BAD, _ROWS = 95, 96, 97, 98, 99, 100
+_NORM2, _DET, _BETA, _DOT, _BAD = 95, 96, 97, 98, 99
+# The layered series' rows (core.sea.SEA_ROWS: a pair's inputs and its previous group), its
+# outputs going straight to w[_J…]. In the Fisher kernel they share rows with the Givens and
+# R⁻¹ scratch, which is dead while a station's rows are being computed.
+_SEA = 100
+_ROWS = _SEA + SEA_ROWS
 
 
 @nb.njit(inline="always", **JIT)
@@ -129,8 +167,9 @@ def _jacobian_lanes(w, dt, stations, s, kappa, model, medium):
     w[_X:_X+7], into w[_J:_J+24]. w[_BAD] = 1 where a target comes within ON_STATION of the
     station (its offset is replaced by a harmless one; the caller masks the result).
 
-    A layered sea (medium[0] = D > 0) takes its own loop over the image series; the whole space
-    keeps the straight loop below, which LLVM vectorises across lanes."""
+    A layered sea (medium[0] = D > 0) runs the image series on the LANES pairs side by side
+    (:func:`core.sea.layered_lanes`, its groups in lockstep, its rows at w[_SEA…]); the whole
+    space keeps the straight loop below. Both loops LLVM vectorises across lanes."""
     sx, sy, sz = stations[s, 0], stations[s, 1], stations[s, 2]
     if medium[0] > 0.0:
         for lane in range(LANES):
@@ -139,11 +178,11 @@ def _jacobian_lanes(w, dt, stations, s, kappa, model, medium):
             rz = w[_X + 2, lane] - sz
             near = rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION
             w[_BAD, lane] = 1.0 if near else w[_BAD, lane]
-            rows = station_rows(1.0 if near else rx, ry, w[_X + 2, lane], sz, w[_X + 3, lane],
-                                w[_X + 4, lane], w[_X + 5, lane], w[_X + 6, lane], kappa, model, medium)
-            _put_row(w, _J, lane, rows[0])
-            _put_row(w, _J + 8, lane, rows[1])
-            _put_row(w, _J + 16, lane, rows[2])
+            w[_SEA, lane], w[_SEA + 1, lane] = 1.0 if near else rx, ry
+            w[_SEA + 2, lane], w[_SEA + 3, lane] = w[_X + 2, lane], sz
+            w[_SEA + 4, lane], w[_SEA + 5, lane] = w[_X + 3, lane], w[_X + 4, lane]
+            w[_SEA + 6, lane], w[_SEA + 7, lane] = w[_X + 5, lane], w[_X + 6, lane]
+        layered_lanes(w, _SEA, _J, LANES, kappa, medium[0], medium[1], medium[2])
         return
     for lane in range(LANES):
         rx = w[_X, lane] + dt * w[_X + 3, lane] - sx

@@ -375,3 +375,47 @@ def test_sweep_takes_the_sea(tmp_path):
     np.testing.assert_allclose(got, want, rtol=1e-12)
     with pytest.raises(SystemExit):  # the default h = 100 m is below an 8.4 m seabed
         sweep.main(["--x", "d=5,20", "--y", "z=2,6", "--sea-depth", "8.4", "--out", str(out)])
+
+
+@pytest.mark.parametrize("depth, sb, z, sz, groups", [(130.0, 0.1, 120.0, 100.0, 3000),
+                                                      (8.4, 0.01, 0.2, 8.4, 8000),
+                                                      (200.0, 1.0, 120.0, 100.0, 200),
+                                                      (50.0, 20.0, 10.0, 50.0, 300)])
+def test_lockstep_lanes_meet_the_tolerance(depth, sb, z, sz, groups):
+    # The map kernels sum 128 neighbouring points in lockstep: one group count for all, set by
+    # the slowest lane, and one tail rule. Along a map row the points' own counts differ; every
+    # point of the lockstep sum must still be within 1e-6 of the brute-force series, each moment
+    # separately, and agree with its own one-lane sum to within the two tolerances.
+    from core.kernels import LANES
+    from core.sea import _series
+
+    sea = Sea(depth, sb)
+    x = np.linspace(-25 * depth if depth < 20 else -300, 25 * depth if depth < 20 else 300, LANES)
+    station = np.array([0.0, 0.0, sz])
+    for moments in ((1.0, 0.0), (0.0, 1.0), (100.0, 20.0)):
+        states = np.array([[xi, 0.3 * depth, z, 2.0, 1.0, *moments] for xi in x])
+        own = image_counts(states, [station], sea)[:, 0]
+        lock = image_counts(states, [station], sea, lanes=LANES)[:, 0]
+        assert own.min() < own.max() and np.all(lock == lock[0])  # the lanes differ on their own
+        e_lock, j_lock, _ = _series(states, [station], sea, SIGMA, LANES)
+        e_own, j_own, _ = _series(states, [station], sea, SIGMA, 1)
+        # one lane is the per-point sum of dipole_field (compiled in another kernel, so equal
+        # up to fastmath's reassociation)
+        np.testing.assert_allclose(e_own, core.dipole_field(states, [station], sea=sea), rtol=1e-12)
+        for k, state in enumerate(states):
+            ref = brute_images(state, station, depth, sb, groups)
+            assert rel(e_lock[k, 0], ref) <= 1e-6
+            assert rel(e_own[k, 0], ref) <= 1e-6
+        if 0.0 not in moments:
+            # Jacobians, both the exact derivative of a field within tol of the series, agree
+            # per row to 1e-5. (Not with a zero moment: its column is the field of a dipole
+            # that the stop rule, judging the total field, does not see.)
+            scale = np.linalg.norm(j_own, axis=-1, keepdims=True)
+            assert np.max(np.abs(j_lock - j_own) / scale) <= 1e-5
+
+
+def test_image_counts_lanes_is_checked():
+    with pytest.raises(ValueError, match="lanes"):
+        image_counts(GOOD_STATE, GOOD_STATIONS, SEA, lanes=0)
+    with pytest.raises(ValueError, match="lanes"):
+        image_counts(GOOD_STATE, GOOD_STATIONS, SEA, lanes=1000)
