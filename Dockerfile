@@ -48,15 +48,11 @@ ENV HOME=/home/dipole \
     PYTHONMALLOC=malloc \
     BOKEH_ALLOW_WS_ORIGIN=localhost:5006,127.0.0.1:5006
 USER 10001:10001
-# Compile every numba kernel once at build time into NUMBA_CACHE_DIR, and build the app once
-# (HoloViews' first import makes matplotlib's font cache), so that the first visitor does not wait
-# ~40 s for LLVM and font scans. -P: import the installed packages, as the server does (not ./core,
-# whose numba cache would sit under another path).
-RUN python -P -c "import core; p = core.Plane('xy', (-10, 10), (-10, 10), 120.0, 3); \
-[core.evaluate_map(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20), measure=m, model=f) \
- for m in core.MEASURES for f in core.MODELS]; core.gamma([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]); \
-core.dipole_field([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]); \
-core.crlb_maps(p, core.dual_station(100, 15), velocity=(2, 2), moments=(100, 20))" \
+# Compile every numba kernel once at build time into NUMBA_CACHE_DIR (app.warmup: the list the
+# server itself warms up with, ~2-4 min of LLVM on 2 cores), and build the app once (HoloViews'
+# first import makes matplotlib's font cache), so that the first visitor does not wait. -P: import
+# the installed packages, as the server does (not ./core, whose numba cache would sit elsewhere).
+RUN python -P -m app.warmup \
  && python -P -c "import panel as pn; pn.extension('tabulator'); import app.dashboard as d; d.create_app()"
 
 EXPOSE 5006

@@ -28,9 +28,11 @@ def free_port():
 
 
 @contextlib.contextmanager
-def served_app(*extra, port=None, timeout=120, log=None):
+def served_app(*extra, port=None, timeout=600, log=None):
     """Yield the base URL of a running dashboard; stop it afterwards. ``log``: a path that gets
-    the server's output (else it goes to the test's, or nowhere with QUIET_SERVER set)."""
+    the server's output (else it goes to the test's, or nowhere with QUIET_SERVER set).
+    ``timeout``: seconds until /liveness answers; the server compiles its numba kernels before it
+    listens (app/server_lifecycle.py), 2-4 min on 2 busy cores when the cache is cold."""
     port = port or free_port()
     cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address", "127.0.0.1",
            "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness", "--num-threads", "4", *extra]
@@ -54,9 +56,9 @@ def served_app(*extra, port=None, timeout=120, log=None):
                 if time.time() > deadline:
                     raise TimeoutError("the dashboard did not answer /liveness") from None
                 time.sleep(0.3)
-        # The first page builds the app, which compiles the numba kernels on a fresh checkout
-        # (~30–60 s on 2 busy cores); do it here, once, rather than inside a test's timeout.
-        with urllib.request.urlopen(url + "/app", timeout=timeout + 180) as page:
+        # The first page builds the app (and compiles any numba kernel the warm-up does not
+        # cover); do it here, once, rather than inside a test's timeout.
+        with urllib.request.urlopen(url + "/app", timeout=timeout) as page:
             page.read()
         yield url, proc
     finally:
