@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ctypes
 import gc
+import threading
 
 import panel as pn
 from bokeh.models.formatters import PrintfTickFormatter
@@ -30,6 +31,8 @@ SECTIONS = (
                   "resolution"], True),
 )
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB = 0, 1, 2, 3
+#: Seconds the page's later build waits for one part to be applied before it builds the next.
+PART_TIMEOUT = 30.0
 
 
 def _release_freed_memory():
@@ -85,6 +88,11 @@ def applies(name, s, tab):
         "d_ref": on_maps and kind == "spacing",
     }
     return rules.get(name, True)
+
+
+def _holder(sizing_mode):
+    """An empty column, spinning until ``create_app``'s ``build_rest`` fills it."""
+    return pn.Column(sizing_mode=sizing_mode, margin=0, min_height=40, loading=True)
 
 
 def _message_pane(scenario, names, css):
@@ -152,11 +160,15 @@ def create_app():
     busy = pn.indicators.LoadingSpinner(value=False, visible=False, width=24, height=24,
                                         css_classes=["w-busy"], margin=(0, 10), align="center",
                                         color="light", bgcolor="dark", throttle=0)
-    tabs = pn.Tabs(("Maps", maps.maps_tab(scenario, cache, busy=busy, after_draw=flush_url)),
-                   ("Layout design", design_tab(scenario, cache, _widgets())),
-                   ("Track", track_tab(scenario)),
-                   ("Calibration", calibration_tab(scenario)),
-                   dynamic=True, sizing_mode="stretch_width")
+    # The first page is the template, the header and the presets; the tabs' contents and the
+    # sidebar's cards are built after it loads (``build_rest``), each in a holder of its own.
+    contents = {"Maps": lambda: maps.maps_tab(scenario, cache, busy=busy, after_draw=flush_url),
+                "Layout design": lambda: design_tab(scenario, cache, _widgets()),
+                "Track": lambda: track_tab(scenario),
+                "Calibration": lambda: calibration_tab(scenario)}
+    tab_holders = {title: _holder("stretch_both" if title == "Track" else "stretch_width")
+                   for title in contents}
+    tabs = pn.Tabs(*tab_holders.items(), dynamic=True, sizing_mode="stretch_width")
 
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
@@ -166,7 +178,33 @@ def create_app():
                                  on_click=lambda e: scenario.apply_preset(name))
 
     presets = pn.FlexBox(*[preset_button(name) for name in PRESETS], sizing_mode="stretch_width")
-    sections = [_section(scenario, tabs, *section) for section in SECTIONS]
+    section_holders = [_holder("stretch_width") for _ in SECTIONS]
+
+    def fill(holder, content):
+        holder.param.update(objects=[content], loading=False, min_height=None)
+        if threading.current_thread() is not threading.main_thread():
+            # On Panel's thread the holder's Bokeh models are built by a callback queued on the
+            # event loop: wait until it has run before building the next part, so that the loop
+            # holds at most one part's build at a time and other sessions' events get in between.
+            applied = threading.Event()
+            pn.state.execute(applied.set, schedule=True)
+            applied.wait(PART_TIMEOUT)
+
+    def build_rest():
+        """The sidebar's cards (the open ones first), the Maps tab, the hidden tabs.
+
+        Each holder's content is built here (on a thread of Panel's pool in a served page: the
+        Panel objects, the maps' first computation and their Bokeh figures) and handed to its
+        holder; Panel then builds the rest of its Bokeh models on the event loop, one holder at a
+        time, so other sessions' events are served in between (the page built in one go held the
+        event loop ~2-4 s on a quiet machine). A hidden tab's models are built when it is first
+        shown (``dynamic=True``)."""
+        for holder, section in zip(section_holders, SECTIONS):
+            fill(holder, _section(scenario, tabs, *section))
+        # The maps after the inputs: once the maps are drawn, the whole page is there to use.
+        for title, build in contents.items():
+            fill(tab_holders[title], build())
+
     downloads = pn.Row(
         pn.widgets.FileDownload(callback=lambda: maps.to_csv(scenario, cache),
                                 filename="observability_maps.csv", label="CSV", button_type="light"),
@@ -177,7 +215,7 @@ def create_app():
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "
                                   "figure's map gets a red frame)"), presets,
-                 _message_pane(scenario, None, "w-message"), *sections,
+                 _message_pane(scenario, None, "w-message"), *section_holders,
                  pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
         main=[tabs],
@@ -189,4 +227,9 @@ def create_app():
         busy_indicator=None,
     )
     template.scenario = scenario  # for tests and the load benchmark
+    doc = pn.state.curdoc
+    if doc is not None and doc.session_context is not None:  # a served page: after it loads
+        pn.state.onload(build_rest, threaded=pn.config.nthreads is not None)
+    else:  # in-process (tests, benchmarks): now
+        build_rest()
     return template
