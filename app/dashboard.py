@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import ctypes
 import gc
-import threading
+from functools import partial
 
 import panel as pn
 from bokeh.models.formatters import PrintfTickFormatter
+from panel.io.state import set_curdoc
 
 from . import maps, url
 from .calibration import calibration_tab
@@ -31,8 +32,6 @@ SECTIONS = (
                   "resolution"], True),
 )
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB = 0, 1, 2, 3
-#: Seconds the page's later build waits for one part to be applied before it builds the next.
-PART_TIMEOUT = 30.0
 
 
 def _release_freed_memory():
@@ -180,30 +179,41 @@ def create_app():
     presets = pn.FlexBox(*[preset_button(name) for name in PRESETS], sizing_mode="stretch_width")
     section_holders = [_holder("stretch_width") for _ in SECTIONS]
 
-    def fill(holder, content):
-        holder.param.update(objects=[content], loading=False, min_height=None)
-        if threading.current_thread() is not threading.main_thread():
-            # On Panel's thread the holder's Bokeh models are built by a callback queued on the
-            # event loop: wait until it has run before building the next part, so that the loop
-            # holds at most one part's build at a time and other sessions' events get in between.
-            applied = threading.Event()
-            pn.state.execute(applied.set, schedule=True)
-            applied.wait(PART_TIMEOUT)
+    doc = pn.state.curdoc
+    served = doc is not None and doc.session_context is not None
+    threaded = served and pn.config.nthreads is not None
 
-    def build_rest():
-        """The sidebar's cards (the open ones first), the Maps tab, the hidden tabs.
+    def fill(holder, build):
+        holder.param.update(objects=[build()], loading=False, min_height=None)
 
-        Each holder's content is built here (on a thread of Panel's pool in a served page: the
-        Panel objects, the maps' first computation and their Bokeh figures) and handed to its
-        holder; Panel then builds the rest of its Bokeh models on the event loop, one holder at a
-        time, so other sessions' events are served in between (the page built in one go held the
-        event loop ~2-4 s on a quiet machine). A hidden tab's models are built when it is first
-        shown (``dynamic=True``)."""
-        for holder, section in zip(section_holders, SECTIONS):
-            fill(holder, _section(scenario, tabs, *section))
-        # The maps after the inputs: once the maps are drawn, the whole page is there to use.
-        for title, build in contents.items():
-            fill(tab_holders[title], build())
+    #: The rest of the page, in order: the sidebar's cards (the open ones first), then the tabs
+    #: (the maps after the inputs: once the maps are drawn, the whole page is there to use).
+    parts = [partial(fill, holder, partial(_section, scenario, tabs, *section))
+             for holder, section in zip(section_holders, SECTIONS)]
+    parts += [partial(fill, tab_holders[title], build) for title, build in contents.items()]
+
+    def build_rest(parts=parts):
+        """Build the first of ``parts`` here, the next once its models are on the page.
+
+        In a served page with Panel's thread pool each part's Panel objects (and the maps' first
+        computation and Bokeh figures) are built on a thread of the pool; Panel then builds the
+        part's remaining Bokeh models in a callback it queues on the event loop. The next part is
+        queued behind that callback and built on the pool again, so the loop holds at most one
+        part's build at a time, no pool thread waits, and other sessions' events are served in
+        between (the page built in one go held the event loop ~2-4 s on a quiet machine). A
+        hidden tab's models are built when it is first shown (``dynamic=True``)."""
+        first, rest = parts[0], parts[1:]
+        first()
+        if not rest:
+            return
+        if not threaded:  # on the event loop, or in-process: the holders are updated at once
+            return build_rest(rest)
+
+        def on_pool():
+            with set_curdoc(doc):
+                pn.state.execute(partial(build_rest, rest), schedule="thread")
+
+        pn.state.execute(on_pool, schedule=True)
 
     downloads = pn.Row(
         pn.widgets.FileDownload(callback=lambda: maps.to_csv(scenario, cache),
@@ -227,9 +237,8 @@ def create_app():
         busy_indicator=None,
     )
     template.scenario = scenario  # for tests and the load benchmark
-    doc = pn.state.curdoc
-    if doc is not None and doc.session_context is not None:  # a served page: after it loads
-        pn.state.onload(build_rest, threaded=pn.config.nthreads is not None)
+    if served:  # after the page has loaded
+        pn.state.onload(build_rest, threaded=threaded)
     else:  # in-process (tests, benchmarks): now
         build_rest()
     return template

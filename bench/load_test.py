@@ -61,6 +61,8 @@ from tests.server import served_app
 
 SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "3000")
 ANSWER_TIMEOUT = 60.0  # s an update may take before it counts as unanswered
+#: s each of the sessions opened at once (before the load) may take to get its page complete.
+CONNECT_TIMEOUT = 300.0
 #: Issue 15's targets at realistic load (seconds).
 UPDATE_P95, CHEAP_P95, NEWCOMER_MAX = 0.300, 0.100, 3.0
 MEASURES = list(MEASURE_LABELS)
@@ -89,6 +91,7 @@ class Client:
         # inputs: app.dashboard's build_rest), and until then Panel holds threaded updates.
         self._send(MessageSentEvent(self.doc, "bokeh_event", DocumentReady()))
         if not self._pump(self.complete, timeout):
+            self.close()  # not left open on the server (its session would never be destroyed)
             raise TimeoutError(f"the page was not complete {timeout:.0f} s after it was pulled")
         models = list(self.doc.models)
         # The three maps' images (not their veils, which are sent only when they change).
@@ -365,7 +368,7 @@ def main(argv=None):
 
         def connect(i):
             try:
-                clients[i] = Client(url)
+                clients[i] = Client(url, timeout=CONNECT_TIMEOUT)
             except Exception as e:
                 errors.append(repr(e))
 
