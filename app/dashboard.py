@@ -8,11 +8,9 @@ from __future__ import annotations
 
 import ctypes
 import gc
-from functools import partial
 
 import panel as pn
 from bokeh.models.formatters import PrintfTickFormatter
-from panel.io.state import set_curdoc
 
 from . import maps, url
 from .calibration import calibration_tab
@@ -89,11 +87,6 @@ def applies(name, s, tab):
     return rules.get(name, True)
 
 
-def _holder(sizing_mode):
-    """An empty column, spinning until ``create_app``'s ``build_rest`` fills it."""
-    return pn.Column(sizing_mode=sizing_mode, margin=0, min_height=40, loading=True)
-
-
 def _message_pane(scenario, names, css):
     """The refusal message, shown here when it is about one of ``names`` (``None``: a message
     about no input, e.g. the page's link)."""
@@ -159,15 +152,11 @@ def create_app():
     busy = pn.indicators.LoadingSpinner(value=False, visible=False, width=24, height=24,
                                         css_classes=["w-busy"], margin=(0, 10), align="center",
                                         color="light", bgcolor="dark", throttle=0)
-    # The first page is the template, the header and the presets; the tabs' contents and the
-    # sidebar's cards are built after it loads (``build_rest``), each in a holder of its own.
-    contents = {"Maps": lambda: maps.maps_tab(scenario, cache, busy=busy, after_draw=flush_url),
-                "Layout design": lambda: design_tab(scenario, cache, _widgets()),
-                "Track": lambda: track_tab(scenario),
-                "Calibration": lambda: calibration_tab(scenario)}
-    tab_holders = {title: _holder("stretch_both" if title == "Track" else "stretch_width")
-                   for title in contents}
-    tabs = pn.Tabs(*tab_holders.items(), dynamic=True, sizing_mode="stretch_width")
+    tabs = pn.Tabs(("Maps", maps.maps_tab(scenario, cache, busy=busy, after_draw=flush_url)),
+                   ("Layout design", design_tab(scenario, cache, _widgets())),
+                   ("Track", track_tab(scenario)),
+                   ("Calibration", calibration_tab(scenario)),
+                   dynamic=True, sizing_mode="stretch_width")
 
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
@@ -177,44 +166,7 @@ def create_app():
                                  on_click=lambda e: scenario.apply_preset(name))
 
     presets = pn.FlexBox(*[preset_button(name) for name in PRESETS], sizing_mode="stretch_width")
-    section_holders = [_holder("stretch_width") for _ in SECTIONS]
-
-    doc = pn.state.curdoc
-    served = doc is not None and doc.session_context is not None
-    threaded = served and pn.config.nthreads is not None
-
-    def fill(holder, build):
-        holder.param.update(objects=[build()], loading=False, min_height=None)
-
-    #: The rest of the page, in order: the sidebar's cards (the open ones first), then the tabs
-    #: (the maps after the inputs: once the maps are drawn, the whole page is there to use).
-    parts = [partial(fill, holder, partial(_section, scenario, tabs, *section))
-             for holder, section in zip(section_holders, SECTIONS)]
-    parts += [partial(fill, tab_holders[title], build) for title, build in contents.items()]
-
-    def build_rest(parts=parts):
-        """Build the first of ``parts`` here, the next once its models are on the page.
-
-        In a served page with Panel's thread pool each part's Panel objects (and the maps' first
-        computation and Bokeh figures) are built on a thread of the pool; Panel then builds the
-        part's remaining Bokeh models in a callback it queues on the event loop. The next part is
-        queued behind that callback and built on the pool again, so the loop holds at most one
-        part's build at a time, no pool thread waits, and other sessions' events are served in
-        between (the page built in one go held the event loop ~2-4 s on a quiet machine). A
-        hidden tab's models are built when it is first shown (``dynamic=True``)."""
-        first, rest = parts[0], parts[1:]
-        first()
-        if not rest:
-            return
-        if not threaded:  # on the event loop, or in-process: the holders are updated at once
-            return build_rest(rest)
-
-        def on_pool():
-            with set_curdoc(doc):
-                pn.state.execute(partial(build_rest, rest), schedule="thread")
-
-        pn.state.execute(on_pool, schedule=True)
-
+    sections = [_section(scenario, tabs, *section) for section in SECTIONS]
     downloads = pn.Row(
         pn.widgets.FileDownload(callback=lambda: maps.to_csv(scenario, cache),
                                 filename="observability_maps.csv", label="CSV", button_type="light"),
@@ -225,7 +177,7 @@ def create_app():
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "
                                   "figure's map gets a red frame)"), presets,
-                 _message_pane(scenario, None, "w-message"), *section_holders,
+                 _message_pane(scenario, None, "w-message"), *sections,
                  pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
         main=[tabs],
@@ -237,8 +189,4 @@ def create_app():
         busy_indicator=None,
     )
     template.scenario = scenario  # for tests and the load benchmark
-    if served:  # after the page has loaded
-        pn.state.onload(build_rest, threaded=threaded)
-    else:  # in-process (tests, benchmarks): now
-        build_rest()
     return template

@@ -77,6 +77,10 @@ def test_a_refused_value_sends_no_maps(server):
         on_thread(close_client, client)
 
 
+@pytest.mark.xfail(strict=True, reason="Bokeh builds a new page on the event loop (the patch that moved "
+                   "it to a thread is gone, issue 15). Building the page after it loads, a part at a "
+                   "time on Panel's threads (commit 3c6d36b), passes this test but made the browser's "
+                   "paint of each map ~5x slower (docs/performance.md): reverted")
 def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server):
     """A new page takes seconds of Python to build (~2 s on a quiet machine, its ~460 models);
     built in one go on the server's event loop, it held up every open session's events for all
