@@ -20,9 +20,11 @@ are destroyed within seconds, then:
    how long a cheap event of one session waits behind the others' computations. The same
    cheap event is also timed on the idle server, just before the load: its own cost;
 4. ``--newcomers`` times (default 3: at a quarter, half and three quarters of the load) a new
-   session connects (websocket, its page built by the server, the document pulled): how long a
-   newcomer waits while the others work. Each page build holds its server's event loop, so the
-   other figures are measured with ``--newcomers 0`` too;
+   session connects (websocket, its first page built by the server, the document pulled, the
+   rest of the page built after it announces itself, until the page is complete:
+   :meth:`Client.complete`): how long a newcomer waits while the others work. The page is built
+   on the newcomer's replica a part at a time (app.dashboard), but each part still takes its
+   event loop for a while, so the other figures are measured with ``--newcomers 0`` too;
 5. after the sessions close: the server's RSS (the sum over the replicas) must come back within
    10 % of the baseline.
 
@@ -53,14 +55,19 @@ from bokeh.models import ColumnDataSource
 
 from app.cluster import Cluster
 from app.compute import Snapshot, compute
+from app.dashboard import SECTIONS
 from app.scenario import MEASURE_LABELS, Scenario
 from tests.server import served_app
 
 SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "3000")
 ANSWER_TIMEOUT = 60.0  # s an update may take before it counts as unanswered
+#: s each of the sessions opened at once (before the load) may take to get its page complete.
+CONNECT_TIMEOUT = 300.0
 #: Issue 15's targets at realistic load (seconds).
 UPDATE_P95, CHEAP_P95, NEWCOMER_MAX = 0.300, 0.100, 3.0
 MEASURES = list(MEASURE_LABELS)
+#: Every input of the sidebar (the page is complete when each has reached the client).
+SIDEBAR_INPUTS = [name for _, names, _ in SECTIONS for name in names]
 
 
 def pct(values, q):
@@ -72,22 +79,44 @@ def pct(values, q):
 class Client:
     """One browser-like session: a pulled document whose widgets are changed from here."""
 
-    def __init__(self, url, arguments=None):
+    def __init__(self, url, arguments=None, timeout=ANSWER_TIMEOUT):
         self.session = pull_session(url=url + "/app", arguments=arguments)
         self.conn = self.session._connection
         self.conn._socket._socket.protocol.set_nodelay(True)  # as a browser's socket: no Nagle delay
         self.doc = self.session.document
         self.events = []  # (attr, model id, new) of every server push
+        self.doc.on_change(lambda ev: self.events.append(
+            (getattr(ev, "attr", None), getattr(getattr(ev, "model", None), "id", None), getattr(ev, "new", None))))
+        # A browser announces itself; the server then builds the rest of the page (the sidebar's
+        # inputs: app.dashboard's build_rest), and until then Panel holds threaded updates.
+        self._send(MessageSentEvent(self.doc, "bokeh_event", DocumentReady()))
+        if not self._pump(self.complete, timeout):
+            self.close()  # not left open on the server (its session would never be destroyed)
+            raise TimeoutError(f"the page was not complete {timeout:.0f} s after it was pulled")
         models = list(self.doc.models)
         # The three maps' images (not their veils, which are sent only when they change).
         self.images = {m.id for m in models if isinstance(m, ColumnDataSource) and m.name == "map-image"}
         assert len(self.images) == 3, f"expected the three maps' images, found {len(self.images)}"
         self.ph = self._inner("w-Ph", "Slider")
         self.measure = next(m for m in models if "w-measure" in (getattr(m, "css_classes", None) or []))
-        self.doc.on_change(lambda ev: self.events.append(
-            (getattr(ev, "attr", None), getattr(getattr(ev, "model", None), "id", None), getattr(ev, "new", None))))
-        # A browser announces itself; until then Panel holds threaded updates for the session.
-        self._send(MessageSentEvent(self.doc, "bokeh_event", DocumentReady()))
+
+    def complete(self):
+        """Whether the page is whole: the three maps' images and every sidebar input."""
+        present = {c for m in self.doc.models for c in (getattr(m, "css_classes", None) or [])}
+        images = sum(isinstance(m, ColumnDataSource) and m.name == "map-image" for m in self.doc.models)
+        return images == 3 and all(f"w-{name}" in present for name in SIDEBAR_INPUTS)
+
+    def _pump(self, done, timeout):
+        """Process the server's messages until ``done()`` or ``timeout`` s; returns ``done()``."""
+        loop = self.conn._loop
+        deadline = time.perf_counter() + timeout
+        # _loop_until checks its predicate after each message: a server-info request at the
+        # deadline guarantees one more message.
+        wake = loop.call_at(loop.time() + timeout, lambda: loop.add_callback(
+            self.conn.send_message, self.conn._protocol.create("SERVER-INFO-REQ")))
+        self.conn._loop_until(lambda: done() or time.perf_counter() > deadline or not self.conn.connected)
+        loop.remove_timeout(wake)
+        return done()
 
     def _inner(self, css, kind):
         outer = next(m for m in self.doc.models if css in (getattr(m, "css_classes", None) or []))
@@ -104,16 +133,7 @@ class Client:
         start = len(self.events)
         t0 = time.perf_counter()
         self._send(ModelChangedEvent(self.doc, model, attr, value))
-        loop = self.conn._loop
-        deadline = t0 + timeout
-        # _loop_until checks its predicate after each message: a server-info request at the
-        # deadline guarantees one more message.
-        wake = loop.call_at(loop.time() + timeout, lambda: loop.add_callback(
-            self.conn.send_message, self.conn._protocol.create("SERVER-INFO-REQ")))
-        self.conn._loop_until(lambda: done(self.events[start:]) or time.perf_counter() > deadline
-                              or not self.conn.connected)
-        loop.remove_timeout(wake)
-        ok = done(self.events[start:])
+        ok = self._pump(lambda: done(self.events[start:]), timeout)
         return time.perf_counter() - t0 if ok else None
 
     @staticmethod
@@ -213,8 +233,8 @@ class Probe(threading.Thread):
 
 def newcomers(url, stop_at, duration, out, n=3):
     """At ``n`` evenly spread moments of the load (1/4, 1/2, 3/4 for 3), time one new session
-    until its document is pulled and announced (:class:`Client`), then close it; append the
-    seconds (inf if it failed)."""
+    until its page is complete (:class:`Client`), then close it; append the seconds (inf if it
+    failed)."""
     for frac in [(k + 1) / (n + 1) for k in range(n)]:
         time.sleep(max(0.0, stop_at - duration * (1 - frac) - time.perf_counter()))
         t0 = time.perf_counter()
@@ -348,7 +368,7 @@ def main(argv=None):
 
         def connect(i):
             try:
-                clients[i] = Client(url)
+                clients[i] = Client(url, timeout=CONNECT_TIMEOUT)
             except Exception as e:
                 errors.append(repr(e))
 
@@ -420,7 +440,7 @@ def main(argv=None):
         print(f"update latency: median {statistics.median(lat) * 1e3:.0f} ms, p95 {pct(lat, 95) * 1e3:.0f} ms, "
               f"max {max(lat) * 1e3:.0f} ms")
     if newcomer:
-        print("new session ready (connect, page built, document pulled) during the load: "
+        print("new session ready (connect, document pulled, page complete) during the load: "
               + ", ".join(f"{t:.2f}" for t in newcomer) + " s")
     print(f"CPU under load (cores busy): server {cpu_server:.2f}, this load generator {cpu_clients:.2f} "
           f"(of {psutil.cpu_count()})")

@@ -11,7 +11,6 @@ B's event would wait for it.
 import os
 import threading
 import time
-import urllib.request
 
 import pytest
 
@@ -78,12 +77,17 @@ def test_a_refused_value_sends_no_maps(server):
         on_thread(close_client, client)
 
 
-@pytest.mark.xfail(strict=True, reason="Bokeh builds a new page on the event loop; the patch that "
-                   "moved it to a thread is gone (issue 15): not yet regained by public means")
+@pytest.mark.xfail(strict=True, reason="Bokeh builds a new page on the event loop (the patch that moved "
+                   "it to a thread is gone, issue 15). Building the page after it loads, a part at a "
+                   "time on Panel's threads (commit 3c6d36b), passes this test but made the browser's "
+                   "paint of each map ~5x slower (docs/performance.md): reverted")
 def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server):
-    """A page takes ~2 s of Python to build; Bokeh builds it on the event loop, and every open
-    session waits. Another session's cheap event must
-    be answered while the page is still being built, in under a third of the page's time."""
+    """A new page takes seconds of Python to build (~2 s on a quiet machine, its ~460 models);
+    built in one go on the server's event loop, it held up every open session's events for all
+    that time. While a newcomer's page is built (from its first request until the page is
+    complete: the maps and every sidebar input, :meth:`Client.complete`), another session sends
+    cheap events (0.1 s apart): each must be answered in under a third of the page's time, and
+    at least two of them before the page is complete (the loop serves others in between)."""
     other = on_thread(Client, server)
     try:
         for attempt in range(3):  # the machine may be busy: the claim must hold in one clean try
@@ -91,24 +95,33 @@ def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server)
 
             def open_page():
                 t0 = time.perf_counter()
-                with urllib.request.urlopen(server + "/app", timeout=120) as reply:
-                    reply.read()
+                client = Client(server)
                 page["end"] = time.perf_counter()
                 page["time"] = page["end"] - t0
+                close_client(client)
 
             opener = threading.Thread(target=open_page)
             opener.start()
-            time.sleep(0.3)  # the page is being built
-            bad = -(attempt + 20.5)
-            t0 = time.perf_counter()
-            quick = other.refuse(bad)
-            quick_end = t0 + (quick or 0)
+            quick = []  # (seconds, end) of each cheap event sent while the page was being built
+            n = 0
+            while opener.is_alive() and n < 200:
+                n += 1
+                t0 = time.perf_counter()
+                dt = other.refuse(-(attempt * 1000 + n + 20.5))
+                quick.append((dt, t0 + (dt or 0)))
+                # A pause, as a person's: two events of one session sent back to back can be
+                # processed on two of Panel's threads at once, and Panel's editable slider then
+                # fails ("Constant parameter 'value_throttled' cannot be modified"; seen here).
+                time.sleep(0.1)
             opener.join(120)
-            assert quick is not None and "time" in page, "the event or the page was not answered"
-            if quick_end < page["end"] and quick < page["time"] / 3:
+            assert "time" in page, "the new page was not complete in time"
+            during = [dt for dt, end in quick if end < page["end"]]
+            assert all(dt is not None for dt, _ in quick), "a cheap event was not answered"
+            if len(during) >= 2 and max(dt for dt, _ in quick) < page["time"] / 3:
                 break
         else:
-            pytest.fail(f"the cheap event took {quick * 1e3:.0f} ms, the page {page['time'] * 1e3:.0f} ms "
-                        f"(answered {'before' if quick_end < page['end'] else 'after'} the page)")
+            pytest.fail(f"{len(during)} cheap events answered while a {page['time']:.1f} s page was "
+                        f"built, the slowest in {max(dt for dt, _ in quick) * 1e3:.0f} ms "
+                        f"(bar: {page['time'] / 3 * 1e3:.0f} ms)")
     finally:
         on_thread(close_client, other)
