@@ -32,7 +32,7 @@ def served_app(*extra, port=None, timeout=600, log=None):
     """Yield the base URL of a running dashboard; stop it afterwards. ``log``: a path that gets
     the server's output (else it goes to the test's, or nowhere with QUIET_SERVER set).
     ``timeout``: seconds until /liveness answers; the server compiles its numba kernels before it
-    listens (app/server_lifecycle.py), 2-4 min on 2 busy cores when the cache is cold."""
+    listens (app/server_lifecycle.py), 3-6 min on 2 cores when the cache is cold."""
     port = port or free_port()
     cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address", "127.0.0.1",
            "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness", "--num-threads", "4", *extra]
