@@ -198,16 +198,21 @@ def unobservable_note(s: Scenario, results, stations):
     return "\n".join(lines)
 
 
-def nearest_range(plane, stations):
-    """Distance (m) from each point of ``plane`` (shape (n, n), rows its second axis) to the
-    nearest of ``stations`` (S, 3)."""
-    u, v = plane.axes
-    uu, vv = np.meshgrid(u, v)
-    x, y, z = (uu, plane.fixed, vv) if plane.kind == "xz" else (uu, vv, plane.fixed)
-    out = np.full(uu.shape, np.inf)
-    for sx, sy, sz in np.asarray(stations, dtype=float):
-        out = np.minimum(out, np.sqrt((x - sx) ** 2 + (y - sy) ** 2 + (z - sz) ** 2))
+def nearest_range(points, stations):
+    """Distance (m) from each of ``points`` (..., 3) to the nearest of ``stations`` (S, 3), S ≥ 1:
+    shape (...)."""
+    points = np.asarray(points, dtype=float)
+    out = np.full(points.shape[:-1], np.inf)
+    for st in np.asarray(stations, dtype=float).reshape(-1, 3):
+        out = np.minimum(out, np.linalg.norm(points - st, axis=-1))
     return out
+
+
+def plane_points(plane):
+    """The (x, y, z) of every point of ``plane`` (m): shape (n, n, 3), rows its second axis."""
+    uu, vv = np.meshgrid(*plane.axes)
+    fixed = np.full_like(uu, plane.fixed)
+    return np.stack((uu, fixed, vv) if plane.kind == "xz" else (uu, vv, fixed), axis=-1)
 
 
 def runaway(plane, stations, crlb, observable):
@@ -215,7 +220,7 @@ def runaway(plane, stations, crlb, observable):
     to the nearest station: there the linearised bound stops predicting a tracker's error."""
     if len(stations) == 0:
         return np.zeros(np.shape(crlb), dtype=bool)
-    rng = np.maximum(nearest_range(plane, stations), 1e-9)  # on a station the CRLB is NaN: False
+    rng = np.maximum(nearest_range(plane_points(plane), stations), 1e-9)  # on a station the CRLB is NaN: False
     return observable & np.isfinite(crlb) & core.linearisation_breaks(crlb, rng, limit=RUNAWAY_LIMIT)
 
 

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import holoviews as hv
-import numpy as np
 import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
 from . import compute, views
-from .compute import DESIGN_FIELDS, Snapshot
+from .compute import DESIGN_FIELDS, RUNAWAY_LIMIT, Snapshot
 from .maps import alert
 from .scenario import MAX_STATIONS
 
@@ -18,13 +17,13 @@ DESIGN_HELP = """
 drag one to move it, select it and press Backspace to delete it; or edit the table (z is a depth,
 positive down). The map is the Cramér–Rao bound (1σ) on the 3-D position, horizontal, depth or
 speed error of a target at depth z, with the sensor noise and N instants of the Advanced section —
-the numbers an analyst reports — on a log colour scale. White hatching: the 3-D bound exceeds 30 %
+the numbers an analyst reports — on a log colour scale. White hatching: the 3-D bound exceeds {limit:.0%}
 of the range to the nearest station, where a linearised bound no longer predicts a tracker's error
 (far-field runaway; read it as "not trackable from here"). Click a point for its horizontal error
 ellipse. *Find best spacing* scans the dual layout's spacing d over this region and refines the
 optimum with scipy; *Optimise N-station layout* does the same for a line, triangle or square of
 N stations (or free positions, ~10 s) and makes it the custom layout.
-"""
+""".format(limit=RUNAWAY_LIMIT)
 
 #: Parameters of this tab whose refusal is shown here, next to their inputs.
 OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error_quantity")
@@ -79,9 +78,8 @@ def design_tab(scenario, cache, widgets):
         return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[0]
 
     def ellipse_text(x, y, *_):
-        stations = np.array(scenario.stations, dtype=float).reshape(-1, 3)
-        rng = (float(np.min(np.linalg.norm(stations - [x, y, scenario.z], axis=1)))
-               if len(stations) else None)
+        rng = (float(compute.nearest_range([x, y, scenario.z], scenario.stations))
+               if len(scenario.stations) else None)
         return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent, rng)[1]
 
     ell = hv.DynamicMap(ellipse, streams=[tap, hv.streams.Params(scenario, watch + ["stations"])])

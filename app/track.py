@@ -36,7 +36,7 @@ from core import track as core_track
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
 from . import views
-from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design
+from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design, nearest_range
 from .scenario import Scenario
 
 hv.extension("bokeh", logo=False)
@@ -97,7 +97,7 @@ def _compute(key):
                                      workers=1, keep_tracks=int(s.track_runs))
     truth = case.nominal_track()
     stations = np.asarray(case.stations, float)
-    rng = np.min(np.linalg.norm(truth[:, None, :3] - stations[None], axis=-1), axis=1)
+    rng = nearest_range(truth[:, :3], stations)
     breaks = core.linearisation_breaks(res.pcrlb_m, rng, limit=RUNAWAY_LIMIT)
     window = view_window(truth)
     plane = core.Plane("xy", window[0], window[1], float(s.z), MAP_POINTS)
@@ -138,7 +138,7 @@ def plan_view(out):
     pts = hv.Points(
         {"x": truth[:, 0], "y": truth[:, 1], "time": t, "pcrlb": bound,
          "log10_pcrlb": np.log10(bound), "range": out["range_m"],
-         "trusted": np.where(breaks, "no: bound > 0.3 × range", "yes")},
+         "trusted": np.where(breaks, f"no: bound > {RUNAWAY_LIMIT:g} × range", "yes")},
         kdims=[x, y],
         vdims=[hv.Dimension("log10_pcrlb", label="log10 PCRLB", unit="log10 m"),
                hv.Dimension("time", unit="s"), hv.Dimension("pcrlb", label="PCRLB σ", unit="m"),
@@ -201,7 +201,7 @@ def error_view(out):
             color=WINNER, tools=["hover"]),
         hv.Curve((res.time_s, trusted), t, err, label="PCRLB position σ").opts(
             color="black", line_dash="dashed", tools=["hover"]),
-        hv.Curve((res.time_s, untrusted), t, err, label="PCRLB (> 0.3 × range: not predictive)").opts(
+        hv.Curve((res.time_s, untrusted), t, err, label=f"PCRLB (> {RUNAWAY_LIMIT:g} × range: not predictive)").opts(
             color="#7f7f7f", line_dash="dotted", tools=["hover"]),
     ]).opts(logy=True, title="TRMSE vs PCRLB", legend_position="top_right", responsive=True)
 
@@ -220,7 +220,7 @@ def summary_text(out):
     if out["breaks"].any():
         share = 100 * out["breaks"].mean()
         parts.append(f"the linearised bound is not predictive on {share:.0f} % of the track "
-                     "(PCRLB > 0.3 × range: far-field runaway along range–strength)")
+                     f"(PCRLB > {RUNAWAY_LIMIT:g} × range: far-field runaway along range–strength)")
     return "; ".join(parts) + "."
 
 
@@ -251,7 +251,7 @@ def track_tab(scenario: Scenario):
         "target's moments and the sensor noise set above. The PCRLB (Tichavský) is the best "
         "achievable position σ along it; the trackers are run on simulated measurements. "
         "Beneath: the snapshot CRLB map (3-D position σ over N instants at the track's velocity, "
-        "darker = smaller), hatched white where it exceeds 30 % of the range to the nearest "
+        f"darker = smaller), hatched white where it exceeds {RUNAWAY_LIMIT:.0%} of the range to the nearest "
         "station (the linearised bound does not predict there).",
         sizing_mode="stretch_width")
     return pn.Row(
