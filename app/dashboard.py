@@ -16,6 +16,7 @@ from . import maps, url
 from .calibration import calibration_tab
 from .compute import PanelCache
 from .design import design_tab
+from .inputs import number_input
 from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, Scenario
 from .track import track_tab
 
@@ -43,18 +44,18 @@ def _release_freed_memory():
 _alert = maps.alert
 
 
+#: Numbers typed or dragged (:func:`app.inputs.number_input`); the noise has a box only.
+NUMBERS = ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k", "Ph_b", "Pv_b", "d_ref", "T",
+           "sigma", "extent", "z_min", "z_max", "threshold", "sea_depth", "seabed_sigma", "steps",
+           "resolution")
+
+
 def _widgets():
-    """Editable sliders (type a value or drag) for every number; a text box for the noise."""
-    numeric = {"type": pn.widgets.EditableFloatSlider, "sizing_mode": "stretch_width", "format": "0.[00]"}
-    integer = {"type": pn.widgets.EditableIntSlider, "sizing_mode": "stretch_width"}
-    spec = {name: dict(numeric) for name in ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k",
-                                                "Ph_b", "Pv_b", "d_ref", "T", "sigma", "extent",
-                                                "z_min", "z_max", "threshold", "sea_depth",
-                                                "seabed_sigma")}
-    spec.update(steps=dict(integer), resolution=dict(integer))
+    """pn.Param widget specs of the inputs that are not :data:`NUMBERS`: a text box for the
+    noise, a select for the rest; each with its stable css class."""
     # Scientific notation (numbro's "0.0e+0" showed 1e-7 as "+0.000"): a printf formatter.
-    spec["noise"] = {"type": pn.widgets.FloatInput, "format": PrintfTickFormatter(format="%.2e"),
-                     "sizing_mode": "stretch_width"}
+    spec = {"noise": {"type": pn.widgets.FloatInput, "format": PrintfTickFormatter(format="%.2e"),
+                      "sizing_mode": "stretch_width"}}
     for name in Scenario.param:
         if name not in ("name", "message"):  # stable hooks for the browser tests
             spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
@@ -110,6 +111,8 @@ def _section(scenario, tabs, title, names, collapsed):
         return pn.bind(lambda *_: applies(name, scenario, tabs.active), *watched)
 
     def widget(name):
+        if name in NUMBERS:
+            return number_input(scenario, name, css_classes=[f"w-{name}"], visible=visible(name))
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
         return cls.from_param(scenario.param[name], visible=visible(name), **spec)

@@ -9,6 +9,7 @@ from bokeh.models.widgets.tables import NumberFormatter
 
 from . import compute, views
 from .compute import DESIGN_FIELDS, RUNAWAY_LIMIT, Snapshot
+from .inputs import number_input
 from .maps import alert
 from .scenario import MAX_STATIONS
 
@@ -111,8 +112,13 @@ def design_tab(scenario, cache, widgets):
                           pn.pane.HoloViews(paper * views.station_layer(sp.paper.stations)),
                           sizing_mode="stretch_width")
 
-    criteria = pn.Param(scenario, parameters=["criterion", "threshold", "layout_kind", "n_stations"],
-                        show_name=False, widgets=widgets, sizing_mode="stretch_width")
+    criteria = pn.Column(
+        pn.Param(scenario, parameters=["criterion"], show_name=False, widgets=widgets,
+                 sizing_mode="stretch_width"),
+        number_input(scenario, "threshold", css_classes=["w-threshold"]),
+        pn.Param(scenario, parameters=["layout_kind", "n_stations"], show_name=False, widgets=widgets,
+                 sizing_mode="stretch_width"),
+        sizing_mode="stretch_width", margin=0)
     optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
 
     outcome = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-optimise-result"])

@@ -82,7 +82,7 @@ def test_a_refused_value_sends_no_maps(server):
                    "time on Panel's threads (commit 3c6d36b), passes this test but made the browser's "
                    "paint of each map ~5x slower (docs/performance.md): reverted")
 def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server):
-    """A new page takes seconds of Python to build (~2 s on a quiet machine, its ~460 models);
+    """A new page takes seconds of Python to build (~2 s on a quiet machine, its ~380 models);
     built in one go on the server's event loop, it held up every open session's events for all
     that time. While a newcomer's page is built (from its first request until the page is
     complete: the maps and every sidebar input, :meth:`Client.complete`), another session sends
@@ -110,8 +110,8 @@ def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server)
                 dt = other.refuse(-(attempt * 1000 + n + 20.5))
                 quick.append((dt, t0 + (dt or 0)))
                 # A pause, as a person's: two events of one session sent back to back can be
-                # processed on two of Panel's threads at once, and Panel's editable slider then
-                # fails ("Constant parameter 'value_throttled' cannot be modified"; seen here).
+                # processed on two of Panel's threads at once (Panel's EditableFloatSlider, used
+                # here before app/inputs.py, then failed: "Constant parameter 'value_throttled'").
                 time.sleep(0.1)
             opener.join(120)
             assert "time" in page, "the new page was not complete in time"

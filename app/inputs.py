@@ -1,0 +1,54 @@
+"""A number the user types or drags: a box above a slider, both in step with one parameter.
+
+Panel's ``EditableFloatSlider`` does this too, but links its two parts in the browser with a
+``jscallback``, and Panel's ``Callback.registry`` (a WeakKeyDictionary whose values refer to
+their keys) then keeps every closed session's whole page alive: the served app grew by ~9 MB
+per session that came and went (docs/performance.md, issue 15). Here the two parts are plain
+Panel widgets kept in step through Python watchers on the parameter, so nothing outlives the
+session, and the page has fewer Bokeh models.
+"""
+
+from __future__ import annotations
+
+import panel as pn
+import param
+
+
+def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
+    """A Column (box, slider) for the Number or Integer parameter ``name`` of ``owner``.
+
+    The box takes any typed value and the slider spans the parameter's soft bounds, widened to
+    include the current value. Either sets ``owner.<name>``; the owner may refuse the value and
+    restore the last good one, which both then show. ``css_classes`` and ``visible`` go to the
+    Column (``visible`` may be a bound function)."""
+    p = owner.param[name]
+    integer = isinstance(p, param.Integer)
+    lo, hi = p.get_soft_bounds()
+    value = getattr(owner, name)
+    lo = value if lo is None else min(lo, value)
+    hi = value if hi is None else max(hi, value)
+    if integer:
+        box = pn.widgets.IntInput(name=p.label, value=value, sizing_mode="stretch_width")
+        slider = pn.widgets.IntSlider(start=lo, end=hi, value=value, step=p.step or 1)
+    else:
+        box = pn.widgets.FloatInput(name=p.label, value=value, format=fmt, sizing_mode="stretch_width")
+        slider = pn.widgets.FloatSlider(start=lo, end=hi, value=value, step=p.step or 0.1,
+                                        format=fmt)
+    slider.param.update(name="", show_value=False, sizing_mode="stretch_width", margin=(0, 10, 5, 10))
+
+    def shown(_event):
+        # The owner's current value, not the event's: a refused value is restored inside the
+        # owner's own watcher, so this event may already be stale.
+        v = getattr(owner, name)
+        slider.param.update(start=min(slider.start, v), end=max(slider.end, v), value=v)
+        box.value = v
+
+    def typed(event):
+        if event.new is not None:
+            setattr(owner, name, event.new)
+
+    owner.param.watch(shown, [name])
+    box.param.watch(typed, ["value"])
+    slider.param.watch(typed, ["value"])  # on release: the page's sliders are throttled
+    return pn.Column(box, slider, css_classes=list(css_classes), visible=visible,
+                     sizing_mode="stretch_width", margin=0)
