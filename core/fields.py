@@ -5,15 +5,18 @@ the moment features ``f = (Ph cos θ, Ph sin θ, Pv, Ph)`` (A·m) and ``θ = ata
 
     E = K · N(r, f) / D⁵,    K = 1 / (4 π σ),
 
-with N quadratic in r and linear in f. One kernel applies the quotient rule and the heading
-chain to either model's N and its hand-derived partials.
+with N quadratic in r and linear in f.
 
 - ``exact``: the point current dipole in a homogeneous conductor, N = 3 (p·r) r − p D² with
-  p = f[:3] (spec §2).
+  p = f[:3] (spec §2). Its kernel, :func:`image_sums`, adds one source on the station's
+  vertical line to thirteen sums (powers of its vertical offset over powers of its distance),
+  from which :func:`sums_rows` builds the field and its Jacobian; the images of a layered sea
+  add to the same sums.
 - ``paper``: eqs. (10)–(12) of the source paper *as printed*. Compared with ``exact`` its
   E_x has ``−3ab`` where ``+3ab`` belongs, its E_y uses ``3a² − D²`` where ``3b² − D²``
   belongs, and its E_z uses the bare ``Ph`` (feature 3) instead of the heading-resolved
-  moment. Kept only so that the paper's figures can be reproduced.
+  moment. Kept only so that the paper's figures can be reproduced: its hand-derived partials
+  go through the quotient rule and the heading chain (:func:`_jacobian_row`).
 
 The kernels here assume valid input (finite, ``D > 0``, speed > 0); validation happens at the
 public boundary in :mod:`core.validation`.
@@ -46,30 +49,97 @@ MODELS = ("exact", "paper")
 JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 
-@nb.njit(inline="always", **JIT)
-def _numerator_exact(a, b, c, f0, f1, f2, f3):
-    """Exact dipole: N = 3 (p·r) r − p D², p = (f0, f1, f2). Hand-derived partials.
+#: The image sums of no image (see :func:`image_sums`).
+NO_IMAGES = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
-    Returns (N (3), ∂N/∂r (3 × 3, row-major), ∂N/∂f (3 × 4, row-major)) as one flat tuple:
-    ∂N_i/∂r_j = 3 p_j r_i − 2 p_i r_j + 3 (p·r) δ_ij and ∂N_i/∂p_j = 3 r_i r_j − δ_ij D²; the
-    bare Ph feature f3 does not enter the exact field.
+
+@nb.njit(inline="always", **JIT)
+def image_sums(acc, rho2, c, w, eps):
+    """``acc`` plus one image of the exact dipole: a source at vertical offset ``c`` and
+    horizontal distance² ``rho2`` from the station, weight ``w`` (K = 1/(4πσ) times the image's
+    weight), sign ``eps`` (ε = −1: a mirror image, vertical moment and ∂/∂z reversed).
+
+    The field of a dipole p at r = (a, b, c), D² = ρ² + c², is E = w [3 (p·r) r / D⁵ − p / D³].
+    Every image of a sea shares (a, b) and the moments, and differs only in c, w and ε, so the
+    field of any set of images, and its Jacobian, is a fixed combination (:func:`sums_rows`) of
+    thirteen sums over them,
+
+        U_nj = Σ w c^j / D^(2n+1),   V_nj = Σ ε w c^j / D^(2n+1),
+
+    in the order (U10, U20, U21, U30, U31, U32, U33, V10, V20, V21, V22, V31, V32). The whole
+    space is the one image (w = K, ε = 1, c = z − h).
     """
-    d2 = a * a + b * b + c * c
-    t = 3.0 * (f0 * a + f1 * b + f2 * c)  # 3 (p·r)
-    return (t * a - f0 * d2, t * b - f1 * d2, t * c - f2 * d2,
-            f0 * a + t, 3.0 * f1 * a - 2.0 * f0 * b, 3.0 * f2 * a - 2.0 * f0 * c,
-            3.0 * f0 * b - 2.0 * f1 * a, f1 * b + t, 3.0 * f2 * b - 2.0 * f1 * c,
-            3.0 * f0 * c - 2.0 * f2 * a, 3.0 * f1 * c - 2.0 * f2 * b, f2 * c + t,
-            3.0 * a * a - d2, 3.0 * a * b, 3.0 * a * c, 0.0,
-            3.0 * a * b, 3.0 * b * b - d2, 3.0 * b * c, 0.0,
-            3.0 * a * c, 3.0 * b * c, 3.0 * c * c - d2, 0.0)
+    inv2 = 1.0 / (rho2 + c * c)
+    e1 = w * inv2 * math.sqrt(inv2)  # w / D³
+    e2 = e1 * inv2  # w / D⁵
+    e3 = e2 * inv2  # w / D⁷
+    c2, c3 = c * e2, c * e3
+    cc2, cc3 = c * c2, c * c3
+    return (acc[0] + e1, acc[1] + e2, acc[2] + c2, acc[3] + e3, acc[4] + c3, acc[5] + cc3,
+            acc[6] + c * cc3, acc[7] + eps * e1, acc[8] + eps * e2, acc[9] + eps * c2,
+            acc[10] + eps * cc2, acc[11] + eps * c3, acc[12] + eps * cc3)
+
+
+@nb.njit(inline="always", **JIT)
+def sums_field(s, a, b, ph, pv, cos, sin):
+    """E (3 components) of the images summed in ``s`` (:func:`image_sums`)."""
+    f = ph * (cos * a + sin * b) * s[1] + pv * s[9]  # Σ w (p·r) / D⁵
+    return (3.0 * a * f - ph * cos * s[0], 3.0 * b * f - ph * sin * s[0],
+            3.0 * (ph * (cos * a + sin * b) * s[2] + pv * s[10]) - pv * s[7])
+
+
+@nb.njit(inline="always", **JIT)
+def sums_rows(s, a, b, ph, pv, cos, sin, inv_speed):
+    """The three rows (E_i, ∂E_i/∂X) of the images summed in ``s`` (:func:`image_sums`), target
+    − station horizontal offset (a, b), moments Ph along the heading θ (cos θ, sin θ) and Pv.
+
+    Per image ∂_k E_i = w [3 (δ_ik p·r + p_k r_i + p_i r_k) / D⁵ − 15 (p·r) r_i r_k / D⁷] with
+    p·r = P + ε Pv c, P = Ph (a cos θ + b sin θ); the target's depth moves c by ε, its vertical
+    moment enters as ε Pv. ∂/∂Ph and ∂/∂Pv are the field's coefficients; the heading θ =
+    atan2(vy, vx) gives ∂E/∂vx = −(sin θ / |v|) ∂E/∂θ, ∂E/∂vy = (cos θ / |v|) ∂E/∂θ.
+    """
+    u10, u20, u21, u30, u31, u32, u33 = s[0], s[1], s[2], s[3], s[4], s[5], s[6]
+    v10, v20, v21, v22, v31, v32 = s[7], s[8], s[9], s[10], s[11], s[12]
+    hr, nr = cos * a + sin * b, cos * b - sin * a  # h·r and h⊥·r, h = (cos θ, sin θ)
+    p0, p1, big_p, big_n = ph * cos, ph * sin, ph * hr, ph * nr
+    f = big_p * u20 + pv * v21
+    h = big_p * u30 + pv * v31
+    fz = big_p * u21 + pv * v22
+    hxz = big_p * u31 + pv * v32  # for ∂_x E_z, ∂_y E_z
+    hzx = big_p * v31 + pv * u32  # for ∂_z E_x, ∂_z E_y
+    gxy = 3.0 * (p0 * b + p1 * a) * u20 - 15.0 * a * b * h
+    ex = (3.0 * a * f - p0 * u10,
+          3.0 * f + 6.0 * p0 * a * u20 - 15.0 * a * a * h,
+          gxy,
+          3.0 * pv * a * u20 + 3.0 * p0 * v21 - 15.0 * a * hzx,
+          3.0 * a * big_n * u20 + p1 * u10,  # ∂E_x/∂θ
+          3.0 * a * hr * u20 - cos * u10,
+          3.0 * a * v21)
+    ey = (3.0 * b * f - p1 * u10,
+          gxy,
+          3.0 * f + 6.0 * p1 * b * u20 - 15.0 * b * b * h,
+          3.0 * pv * b * u20 + 3.0 * p1 * v21 - 15.0 * b * hzx,
+          3.0 * b * big_n * u20 - p0 * u10,
+          3.0 * b * hr * u20 - sin * u10,
+          3.0 * b * v21)
+    ez = (3.0 * fz - pv * v10,
+          3.0 * p0 * u21 + 3.0 * pv * a * v20 - 15.0 * a * hxz,
+          3.0 * p1 * u21 + 3.0 * pv * b * v20 - 15.0 * b * hxz,
+          3.0 * big_p * v20 + 9.0 * pv * u21 - 15.0 * (big_p * v32 + pv * u33),
+          3.0 * big_n * u21,
+          3.0 * hr * u21,
+          3.0 * v22 - v10)
+    tx, ty = -sin * inv_speed, cos * inv_speed  # ∂θ/∂vx, ∂θ/∂vy
+    return ((ex[0], ex[1], ex[2], ex[3], tx * ex[4], ty * ex[4], ex[5], ex[6]),
+            (ey[0], ey[1], ey[2], ey[3], tx * ey[4], ty * ey[4], ey[5], ey[6]),
+            (ez[0], ez[1], ez[2], ez[3], tx * ez[4], ty * ez[4], ez[5], ez[6]))
 
 
 @nb.njit(inline="always", **JIT)
 def _numerator_paper(a, b, c, f0, f1, f2, f3):
     """The paper's eqs. (10)–(12) as printed, with (a, b, c) = (x, y, z − h) of the target
     relative to the station; f = (Ph cos θ, Ph sin θ, Pv, Ph). Same flat tuple as
-    :func:`_numerator_exact`."""
+    :func:`_local_jacobian`'s partials."""
     d2 = a * a + b * b + c * c
     q = 3.0 * a * a - d2  # the printed 3x² − D², used in both Ex and Ey
     return (
@@ -111,17 +181,19 @@ def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model):
     (Ex, Ey, Ez), each ``(E_i, ∂E_i/∂x, ∂E_i/∂y, ∂E_i/∂z, ∂E_i/∂vx, ∂E_i/∂vy, ∂E_i/∂Ph,
     ∂E_i/∂Pv)``. Scalars in, a tuple out: no memory, so loops over points vectorise.
 
-    ``model`` is an index into :data:`MODELS`. Assumes D > 0, speed > 0.
+    ``model`` is an index into :data:`MODELS`: ``exact`` through :func:`image_sums` of the one
+    image (a layered sea sums the same over its images), ``paper`` through the printed
+    numerators and the quotient rule. Assumes D > 0, speed > 0.
     """
     inv_speed = 1.0 / math.sqrt(vx * vx + vy * vy)
     cos = vx * inv_speed
     sin = vy * inv_speed
+    if model == 0:
+        return sums_rows(image_sums(NO_IMAGES, rx * rx + ry * ry, rz, kappa, 1.0), rx, ry, ph, pv,
+                         cos, sin, inv_speed)
     f0 = ph * cos
     f1 = ph * sin
-    if model == 0:
-        t = _numerator_exact(rx, ry, rz, f0, f1, pv, ph)
-    else:
-        t = _numerator_paper(rx, ry, rz, f0, f1, pv, ph)
+    t = _numerator_paper(rx, ry, rz, f0, f1, pv, ph)
     d2 = rx * rx + ry * ry + rz * rz
     inv5 = kappa / (d2 * d2 * math.sqrt(d2))
     return (

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .fields import JIT, _local_jacobian
+from .fields import JIT, NO_IMAGES, _local_jacobian, image_sums, sums_field, sums_rows
 
 __all__ = ["DEFAULT_TOL", "Sea", "image_counts"]
 
@@ -165,34 +165,27 @@ def check_column(sea, states, stations, model):
 
 
 @nb.njit(inline="always", **JIT)
-def _add(acc, rows, eps):
-    """acc + rows of one image, chain rule through its mirrored position and moment: the image
-    depth is ε·z + const and its vertical moment ε·Pv, so ∂/∂z and ∂/∂Pv take a factor ε."""
-    out0 = (acc[0][0] + rows[0][0], acc[0][1] + rows[0][1], acc[0][2] + rows[0][2],
-            acc[0][3] + eps * rows[0][3], acc[0][4] + rows[0][4], acc[0][5] + rows[0][5],
-            acc[0][6] + rows[0][6], acc[0][7] + eps * rows[0][7])
-    out1 = (acc[1][0] + rows[1][0], acc[1][1] + rows[1][1], acc[1][2] + rows[1][2],
-            acc[1][3] + eps * rows[1][3], acc[1][4] + rows[1][4], acc[1][5] + rows[1][5],
-            acc[1][6] + rows[1][6], acc[1][7] + eps * rows[1][7])
-    out2 = (acc[2][0] + rows[2][0], acc[2][1] + rows[2][1], acc[2][2] + rows[2][2],
-            acc[2][3] + eps * rows[2][3], acc[2][4] + rows[2][4], acc[2][5] + rows[2][5],
-            acc[2][6] + rows[2][6], acc[2][7] + eps * rows[2][7])
-    return (out0, out1, out2)
+def _plus(acc, g):
+    """acc + g, two sets of image sums (:func:`core.fields.image_sums`)."""
+    return (acc[0] + g[0], acc[1] + g[1], acc[2] + g[2], acc[3] + g[3], acc[4] + g[4],
+            acc[5] + g[5], acc[6] + g[6], acc[7] + g[7], acc[8] + g[8], acc[9] + g[9],
+            acc[10] + g[10], acc[11] + g[11], acc[12] + g[12])
 
 
 @nb.njit(inline="always", **JIT)
-def _group(acc, rx, ry, z, sz, vx, vy, ph, pv, kw, shift):
-    """acc + the four images at index ±t (shift = 2 t D), each weighted by kw = κ_water · w:
-    ε = +1 at z ± shift, ε = −1 at −z ± shift."""
-    acc = _add(acc, _local_jacobian(rx, ry, z + shift - sz, vx, vy, ph, pv, kw, 0), 1.0)
-    acc = _add(acc, _local_jacobian(rx, ry, z - shift - sz, vx, vy, ph, pv, kw, 0), 1.0)
-    acc = _add(acc, _local_jacobian(rx, ry, -z + shift - sz, vx, vy, ph, -pv, kw, 0), -1.0)
-    return _add(acc, _local_jacobian(rx, ry, -z - shift - sz, vx, vy, ph, -pv, kw, 0), -1.0)
+def _group(acc, rho2, z, sz, kw, shift):
+    """acc + the four images at index ±t (shift = 2 t D), each of weight kw = κ_water · w:
+    ε = +1 at z ± shift, ε = −1 at −z ± shift (their vertical moment and ∂/∂z reversed)."""
+    acc = image_sums(acc, rho2, z + shift - sz, kw, 1.0)
+    acc = image_sums(acc, rho2, z - shift - sz, kw, 1.0)
+    acc = image_sums(acc, rho2, -z + shift - sz, kw, -1.0)
+    return image_sums(acc, rho2, -z - shift - sz, kw, -1.0)
 
 
 #: Rows of the series' own workspace, each one lane wide (see :func:`layered_lanes`): the pair's
-#: inputs (rx, ry, z, sz, vx, vy, Ph, Pv), then the previous group's field G_{m−1} (3).
-SEA_ROWS = 11
+#: inputs (rx, ry, z, sz, vx, vy, Ph, Pv; the series replaces vx, vy by cos θ, sin θ), the
+#: previous group's field G_{m−1} (3), 1/|v|.
+SEA_ROWS = 12
 #: Rows of a one-pair workspace (:func:`station_rows`): the series' rows, then its 24 output rows.
 PAIR_ROWS = SEA_ROWS + 24
 
@@ -230,6 +223,39 @@ def _store(w, r0, lane, rows):
 
 
 @nb.njit(inline="always", **JIT)
+def _load_sums(w, r0, lane):
+    """The 13 image sums of one lane from w[r0 : r0 + 13]."""
+    return (w[r0, lane], w[r0 + 1, lane], w[r0 + 2, lane], w[r0 + 3, lane], w[r0 + 4, lane],
+            w[r0 + 5, lane], w[r0 + 6, lane], w[r0 + 7, lane], w[r0 + 8, lane], w[r0 + 9, lane],
+            w[r0 + 10, lane], w[r0 + 11, lane], w[r0 + 12, lane])
+
+
+@nb.njit(inline="always", **JIT)
+def _store_sums(w, r0, lane, t):
+    """w[r0 : r0 + 13, lane] = the 13 image sums ``t``."""
+    w[r0, lane], w[r0 + 1, lane], w[r0 + 2, lane], w[r0 + 3, lane] = t[0], t[1], t[2], t[3]
+    w[r0 + 4, lane], w[r0 + 5, lane], w[r0 + 6, lane], w[r0 + 7, lane] = t[4], t[5], t[6], t[7]
+    w[r0 + 8, lane], w[r0 + 9, lane], w[r0 + 10, lane] = t[8], t[9], t[10]
+    w[r0 + 11, lane], w[r0 + 12, lane] = t[11], t[12]
+
+
+@nb.njit(inline="always", **JIT)
+def _sums_to_rows(w, r_in, r_out, n):
+    """Replace the image sums at w[r_out : r_out + 13] by the rows (E_i, ∂E_i/∂X) (24)."""
+    for lane in range(n):
+        rx, ry, _, _, cos, sin, ph, pv = _inputs(w, r_in, lane)
+        _store(w, r_out, lane, sums_rows(_load_sums(w, r_out, lane), rx, ry, ph, pv, cos, sin,
+                                         w[r_in + 11, lane]))
+
+
+@nb.njit(inline="always", **JIT)
+def _field_of(w, r_in, lane, sums):
+    """E (3 components) of image sums of the pair in ``lane``."""
+    rx, ry, _, _, cos, sin, ph, pv = _inputs(w, r_in, lane)
+    return sums_field(sums, rx, ry, ph, pv, cos, sin)
+
+
+@nb.njit(inline="always", **JIT)
 def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
     """The image series of ``n`` target–station pairs side by side (lanes 0 … n − 1 of the
     workspace ``w``, a C-ordered array of shape (rows, ≥ n)), in the layered sea (D =
@@ -237,9 +263,12 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
     ``LANES`` neighbouring points, every other caller on one pair (:func:`station_rows`).
 
     Input rows w[r_in : r_in + 8] = (rx, ry, z, sz, vx, vy, Ph, Pv) per lane: horizontal offset
-    target − station, target and station depths, velocity, moments; w[r_in + 8 : r_in + 11] is
-    scratch. Output rows w[r_out : r_out + 24]: per lane the three rows (E_i, ∂E_i/∂X) of
-    :func:`core.fields._local_jacobian`. Returns the number of free-space images per pair.
+    target − station, target and station depths, velocity, moments; the series overwrites vx,
+    vy (by cos θ, sin θ) and uses w[r_in + 8 : r_in + 12] as scratch. Output rows
+    w[r_out : r_out + 24]: per lane the three rows (E_i, ∂E_i/∂X) of
+    :func:`core.fields._local_jacobian`; while the series runs, the first 13 hold the images'
+    sums (:func:`core.fields.image_sums`), turned into the rows once at the end
+    (:func:`core.fields.sums_rows`). Returns the number of free-space images per pair.
     Assumes valid input (both in the water column, not on the station).
 
     The groups m = 1, 2, … run in lockstep: all lanes take group m, until one M at which every
@@ -248,16 +277,18 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
     it is at least as accurate. The image positions and tail nodes depend on M and η only,
     and M is locally constant, so the Jacobian stays the exact derivative of the field.
     """
-    zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    prev = r_in + 8
-    # 1. m = 0: the source and its surface image
+    prev, rinv = r_in + 8, r_in + 11
+    # 1. m = 0: the source and its surface image; vx, vy give way to cos θ, sin θ and 1/|v|
     for lane in range(n):
         rx, ry, z, sz, vx, vy, ph, pv = _inputs(w, r_in, lane)
-        acc = _local_jacobian(rx, ry, z - sz, vx, vy, ph, pv, kappa, 0)
-        _store(w, r_out, lane, _add(acc, _local_jacobian(rx, ry, -z - sz, vx, vy, ph, -pv, kappa, 0),
-                                    -1.0))
+        inv_speed = 1.0 / math.sqrt(vx * vx + vy * vy)
+        w[r_in + 4, lane], w[r_in + 5, lane], w[rinv, lane] = vx * inv_speed, vy * inv_speed, inv_speed
+        rho2 = rx * rx + ry * ry
+        _store_sums(w, r_out, lane, image_sums(image_sums(NO_IMAGES, rho2, z - sz, kappa, 1.0),
+                                               rho2, -z - sz, kappa, -1.0))
         w[prev, lane], w[prev + 1, lane], w[prev + 2, lane] = 0.0, 0.0, 0.0
     if eta == 0.0:
+        _sums_to_rows(w, r_in, r_out, n)
         return 2
     # 2. groups |m| = 1, 2, …, until the tail can be closed (or, η < 0, neglected) in every lane;
     # squared norms: |G| ≤ c |E| as G² ≤ c² E²
@@ -271,12 +302,13 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
         kw, shift = kappa * wm, 2.0 * m * depth
         n_open = 0
         for lane in range(n):
-            rx, ry, z, sz, vx, vy, ph, pv = _inputs(w, r_in, lane)
-            g = _group((zero, zero, zero), rx, ry, z, sz, vx, vy, ph, pv, kw, shift)
-            acc = _add(_load(w, r_out, lane), g, 1.0)
-            _store(w, r_out, lane, acc)
-            g0, g1, g2 = g[0][0], g[1][0], g[2][0]
-            total2 = acc[0][0] * acc[0][0] + acc[1][0] * acc[1][0] + acc[2][0] * acc[2][0]
+            rx, ry, z, sz = w[r_in, lane], w[r_in + 1, lane], w[r_in + 2, lane], w[r_in + 3, lane]
+            g = _group(NO_IMAGES, rx * rx + ry * ry, z, sz, kw, shift)
+            acc = _plus(_load_sums(w, r_out, lane), g)
+            _store_sums(w, r_out, lane, acc)
+            g0, g1, g2 = _field_of(w, r_in, lane, g)
+            t0, t1, t2 = _field_of(w, r_in, lane, acc)
+            total2 = t0 * t0 + t1 * t1 + t2 * t2
             if eta < 0.0:
                 done = g0 * g0 + g1 * g1 + g2 * g2 <= c_neg * total2
             else:
@@ -289,6 +321,7 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
         if n_open == 0:
             break
     if eta < 0.0:
+        _sums_to_rows(w, r_in, r_out, n)
         return 2 + 4 * m
     # 3. the tail Σ_{m > M} G_m as κ ∫_{M+½}^∞ G(t) dt, G(t) = η^t (images at index t), by the
     # Gauss–Legendre rule the largest geometric tail estimate τ of the lanes calls for
@@ -296,7 +329,7 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
     if eta < 1.0:
         ratio2 = 0.0  # max |G_M|² / |E|² over the lanes
         for lane in range(n):
-            t0, t1, t2 = w[r_out, lane], w[r_out + 8, lane], w[r_out + 16, lane]
+            t0, t1, t2 = _field_of(w, r_in, lane, _load_sums(w, r_out, lane))
             g0, g1, g2 = w[prev, lane], w[prev + 1, lane], w[prev + 2, lane]
             ratio2 = max(ratio2, (g0 * g0 + g1 * g1 + g2 * g2) / (t0 * t0 + t1 * t1 + t2 * t2))
         tau = math.sqrt(ratio2) * eta / (1.0 - eta)
@@ -311,9 +344,10 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
         kw = kappa * kap * _TAIL_W[rule, j] * b / ((1.0 - u) * (1.0 - u)) * math.exp(-alpha * t)
         shift = 2.0 * t * depth
         for lane in range(n):
-            rx, ry, z, sz, vx, vy, ph, pv = _inputs(w, r_in, lane)
-            _store(w, r_out, lane, _group(_load(w, r_out, lane), rx, ry, z, sz, vx, vy, ph, pv, kw,
-                                          shift))
+            rx, ry, z, sz = w[r_in, lane], w[r_in + 1, lane], w[r_in + 2, lane], w[r_in + 3, lane]
+            _store_sums(w, r_out, lane, _group(_load_sums(w, r_out, lane), rx * rx + ry * ry, z, sz,
+                                               kw, shift))
+    _sums_to_rows(w, r_in, r_out, n)
     return 2 + 4 * m + 4 * _TAIL_N[rule]
 
 
