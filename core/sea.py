@@ -28,8 +28,8 @@ until the Euler–Maclaurin error estimate of closing the rest with an integral,
 from M + ½ to ∞ (the images become a line-like sum), times κ = (α/2)/sinh(α/2), α = −ln η,
 which makes the midpoint rule exact for the geometric weight; the integral is a 4-, 5- or
 8-node Gauss–Legendre rule (by the size of the tail, ``_TAIL_N``) on t = M + ½ + b u/(1 − u),
-b = min(M + ½, 1/α). Every node is a virtual
-image at a non-integer t, evaluated by the free-space kernel, so the Jacobian of the truncated
+b = min(M + ½, 1/α). Every node is a virtual image at a non-integer t,
+added to the same image sums (``core.fields.image_sums``), so the Jacobian of the truncated
 field, tail included, is exact by the chain rule. A conductive seabed (η < 0) gives an
 alternating series: it is summed until |G_m| ≤ tol (1 − |η|) |E|, no tail.
 """
