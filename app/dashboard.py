@@ -133,6 +133,14 @@ def _section(scenario, tabs, title, names, collapsed):
     return pn.Column(card, visible=any_visible, sizing_mode="stretch_width", margin=0)
 
 
+def panel_extension():
+    """Panel's settings the page is built for: the Tabulator of the calibration tab, sliders that
+    report on release only (:mod:`app.inputs` keeps a box and its slider in step on that value),
+    the busy spinner over a recomputing map, and no notification area (messages are shown in
+    the page)."""
+    pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
+
+
 def create_app():
     scenario = Scenario()
     cache = PanelCache()

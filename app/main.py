@@ -5,10 +5,10 @@ import contextlib
 import panel as pn
 
 from app import server_threads
-from app.dashboard import create_app
+from app.dashboard import create_app, panel_extension
 
 server_threads.configure()
-pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
+panel_extension()
 doc = pn.state.curdoc
 # The template adds its ~15 roots one by one and Bokeh re-walks the whole model graph after each;
 # frozen, it walks it once (a session took ~4 s to build on the event loop, ~2 s frozen).

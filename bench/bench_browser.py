@@ -201,12 +201,11 @@ def server_update_inprocess(repeat=5):
     """Median time (ms) of one P_h change in the server's Python, without websocket or browser:
     the app built into a bare Bokeh Document, ``scenario.Ph`` set (compute + HoloViews + Bokeh
     model updates of the three maps)."""
-    import panel as pn
     from bokeh.document import Document
 
-    from app.dashboard import create_app
+    from app.dashboard import create_app, panel_extension
 
-    pn.extension(throttled=True, loading_indicator=True, notifications=False)
+    panel_extension()
     template = create_app()
     template.server_doc(Document())
     sc = template.scenario

@@ -17,19 +17,18 @@ import argparse
 import statistics
 import time
 
-import panel as pn
 from bokeh.document import Document
 from bokeh.models import Slider
 from panel.io.state import set_curdoc
 
 from app import server_threads
-from app.dashboard import create_app
+from app.dashboard import create_app, panel_extension
 
 
 def refused_release(repeat):
     """Seconds of each of ``repeat`` refused P_h releases."""
     server_threads.configure()
-    pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
+    panel_extension()
     doc = Document()
     with set_curdoc(doc):
         page = create_app()

@@ -24,13 +24,13 @@ def probe(sessions=SESSIONS):
     import panel as pn
 
     from app import server_threads
-    from app.dashboard import create_app
+    from app.dashboard import create_app, panel_extension
     from app.scenario import Scenario
     from bench.load_test import Client
     from tests.server import close_client, free_port, on_thread
 
     server_threads.configure()
-    pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
+    panel_extension()
     port = free_port()
     pn.serve({"app": create_app}, port=port, address="127.0.0.1", threaded=True, show=False,
              websocket_origin=[f"127.0.0.1:{port}"], check_unused_sessions_milliseconds=300,
