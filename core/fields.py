@@ -49,20 +49,16 @@ MODELS = ("exact", "paper")
 JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 
-#: The image sums of no image (see :func:`image_sums`).
-NO_IMAGES = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-
-
 @nb.njit(inline="always", **JIT)
-def image_sums(acc, rho2, c, w, eps):
-    """``acc`` plus one image of the exact dipole: a source at vertical offset ``c`` and
+def image_sums(rho2, c, w, eps):
+    """One image of the exact dipole as thirteen sums: a source at vertical offset ``c`` and
     horizontal distance² ``rho2`` from the station, weight ``w`` (K = 1/(4πσ) times the image's
     weight), sign ``eps`` (ε = −1: a mirror image, vertical moment and ∂/∂z reversed).
 
     The field of a dipole p at r = (a, b, c), D² = ρ² + c², is E = w [3 (p·r) r / D⁵ − p / D³].
     Every image of a sea shares (a, b) and the moments, and differs only in c, w and ε, so the
     field of any set of images, and its Jacobian, is a fixed combination (:func:`sums_rows`) of
-    thirteen sums over them,
+    thirteen sums over them (:func:`add_sums`),
 
         U_nj = Σ w c^j / D^(2n+1),   V_nj = Σ ε w c^j / D^(2n+1),
 
@@ -75,17 +71,25 @@ def image_sums(acc, rho2, c, w, eps):
     e3 = e2 * inv2  # w / D⁷
     c2, c3 = c * e2, c * e3
     cc2, cc3 = c * c2, c * c3
-    return (acc[0] + e1, acc[1] + e2, acc[2] + c2, acc[3] + e3, acc[4] + c3, acc[5] + cc3,
-            acc[6] + c * cc3, acc[7] + eps * e1, acc[8] + eps * e2, acc[9] + eps * c2,
-            acc[10] + eps * cc2, acc[11] + eps * c3, acc[12] + eps * cc3)
+    return (e1, e2, c2, e3, c3, cc3, c * cc3,
+            eps * e1, eps * e2, eps * c2, eps * cc2, eps * c3, eps * cc3)
+
+
+@nb.njit(inline="always", **JIT)
+def add_sums(s, t):
+    """The sums of two sets of images (:func:`image_sums`)."""
+    return (s[0] + t[0], s[1] + t[1], s[2] + t[2], s[3] + t[3], s[4] + t[4], s[5] + t[5],
+            s[6] + t[6], s[7] + t[7], s[8] + t[8], s[9] + t[9], s[10] + t[10], s[11] + t[11],
+            s[12] + t[12])
 
 
 @nb.njit(inline="always", **JIT)
 def sums_field(s, a, b, ph, pv, cos, sin):
     """E (3 components) of the images summed in ``s`` (:func:`image_sums`)."""
-    f = ph * (cos * a + sin * b) * s[1] + pv * s[9]  # Σ w (p·r) / D⁵
+    big_p = ph * (cos * a + sin * b)  # P = p·r − ε Pv c, the same for every image
+    f = big_p * s[1] + pv * s[9]  # Σ w (p·r) / D⁵
     return (3.0 * a * f - ph * cos * s[0], 3.0 * b * f - ph * sin * s[0],
-            3.0 * (ph * (cos * a + sin * b) * s[2] + pv * s[10]) - pv * s[7])
+            3.0 * (big_p * s[2] + pv * s[10]) - pv * s[7])
 
 
 @nb.njit(inline="always", **JIT)
@@ -189,8 +193,8 @@ def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model):
     cos = vx * inv_speed
     sin = vy * inv_speed
     if model == 0:
-        return sums_rows(image_sums(NO_IMAGES, rx * rx + ry * ry, rz, kappa, 1.0), rx, ry, ph, pv,
-                         cos, sin, inv_speed)
+        return sums_rows(image_sums(rx * rx + ry * ry, rz, kappa, 1.0), rx, ry, ph, pv, cos, sin,
+                         inv_speed)
     f0 = ph * cos
     f1 = ph * sin
     t = _numerator_paper(rx, ry, rz, f0, f1, pv, ph)

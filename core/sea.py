@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .fields import JIT, NO_IMAGES, _local_jacobian, image_sums, sums_field, sums_rows
+from .fields import JIT, _local_jacobian, add_sums, image_sums, sums_field, sums_rows
 
 __all__ = ["DEFAULT_TOL", "Sea", "image_counts"]
 
@@ -165,21 +165,13 @@ def check_column(sea, states, stations, model):
 
 
 @nb.njit(inline="always", **JIT)
-def _plus(acc, g):
-    """acc + g, two sets of image sums (:func:`core.fields.image_sums`)."""
-    return (acc[0] + g[0], acc[1] + g[1], acc[2] + g[2], acc[3] + g[3], acc[4] + g[4],
-            acc[5] + g[5], acc[6] + g[6], acc[7] + g[7], acc[8] + g[8], acc[9] + g[9],
-            acc[10] + g[10], acc[11] + g[11], acc[12] + g[12])
-
-
-@nb.njit(inline="always", **JIT)
-def _group(acc, rho2, z, sz, kw, shift):
-    """acc + the four images at index ±t (shift = 2 t D), each of weight kw = κ_water · w:
+def _group(rho2, z, sz, kw, shift):
+    """The sums of the four images at index ±t (shift = 2 t D), each of weight kw = κ_water · w:
     ε = +1 at z ± shift, ε = −1 at −z ± shift (their vertical moment and ∂/∂z reversed)."""
-    acc = image_sums(acc, rho2, z + shift - sz, kw, 1.0)
-    acc = image_sums(acc, rho2, z - shift - sz, kw, 1.0)
-    acc = image_sums(acc, rho2, -z + shift - sz, kw, -1.0)
-    return image_sums(acc, rho2, -z - shift - sz, kw, -1.0)
+    return add_sums(add_sums(image_sums(rho2, z + shift - sz, kw, 1.0),
+                             image_sums(rho2, z - shift - sz, kw, 1.0)),
+                    add_sums(image_sums(rho2, -z + shift - sz, kw, -1.0),
+                             image_sums(rho2, -z - shift - sz, kw, -1.0)))
 
 
 #: Rows of the series' own workspace, each one lane wide (see :func:`layered_lanes`): the pair's
@@ -284,8 +276,8 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
         inv_speed = 1.0 / math.sqrt(vx * vx + vy * vy)
         w[r_in + 4, lane], w[r_in + 5, lane], w[rinv, lane] = vx * inv_speed, vy * inv_speed, inv_speed
         rho2 = rx * rx + ry * ry
-        _store_sums(w, r_out, lane, image_sums(image_sums(NO_IMAGES, rho2, z - sz, kappa, 1.0),
-                                               rho2, -z - sz, kappa, -1.0))
+        _store_sums(w, r_out, lane, add_sums(image_sums(rho2, z - sz, kappa, 1.0),
+                                             image_sums(rho2, -z - sz, kappa, -1.0)))
         w[prev, lane], w[prev + 1, lane], w[prev + 2, lane] = 0.0, 0.0, 0.0
     if eta == 0.0:
         _sums_to_rows(w, r_in, r_out, n)
@@ -303,8 +295,8 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
         n_open = 0
         for lane in range(n):
             rx, ry, z, sz = w[r_in, lane], w[r_in + 1, lane], w[r_in + 2, lane], w[r_in + 3, lane]
-            g = _group(NO_IMAGES, rx * rx + ry * ry, z, sz, kw, shift)
-            acc = _plus(_load_sums(w, r_out, lane), g)
+            g = _group(rx * rx + ry * ry, z, sz, kw, shift)
+            acc = add_sums(_load_sums(w, r_out, lane), g)
             _store_sums(w, r_out, lane, acc)
             g0, g1, g2 = _field_of(w, r_in, lane, g)
             t0, t1, t2 = _field_of(w, r_in, lane, acc)
@@ -345,8 +337,8 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
         shift = 2.0 * t * depth
         for lane in range(n):
             rx, ry, z, sz = w[r_in, lane], w[r_in + 1, lane], w[r_in + 2, lane], w[r_in + 3, lane]
-            _store_sums(w, r_out, lane, _group(_load_sums(w, r_out, lane), rx * rx + ry * ry, z, sz,
-                                               kw, shift))
+            _store_sums(w, r_out, lane, add_sums(_load_sums(w, r_out, lane),
+                                                 _group(rx * rx + ry * ry, z, sz, kw, shift)))
     _sums_to_rows(w, r_in, r_out, n)
     return 2 + 4 * m + 4 * _TAIL_N[rule]
 
