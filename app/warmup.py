@@ -1,6 +1,6 @@
 """Compile every numba kernel the dashboard uses, once, before the first visitor.
 
-On a fresh checkout (or a fresh container layer) numba compiles the kernels on first use, ~3–6 min
+On a fresh checkout (or a fresh container layer) numba compiles the kernels on first use, ~3 min
 of LLVM; the first page would wait for it. ``python -m app.warmup`` does it ahead of time (the
 Dockerfile runs it at build time), and ``app/server_lifecycle.py`` runs it when ``panel serve app``
 loads, before the server takes its first session. With the on-disk cache already filled it takes
