@@ -106,27 +106,27 @@ def sums_rows(s, a, b, ph, pv, cos, sin, inv_speed):
     v10, v20, v21, v22, v31, v32 = s[7], s[8], s[9], s[10], s[11], s[12]
     hr, nr = cos * a + sin * b, cos * b - sin * a  # h·r and h⊥·r, h = (cos θ, sin θ)
     p0, p1, big_p, big_n = ph * cos, ph * sin, ph * hr, ph * nr
+    e = sums_field(s, a, b, ph, pv, cos, sin)
     f = big_p * u20 + pv * v21
     h = big_p * u30 + pv * v31
-    fz = big_p * u21 + pv * v22
     hxz = big_p * u31 + pv * v32  # for ∂_x E_z, ∂_y E_z
     hzx = big_p * v31 + pv * u32  # for ∂_z E_x, ∂_z E_y
     gxy = 3.0 * (p0 * b + p1 * a) * u20 - 15.0 * a * b * h
-    ex = (3.0 * a * f - p0 * u10,
+    ex = (e[0],
           3.0 * f + 6.0 * p0 * a * u20 - 15.0 * a * a * h,
           gxy,
           3.0 * pv * a * u20 + 3.0 * p0 * v21 - 15.0 * a * hzx,
           3.0 * a * big_n * u20 + p1 * u10,  # ∂E_x/∂θ
           3.0 * a * hr * u20 - cos * u10,
           3.0 * a * v21)
-    ey = (3.0 * b * f - p1 * u10,
+    ey = (e[1],
           gxy,
           3.0 * f + 6.0 * p1 * b * u20 - 15.0 * b * b * h,
           3.0 * pv * b * u20 + 3.0 * p1 * v21 - 15.0 * b * hzx,
           3.0 * b * big_n * u20 - p0 * u10,
           3.0 * b * hr * u20 - sin * u10,
           3.0 * b * v21)
-    ez = (3.0 * fz - pv * v10,
+    ez = (e[2],
           3.0 * p0 * u21 + 3.0 * pv * a * v20 - 15.0 * a * hxz,
           3.0 * p1 * u21 + 3.0 * pv * b * v20 - 15.0 * b * hxz,
           3.0 * big_p * v20 + 9.0 * pv * u21 - 15.0 * (big_p * v32 + pv * u33),
