@@ -13,6 +13,36 @@ from .bank import (
     run_bank,
     start_range,
 )
+from .calibration import (
+    CAL_RANK_RTOL,
+    COEFFICIENTS,
+    CONVENTIONS,
+    SEED004_SIMULATION,
+    SEED004_TABLE1,
+    CalibrationObservability,
+    GeomagneticError,
+    KalmanResult,
+    LsqResult,
+    attitude_matrix,
+    calibration_covariance,
+    calibration_crlb,
+    calibration_gamma,
+    calibration_observability,
+    convergence_iteration,
+    design_rows,
+    geomagnetic_error,
+    geomagnetic_solution,
+    heading_manoeuvre,
+    kalman_calibrate,
+    level_headings,
+    lsq_calibrate,
+    parse_attitude_csv,
+    random_attitudes,
+    read_attitude_csv,
+    seed004_table1,
+    ship_field,
+    simulate_ship_data,
+)
 from .design import (
     CRITERIA,
     LAYOUTS,
@@ -75,9 +105,9 @@ __all__ = [
     "straight_track",
 ]
 
-# Ship magnetometer calibration, seed 004 (core.calibration), loaded on first use (PEP 562) so
-# that `python -m core.calibration` runs without runpy's "found in sys.modules" warning.
-_CALIBRATION = (
+# Ship magnetometer calibration, seed 004 (core.calibration, a package whose CLI module is
+# imported only by `python -m core.calibration`).
+__all__ += [
     "CAL_RANK_RTOL", "COEFFICIENTS", "CONVENTIONS", "SEED004_SIMULATION", "SEED004_TABLE1",
     "CalibrationObservability", "GeomagneticError", "KalmanResult", "LsqResult",
     "attitude_matrix", "calibration_covariance", "calibration_crlb", "calibration_gamma",
@@ -85,13 +115,4 @@ _CALIBRATION = (
     "geomagnetic_solution", "heading_manoeuvre", "kalman_calibrate", "level_headings",
     "lsq_calibrate", "parse_attitude_csv", "random_attitudes", "read_attitude_csv",
     "seed004_table1", "ship_field", "simulate_ship_data",
-)
-__all__ += list(_CALIBRATION)
-
-
-def __getattr__(name):
-    if name in _CALIBRATION:
-        from . import calibration
-
-        return getattr(calibration, name)
-    raise AttributeError(f"module 'core' has no attribute {name!r}")
+]

@@ -166,7 +166,7 @@ def section(nums=None):
     L = []
     w = L.append
     w("## Seed 004: calibrating a ship's magnetometer (observability and the Kalman filter)\n")
-    w("Model B = K·A(ψ, θ, φ)·Be + Bp (spec §9; `core/calibration.py`, notes in "
+    w("Model B = K·A(ψ, θ, φ)·Be + Bp (spec §9; `core/calibration/`, notes in "
       "`docs/calibration.md`). Attitude convention: seed 004's eq. (2) as printed, "
       "A = R_y(−φ)·R_x(θ)·R_z(ψ) with ψ heading, θ roll, φ pitch as its Table 1 names them (its "
       "caption's names contradict the table); the comparison that chose it is in the Table 1 part. "

@@ -20,6 +20,7 @@ import pytest
 
 import core
 from core import calibration as cal
+from core.calibration import model
 
 ROOT = Path(__file__).resolve().parents[1]
 SIM = core.SEED004_SIMULATION
@@ -109,7 +110,7 @@ def test_attitude_derivative_matches_complex_step():
         Rps = np.array([[c(p), s(p), z], [-s(p), c(p), z], [z, z, z + 1]])
         return Rph @ Rth @ Rps
     a = np.array([1.1, 0.3, -0.2])
-    _, dA = cal._attitude(a, core.CONVENTIONS["seed004"])
+    _, dA = model._attitude(a, core.CONVENTIONS["seed004"])
     h = 1e-30
     for k in range(3):
         e = np.zeros(3, dtype=complex)

@@ -1,0 +1,105 @@
+"""Checks at the boundary of the calibration functions: each returns the value as a float array
+(or float) or raises ValueError saying what was wrong and what is accepted.
+
+Nothing here knows the model; the private kernels elsewhere in the package assume checked input.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Largest |angle| accepted (rad). A heading of 90 means degrees were given by mistake.
+ANGLE_LIMIT = 2.0 * np.pi
+
+
+def _array(name, value, what):
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a numeric array ({what}): {exc}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite ({what}); NaN and inf are not accepted")
+    return arr
+
+
+def _attitudes(value, name="attitudes"):
+    arr = _array(name, value, "shape (..., N, 3): heading ψ, roll θ, pitch φ in rad")
+    if arr.ndim < 2 or arr.shape[-1] != 3 or arr.shape[-2] < 1:
+        raise ValueError(f"{name} must have shape (..., N, 3) with N ≥ 1 rows of [ψ, θ, φ] in rad; "
+                         f"got shape {arr.shape}")
+    big = np.abs(arr) > ANGLE_LIMIT
+    if big.any():
+        raise ValueError(f"{name} must be in radians with |angle| ≤ 2π; got {arr[big].flat[0]:g} "
+                         "(degrees given by mistake? multiply by π/180)")
+    return arr
+
+
+def _vector3(name, value, unit):
+    arr = _array(name, value, f"3 components in {unit}")
+    if arr.shape != (3,):
+        raise ValueError(f"{name} must be a vector of 3 components in {unit}; got shape {arr.shape}")
+    return arr
+
+
+def _be(value):
+    be = _vector3("be", value, "nT")
+    if not np.linalg.norm(be) > 0:
+        raise ValueError("be (the geomagnetic field, nT) must not be zero")
+    return be
+
+
+def _K(value):
+    K = _array("K", value, "3 × 3, dimensionless")
+    if K.shape[-2:] != (3, 3):
+        raise ValueError(f"K must have shape (..., 3, 3) (dimensionless); got shape {K.shape}")
+    return K
+
+
+def _readings(B, attitudes):
+    B = _array("B", B, "shape (..., N, 3) in nT")
+    if B.shape[-1:] != (3,) or B.ndim < 2 or B.shape[-2] != attitudes.shape[-2]:
+        raise ValueError(f"B must have shape (..., N, 3) in nT with one row per attitude "
+                         f"(N = {attitudes.shape[-2]}); got shape {B.shape}")
+    return B
+
+
+def _positive(name, value, unit, allow_zero=False):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number {'≥' if allow_zero else '>'} 0 ({unit}); "
+                         f"got {value!r}") from None
+    if not (np.isfinite(v) and (v >= 0 if allow_zero else v > 0)):
+        raise ValueError(f"{name} must be a finite number {'≥' if allow_zero else '>'} 0 ({unit}); "
+                         f"got {value!r}")
+    return v
+
+
+
+def _count(name, value, low, high=None, what=""):
+    """An integer in [low, high] (high None: no upper limit), or ValueError naming the range."""
+    ok = not isinstance(value, bool) and isinstance(value, (int, np.integer))
+    if not ok or value < low or (high is not None and value > high):
+        rng = f"≥ {low}" if high is None else f"from {low} to {high:,}".replace(",", " ")
+        raise ValueError(f"{name} must be an integer {rng}{what}; got {value!r}")
+    return int(value)
+
+
+def _square4(name, value, allow_zero):
+    arr = _array(name, value, "a number, 4 diagonal entries or a 4 × 4 matrix")
+    if arr.ndim == 0:
+        arr = np.full(4, float(arr))
+    if arr.shape == (4,):
+        if (arr < 0).any() or (not allow_zero and (arr <= 0).any()):
+            raise ValueError(f"{name}'s diagonal must be {'≥' if allow_zero else '>'} 0; got {arr}")
+        return np.diag(arr)
+    if arr.shape != (4, 4) or not np.allclose(arr, arr.T):
+        raise ValueError(f"{name} must be a number, 4 diagonal entries or a symmetric 4 × 4 "
+                         f"matrix; got shape {arr.shape}")
+    return arr
+
+
+def _min_attitudes(att):
+    if att.shape[-2] < 4:
+        raise ValueError(f"need at least 4 attitudes to determine the 12 coefficients (3 equations "
+                         f"each); got {att.shape[-2]}")
