@@ -20,6 +20,7 @@ from .calibration import (
     SEED004_SIMULATION,
     SEED004_TABLE1,
     CalibrationObservability,
+    FitDiagnosis,
     GeomagneticError,
     KalmanResult,
     LsqResult,
@@ -30,6 +31,7 @@ from .calibration import (
     calibration_observability,
     convergence_iteration,
     design_rows,
+    fit_diagnosis,
     geomagnetic_error,
     geomagnetic_solution,
     heading_manoeuvre,
@@ -109,9 +111,9 @@ __all__ = [
 # imported only by `python -m core.calibration`).
 __all__ += [
     "CAL_RANK_RTOL", "COEFFICIENTS", "CONVENTIONS", "SEED004_SIMULATION", "SEED004_TABLE1",
-    "CalibrationObservability", "GeomagneticError", "KalmanResult", "LsqResult",
+    "CalibrationObservability", "FitDiagnosis", "GeomagneticError", "KalmanResult", "LsqResult",
     "attitude_matrix", "calibration_covariance", "calibration_crlb", "calibration_gamma",
-    "calibration_observability", "convergence_iteration", "design_rows", "geomagnetic_error",
+    "calibration_observability", "convergence_iteration", "design_rows", "fit_diagnosis", "geomagnetic_error",
     "geomagnetic_solution", "heading_manoeuvre", "kalman_calibrate", "level_headings",
     "lsq_calibrate", "parse_attitude_csv", "random_attitudes", "read_attitude_csv",
     "seed004_table1", "ship_field", "simulate_ship_data",

@@ -53,14 +53,18 @@ from .data import (
 )
 from .estimators import (
     DEFAULT_P0_DIAG,
+    KALMAN_STEP_BUDGET,
+    MAX_KALMAN_ITERATIONS,
     KalmanResult,
     LsqResult,
     convergence_iteration,
+    default_iterations,
     kalman_calibrate,
     lsq_calibrate,
 )
 from .geomagnetic import GeomagneticError, geomagnetic_error, geomagnetic_solution
 from .manoeuvres import heading_manoeuvre, level_headings, random_attitudes, simulate_ship_data
+from .misfit import MISFIT_RATIO, NOISY_RATIO, FitDiagnosis, fit_diagnosis
 from .model import (
     COEFFICIENT_UNITS,
     COEFFICIENTS,
@@ -77,23 +81,31 @@ from .observability import (
     calibration_crlb,
     calibration_observability,
 )
-from .validation import ANGLE_LIMIT
+from .validation import ANGLE_LIMIT, ANGLE_NOISE_MAX_RAD, BE_RANGE_NT, NOISE_RANGE_NT
 
 __all__ = [
     "ANGLE_LIMIT",
+    "ANGLE_NOISE_MAX_RAD",
+    "BE_RANGE_NT",
     "CAL_RANK_RTOL",
     "COEFFICIENTS",
     "COEFFICIENT_UNITS",
     "CONVENTIONS",
     "CSV_COLUMNS",
     "DEFAULT_P0_DIAG",
+    "KALMAN_STEP_BUDGET",
+    "MAX_KALMAN_ITERATIONS",
+    "MISFIT_RATIO",
+    "NOISY_RATIO",
     "MAX_CSV_BYTES",
     "MAX_CSV_ROWS",
     "MAX_LINE_CHARS",
     "MAX_READING_NT",
+    "NOISE_RANGE_NT",
     "SEED004_SIMULATION",
     "SEED004_TABLE1",
     "CalibrationObservability",
+    "FitDiagnosis",
     "GeomagneticError",
     "KalmanResult",
     "LsqResult",
@@ -103,7 +115,9 @@ __all__ = [
     "calibration_gamma",
     "calibration_observability",
     "convergence_iteration",
+    "default_iterations",
     "design_rows",
+    "fit_diagnosis",
     "geomagnetic_error",
     "geomagnetic_solution",
     "heading_manoeuvre",

@@ -192,17 +192,20 @@ def parse_attitude_csv(text):
 
 
 def read_attitude_csv(path):
-    """:func:`parse_attitude_csv` of a file (path); ValueError if it cannot be read or is larger
-    than :data:`MAX_CSV_BYTES` (checked before reading it)."""
+    """:func:`parse_attitude_csv` of a file (path); ValueError if it is not a readable regular
+    file or is larger than :data:`MAX_CSV_BYTES` (checked before and while reading it)."""
     p = Path(path)
     try:
-        size = p.stat().st_size
-        if p.is_file() and size > MAX_CSV_BYTES:
-            raise ValueError(f"{path} has {size:,} bytes; the largest CSV accepted is "
-                             f"{MAX_CSV_BYTES:,} bytes ({MAX_CSV_BYTES // 2 ** 20} MiB)")
-        raw = p.read_bytes()
+        if not p.is_file():
+            raise ValueError(f"cannot read {path}: " + ("it is not a regular file" if p.exists()
+                                                       else "no such file"))
+        with p.open("rb") as f:
+            raw = f.read(MAX_CSV_BYTES + 1)
     except OSError as exc:
         raise ValueError(f"cannot read {path}: {exc.strerror or exc}") from None
+    if len(raw) > MAX_CSV_BYTES:
+        raise ValueError(f"{path} has more than {MAX_CSV_BYTES:,} bytes; the largest CSV accepted "
+                         f"is {MAX_CSV_BYTES:,} bytes ({MAX_CSV_BYTES // 2 ** 20} MiB)")
     return parse_attitude_csv(raw)
 
 

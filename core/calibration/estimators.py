@@ -10,7 +10,16 @@ import numpy as np
 
 from .model import design_rows
 from .observability import CAL_RANK_RTOL
-from .validation import _array, _attitudes, _be, _min_attitudes, _positive, _readings, _square4
+from .validation import (
+    _array,
+    _attitudes,
+    _be,
+    _count,
+    _min_attitudes,
+    _noise,
+    _readings,
+    _square4,
+)
 
 
 @dataclass(frozen=True)
@@ -127,6 +136,27 @@ class KalmanResult:
 #: information take x(0) = 0"), with standard deviations of 1 for each K entry and 3000 nT for
 #: each Bp entry (the size of the values seed 004 reports) in P(0).
 DEFAULT_P0_DIAG = (1.0, 1.0, 1.0, 3000.0 ** 2)
+#: Most filter steps one call runs: ~20 µs each in this Python loop (40 s at the limit on this
+#: machine) and 128 bytes of history each (256 MB). A log of N readings up to MAX_CSV_ROWS fits
+#: in one pass; reusing the data adds no information with Q = 0 (docs/calibration.md).
+MAX_KALMAN_ITERATIONS = 2_000_000
+#: Steps the CLI's default runs at most: 50 passes over a short log (seed 004's 12 readings:
+#: 600), fewer over a long one, never less than one pass (:func:`default_iterations`).
+KALMAN_STEP_BUDGET = 60_000
+
+
+def default_iterations(n_readings):
+    """Filter steps for a log of ``n_readings``: 50 passes, cut to whole passes within
+    :data:`KALMAN_STEP_BUDGET` steps, at least one pass (cost bounded by max(N, budget)).
+
+    Examples
+    --------
+    >>> from core.calibration import default_iterations
+    >>> default_iterations(12), default_iterations(5000), default_iterations(1_000_000)
+    (600, 60000, 1000000)
+    """
+    n = _count("n_readings", n_readings, 1)
+    return n * max(1, min(50, KALMAN_STEP_BUDGET // n))
 
 
 def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0=None, Q=None,
@@ -144,8 +174,9 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
     sigma_nt : float
         Observation noise standard deviation σ (nT), > 0 (seed 004's σ²).
     iterations : int, optional
-        Number of filter steps M ≥ 1; the N readings are reused cyclically when M > N (seed
-        004's "extension" of its 12 readings). Default N (one pass).
+        Number of filter steps M, 1 ≤ M ≤ :data:`MAX_KALMAN_ITERATIONS`; the N readings are
+        reused cyclically when M > N (seed 004's "extension" of its 12 readings). Default N
+        (one pass). Cost: time and memory linear in M.
     x0 : array_like, shape (4, 3), optional
         Initial state (seed 004: zero, the default).
     P0 : array_like, shape (4,) or (4, 4), optional
@@ -174,11 +205,10 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
     att = _attitudes(attitudes)
     B = _readings(B, att)
     be = _be(be)
-    sigma2 = _positive("sigma_nt", sigma_nt, "nT") ** 2
+    sigma2 = _noise("sigma_nt", sigma_nt) ** 2
     N = att.shape[-2]
-    M = N if iterations is None else iterations
-    if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 1:
-        raise ValueError(f"iterations must be an integer ≥ 1; got {iterations!r}")
+    M = _count("iterations", N if iterations is None else iterations, 1, MAX_KALMAN_ITERATIONS,
+               " (filter steps)")
     P = _square4("P0", DEFAULT_P0_DIAG if P0 is None else P0, allow_zero=False)
     Qm = _square4("Q", 0.0 if Q is None else Q, allow_zero=True)
     x = np.zeros((4, 3)) if x0 is None else _array("x0", x0, "shape (4, 3): [K Bp]ᵀ")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import CHUNK, _attitude, _convention, design_rows
-from .validation import _K, _attitudes, _be, _positive
+from .validation import _K, _angle_noise, _attitudes, _be, _noise, _positive
 
 #: Γ (columns scaled to unit norm) has rank r when r singular values exceed CAL_RANK_RTOL times
 #: the largest. Exactly confounded coefficients (level headings) give ≤ 1e-15 (round-off); a
@@ -246,8 +246,8 @@ def calibration_covariance(attitudes, be, *, noise_nt, angle_noise_rad=0.0, K=No
     if att.ndim != 2:
         raise ValueError(f"attitudes must have shape (N, 3) for one manoeuvre; got {att.shape}")
     be = _be(be)
-    sb = _positive("noise_nt", noise_nt, "nT")
-    sa = _positive("angle_noise_rad", angle_noise_rad, "rad", allow_zero=True)
+    sb = _noise("noise_nt", noise_nt)
+    sa = _angle_noise("angle_noise_rad", angle_noise_rad)
     if estimator not in ("crlb", "lsq"):
         raise ValueError(f"estimator must be 'crlb' or 'lsq'; got {estimator!r}")
     Kmat = np.eye(3) if K is None else _K(K)

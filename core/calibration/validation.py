@@ -10,6 +10,15 @@ import numpy as np
 
 #: Largest |angle| accepted (rad). A heading of 90 means degrees were given by mistake.
 ANGLE_LIMIT = 2.0 * np.pi
+#: Accepted reading noise σ (nT): from 1 fT (below any magnetometer's) to 1 mT (the field
+#: itself is ~50 000 nT); outside, σ² under- or overflows the sums and means nothing anyway.
+NOISE_RANGE_NT = (1e-6, 1e6)
+#: Largest angle-error σ accepted (rad, ≈ 11.5°): angle errors enter linearised, which is no
+#: description of errors larger than this.
+ANGLE_NOISE_MAX_RAD = 0.2
+#: Accepted magnitude of Be (nT): the geomagnetic field is 22 000–67 000 nT; a coil-made field
+#: in a lab may be smaller or larger, but not below 1 nT nor at 1e7 nT (10 mT) and above.
+BE_RANGE_NT = (1.0, 1e7)
 
 
 def _array(name, value, what):
@@ -43,9 +52,33 @@ def _vector3(name, value, unit):
 
 def _be(value):
     be = _vector3("be", value, "nT")
-    if not np.linalg.norm(be) > 0:
+    norm = np.sqrt(np.sum(be ** 2)) if np.abs(be).max() < BE_RANGE_NT[1] else np.inf
+    if not norm > 0:
         raise ValueError("be (the geomagnetic field, nT) must not be zero")
+    if not BE_RANGE_NT[0] <= norm < BE_RANGE_NT[1]:
+        raise ValueError(f"be (the geomagnetic field north, east, down) must have a magnitude from "
+                         f"{BE_RANGE_NT[0]:g} nT to below {BE_RANGE_NT[1]:g} nT (the earth's is 22 000–67 000 "
+                         f"nT); got |be| = {norm:g} nT")
     return be
+
+
+def _noise(name, value):
+    """A reading-noise σ in :data:`NOISE_RANGE_NT` (nT)."""
+    v = _positive(name, value, "nT")
+    lo, hi = NOISE_RANGE_NT
+    if not lo <= v <= hi:
+        raise ValueError(f"{name} must be from {lo:g} to {hi:g} nT; got {value!r}")
+    return v
+
+
+def _angle_noise(name, value, unit="rad"):
+    """An angle-error σ ≥ 0, at most :data:`ANGLE_NOISE_MAX_RAD` (given in ``unit``)."""
+    v = _positive(name, value, unit, allow_zero=True)
+    hi = ANGLE_NOISE_MAX_RAD if unit == "rad" else float(np.rad2deg(ANGLE_NOISE_MAX_RAD))
+    if v > hi:
+        raise ValueError(f"{name} must be from 0 to {hi:.3g} {unit} (angle errors are linearised); "
+                         f"got {value!r}")
+    return v
 
 
 def _K(value):
