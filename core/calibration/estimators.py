@@ -136,10 +136,10 @@ class KalmanResult:
 #: information take x(0) = 0"), with standard deviations of 1 for each K entry and 3000 nT for
 #: each Bp entry (the size of the values seed 004 reports) in P(0).
 DEFAULT_P0_DIAG = (1.0, 1.0, 1.0, 3000.0 ** 2)
-#: Most filter steps one call runs: ~20 µs each in this Python loop (40 s at the limit on this
-#: machine) and 128 bytes of history each (256 MB). A log of N readings up to MAX_CSV_ROWS fits
-#: in one pass; reusing the data adds no information with Q = 0 (docs/calibration.md).
-MAX_KALMAN_ITERATIONS = 2_000_000
+#: Most filter steps one call runs: one pass over the largest log accepted (MAX_CSV_ROWS);
+#: ~20 µs each in this Python loop (~20 s at the limit on this machine) and 128 bytes of history
+#: each (128 MB). Reusing the data adds no information with Q = 0 (docs/calibration.md).
+MAX_KALMAN_ITERATIONS = 1_000_000
 #: Steps the CLI's default runs at most: 50 passes over a short log (seed 004's 12 readings:
 #: 600), fewer over a long one, never less than one pass (:func:`default_iterations`).
 KALMAN_STEP_BUDGET = 60_000
