@@ -11,6 +11,7 @@ accepted, before any computation starts.
 from __future__ import annotations
 
 import csv
+import os
 from pathlib import Path
 
 import numpy as np
@@ -193,19 +194,22 @@ def parse_attitude_csv(text):
 
 def read_attitude_csv(path):
     """:func:`parse_attitude_csv` of a file (path); ValueError if it is not a readable regular
-    file or is larger than :data:`MAX_CSV_BYTES` (checked before and while reading it)."""
+    file or is larger than :data:`MAX_CSV_BYTES` (checked before reading it)."""
     p = Path(path)
+    too_big = (f"{path} has more than {MAX_CSV_BYTES:,} bytes; the largest CSV accepted is "
+               f"{MAX_CSV_BYTES:,} bytes ({MAX_CSV_BYTES // 2 ** 20} MiB)")
     try:
         if not p.is_file():
             raise ValueError(f"cannot read {path}: " + ("it is not a regular file" if p.exists()
                                                        else "no such file"))
         with p.open("rb") as f:
-            raw = f.read(MAX_CSV_BYTES + 1)
+            if os.fstat(f.fileno()).st_size > MAX_CSV_BYTES:
+                raise ValueError(too_big)
+            raw = f.read()
     except OSError as exc:
         raise ValueError(f"cannot read {path}: {exc.strerror or exc}") from None
-    if len(raw) > MAX_CSV_BYTES:
-        raise ValueError(f"{path} has more than {MAX_CSV_BYTES:,} bytes; the largest CSV accepted "
-                         f"is {MAX_CSV_BYTES:,} bytes ({MAX_CSV_BYTES // 2 ** 20} MiB)")
+    if len(raw) > MAX_CSV_BYTES:  # grew since fstat
+        raise ValueError(too_big)
     return parse_attitude_csv(raw)
 
 
