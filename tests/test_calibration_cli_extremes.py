@@ -154,3 +154,6 @@ def test_text_output_prints_the_diagnosis(files):
     assert "warning: The model does not fit these readings" in out
     code, out, err = _run([TABLE1, "--be", BE])
     assert code == 0 and "warning: The residual RMS is 400 nT" in out and "σ̂ = 489 nT" in out
+    assert "hint: rerun with --convention seed004_std_pitch" in out
+    code, out, err = _run([TABLE1, "--be", BE, "--convention", "seed004_std_pitch"])
+    assert code == 0 and "hint: rerun with --sigma-nt 372" in out

@@ -273,8 +273,9 @@ def test_table1_bound_is_optimistic_and_sigma_hat_offered():
     assert d.sigma_hat_nt == pytest.approx(d.residual_rms_nt * np.sqrt(36 / 24), rel=1e-12)
     assert 485 < d.sigma_hat_nt < 495 and d.ratio == pytest.approx(d.sigma_hat_nt / 100)
     (msg,) = d.messages
-    assert "optimistic" in msg and "σ̂ = 489 nT" in msg and "--sigma-nt 489" in msg
-    assert "'seed004_std_pitch' attitude convention fits better (303 nT" in msg
+    assert "optimistic" in msg and "σ̂ = 489 nT" in msg and "--" not in msg  # no CLI words
+    assert "'seed004_std_pitch' attitude convention fits better (303 nT)" in msg
+    assert d.suggested_convention == "seed004_std_pitch" and d.suggested_be is None
     # with σ̂ stated, nothing is left to say
     assert core.fit_diagnosis(B, att, core.SEED004_TABLE1["be"], noise_nt=d.sigma_hat_nt).level == "ok"
 
@@ -290,7 +291,7 @@ def test_random_readings_are_called_a_misfit():
 
 
 @pytest.mark.parametrize("convention, be_given, named", [
-    ("zyx", BE_SIM, "'zyx' attitude convention (--convention zyx)"),
+    ("zyx", BE_SIM, "with the 'zyx' attitude convention the model fits"),
     ("seed004_std_pitch", BE_SIM, "'seed004_std_pitch' attitude convention"),
     ("seed004", BE_SIM * [1, 1, -1], "Be's down component negated"),
     ("seed004", BE_SIM[[1, 0, 2]], "Be's north and east swapped"),
@@ -303,6 +304,11 @@ def test_misfit_names_the_convention_or_be_that_fits(convention, be_given, named
                            angle_noise_rad=np.deg2rad(0.05) / np.sqrt(3))
     assert d.level == "misfit", d
     assert named in d.messages[0] and "the model fits" in d.messages[0]
+    if convention != "seed004":
+        assert d.suggested_convention == convention and d.suggested_be is None
+    else:
+        assert d.suggested_convention is None
+        np.testing.assert_array_equal(d.suggested_be, BE_SIM)
 
 
 def test_consistent_log_has_nothing_to_say():

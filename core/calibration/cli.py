@@ -94,8 +94,23 @@ def _cli_result(B, att, be, *, sigma_nt, angle_sigma_deg, iterations, convention
                       "ratio": _finite_or_none(diag.ratio), "dof": diag.dof,
                       "unbounded": list(diag.unbounded),
                       "convention_rms_nT": diag.convention_rms_nt,
-                      "best_convention": diag.best_convention},
+                      "best_convention": diag.best_convention,
+                      "suggested_convention": diag.suggested_convention,
+                      "suggested_be_nT": None if diag.suggested_be is None else list(diag.suggested_be),
+                      "hint": _hint(diag, sigma_nt)},
     }
+
+
+def _hint(diag, sigma_nt):
+    """The options to rerun with, from the diagnosis (None if none)."""
+    opts = []
+    if diag.suggested_convention:
+        opts.append(f"--convention {diag.suggested_convention}")
+    if diag.suggested_be:
+        opts.append("--be " + ",".join(f"{v:g}" for v in diag.suggested_be))
+    if not opts and diag.level == "warning" and np.isfinite(diag.ratio) and diag.ratio > diag.threshold:
+        opts.append(f"--sigma-nt {diag.sigma_hat_nt:.3g}")
+    return " ".join(opts) or None
 
 
 def _print_text(r, out):
@@ -126,6 +141,8 @@ def _print_text(r, out):
     d = r["diagnosis"]
     for m in d["messages"]:
         w(f"{'warning' if d['level'] in ('misfit', 'warning') else 'note'}: {m}")
+    if d["hint"]:
+        w(f"hint: rerun with {d['hint']}")
 
 
 def _parser():

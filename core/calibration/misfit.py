@@ -63,6 +63,12 @@ class FitDiagnosis:
         when the fit is poor; otherwise only the one used).
     best_convention : str
         The convention with the smallest residual.
+    suggested_convention : str or None
+        Another convention worth using: the one with which the model fits (a misfit), or one
+        that fits clearly better (a poor fit); None otherwise.
+    suggested_be : tuple of float or None
+        Be (nT) with a common slip undone (down negated, north and east swapped) when that
+        makes the model fit; None otherwise.
     """
 
     level: str
@@ -77,6 +83,8 @@ class FitDiagnosis:
     unbounded: tuple
     convention_rms_nt: dict
     best_convention: str
+    suggested_convention: object = None
+    suggested_be: object = None
 
 
 def _noise_threshold(dof):
@@ -164,6 +172,7 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
     ratio = sigma_hat / sigma if dof > 0 else float("nan")
     threshold = _noise_threshold(dof) if dof > 0 else float("nan")
     conv_rms = {convention: rms}
+    suggest_conv = suggest_be = None
     unbounded = tuple(c for c, ok in zip(COEFFICIENTS, obs.observable) if not ok)
     msgs = {"misfit": [], "warning": [], "note": []}
 
@@ -197,7 +206,9 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
                         lsq_calibrate(B, att, alt, convention=name).residual_rms_nt)
             (c_fit, be_fit), r_fit = min(tried.items(), key=lambda kv: kv[1])
             if fits(r_fit) and (c_fit, be_fit) != (convention, ""):
-                change = [f"the '{c_fit}' attitude convention (--convention {c_fit})"] * (c_fit != convention)
+                suggest_conv = c_fit if c_fit != convention else None
+                suggest_be = tuple(float(v) for v in variants[be_fit]) if be_fit else None
+                change = [f"the '{c_fit}' attitude convention"] * (c_fit != convention)
                 change += [be_fit] * bool(be_fit)
                 checks = [unit, "the attitude convention and Be: with " + " and ".join(change)
                           + f" the model fits (residual RMS {_fmt(r_fit)} nT)"]
@@ -211,12 +222,12 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
         else:
             better = ""
             if best != convention and conv_rms[best] < 0.9 * rms:
-                better = (f" The '{best}' attitude convention fits better ({_fmt(conv_rms[best])} nT;"
-                          f" --convention {best}).")
+                better = (f" The '{best}' attitude convention fits better ({_fmt(conv_rms[best])} nT).")
+                suggest_conv = best
             msgs["warning"].append(
                 f"{said[0].upper()}{said[1:]}: either the readings are noisier than stated, and then the CRLB for σ is "
                 f"optimistic by about {ratio:.2g}×: with σ estimated from the residuals, "
-                f"σ̂ = {_fmt(sigma_hat)} nT (--sigma-nt {sigma_hat:.0f}), the bounds are {ratio:.2g}× "
+                f"σ̂ = {_fmt(sigma_hat)} nT, the bounds are {ratio:.2g}× "
                 "larger; or the model does not fully describe them (attitude convention, Be, "
                 f"unmodelled interference).{better}")
     elif ratio < 1.0 / threshold:
@@ -235,4 +246,5 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
     level = next((k for k in ("misfit", "warning", "note") if msgs[k]), "ok")
     messages = tuple(m for k in ("misfit", "warning", "note") for m in msgs[k])
     return FitDiagnosis(level, messages, rms, sigma, sigma_hat, ratio, threshold, dof, rank,
-                        unbounded, conv_rms, min(conv_rms, key=conv_rms.get))
+                        unbounded, conv_rms, min(conv_rms, key=conv_rms.get), suggest_conv,
+                        suggest_be)
