@@ -82,7 +82,8 @@ def compute(values, upload=None):
     dict
         ``error`` (str) if the inputs cannot be used; else ``attitudes`` (N, 3) rad, ``be`` (nT),
         ``truth`` (K, Bp) or None, ``obs``, ``crlb`` (12,), ``lsq``, ``kalman``, ``conv`` (iteration),
-        ``be_err_kal`` / ``be_err_lsq`` ((N, 3) nT or None), ``be_rms`` (dict), ``note`` (str).
+        ``be_err_kal`` / ``be_err_lsq`` ((N, 3) nT or None), ``be_rms`` (dict), ``note`` (str),
+        ``diagnosis`` (:class:`core.calibration.FitDiagnosis`, when N ≥ 4).
     """
     v = values
     be = np.array([v["cal_be_n"], v["cal_be_e"], v["cal_be_d"]], dtype=float)
@@ -129,7 +130,8 @@ def compute(values, upload=None):
         kal = cal.kalman_calibrate(B, rec, be, sigma_nt=sigma, iterations=int(v["cal_iterations"]),
                                    P0=(1.0, 1.0, 1.0, float(v["cal_p0_bp_nt"]) ** 2))
         out.update(crlb=crlb, lsq=lsq, kalman=kal,
-                   conv=int(cal.convergence_iteration(kal.coefficients, crlb)))
+                   conv=int(cal.convergence_iteration(kal.coefficients, crlb)),
+                   diagnosis=cal.fit_diagnosis(B, rec, be, noise_nt=sigma, angle_noise_rad=sig_a))
         rms = {}
         for key, (K, Bp) in (("kal", (kal.K, kal.Bp)), ("lsq", (lsq.K, lsq.Bp))):
             try:
@@ -170,6 +172,10 @@ def summary(res):
         if 3 * res["attitudes"].shape[0] == 12:
             lines.append("- 12 readings for 12 unknowns: least squares fits them exactly, so its "
                          "geomagnetic solution has no error to show; the CRLB is the honest measure.")
+        # a misfit, an optimistic bound or unbounded coefficients, in words (core's sentences)
+        lines += [f"- **{dict(misfit='Misfit', warning='Check', note='Note')[d.level]}:** "
+                  f"{html.escape(m, quote=False)}"
+                  for d in [res["diagnosis"]] for m in d.messages]
         r = res["be_rms"]
         if r:
             lines.append("- Geomagnetic solution Be = (KA)⁻¹(B − Bp), RMS error per component: "
@@ -312,7 +318,8 @@ def calibration_tab(scenario):
     controls = pn.Column(
         pn.Param(scenario, parameters=list(FIELDS), widgets=widgets, show_name=False,
                  sizing_mode="stretch_width"),
-        pn.pane.Markdown("**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad)"), upload,
+        pn.pane.Markdown(f"**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad; at most "
+                         f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB)"), upload,
         width=320)
     results = pn.Column(
         pn.pane.HTML(pn.bind(_error_html, res), sizing_mode="stretch_width", css_classes=["w-cal-error"]),
