@@ -9,6 +9,7 @@ N = 20 000 to N = 80 000, and a 50 000-reading CLI run completes.
 
 from __future__ import annotations
 
+import ast
 import json
 import subprocess
 import sys
@@ -337,3 +338,24 @@ def test_exactly_determined_log_says_the_residual_cannot_tell():
     d = core.fit_diagnosis(B, att, BE_SIM, noise_nt=1)
     assert d.dof == 0 and d.level == "note" and "cannot tell" in d.messages[0]
     assert np.isnan(d.ratio) and np.isnan(d.sigma_hat_nt)
+
+
+# --------------------------------------------------------------------------- package layout
+def test_cli_module_is_the_only_one_with_argparse_and_nothing_imports_it():
+    def imported(path):
+        names = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names |= {a.name.split(".")[0] for a in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names.add(node.module.split(".")[0])
+        return names
+
+    pkg = ROOT / "core" / "calibration"
+    users = sorted(p.name for p in pkg.glob("*.py")
+                   if imported(p) & {"argparse", "matplotlib", "tqdm"})
+    assert users == ["cli.py"]
+    p = subprocess.run([sys.executable, "-c", "import sys, core, app.calibration; "
+                        "print('core.calibration.cli' in sys.modules)"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and p.stdout.strip() == "False", p.stderr
