@@ -67,6 +67,10 @@ def test_calibration_tab_in_chromium(tmp_path):
         rms = res["be_rms"]["kal"].rms_nt
         assert np.isfinite(rms)
         page.wait_for_selector(f"text=Kalman {rms:.1f} nT", timeout=SLOW)
+        # the fit said in words (core.fit_diagnosis): Table 1's residual is ~4.9 × σ = 100 nT
+        assert res["diagnosis"].level == "warning"
+        page.wait_for_selector("text=the CRLB for σ is optimistic", timeout=SLOW)
+        page.wait_for_selector("text=σ̂ = 489 nT", timeout=SLOW)
         assert page.locator(".w-cal-error").inner_text().strip() == ""
     # no exception from the tab's code on the server (a websocket closed by the browser's exit
     # may log Tornado's own WebSocketClosedError: not ours)
