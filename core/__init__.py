@@ -63,6 +63,7 @@ from .observability import (
 )
 from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
 from .sea import Sea
+from .sensors import KINDS, MAGNETIC_NOISE, Sensor
 from .validation import STATE_NAMES
 
 __all__ = [
@@ -77,6 +78,8 @@ __all__ = [
     "gradient_tensor", "magnetic_field", "magnetic_jacobian", "tensor_invariants",
     # the layered sea (core.sea)
     "Sea",
+    # the measurement model (core.sensors)
+    "KINDS", "MAGNETIC_NOISE", "Sensor",
     # sensor-layout design (core.design)
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
