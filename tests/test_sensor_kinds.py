@@ -125,3 +125,43 @@ def test_magnetic_maps_and_crlb_maps():
     x = np.array([u[3], v[5], 15.0, 1.0, 1.0, 1e3, -2e3, 5e2])
     point = core.fisher_measures(x, STATION, sensor="BG", steps=2).position_std
     np.testing.assert_allclose(m_bg.value[5, 3], point, rtol=1e-12)
+
+
+def magnetic_track(steps=40, T=1.0):
+    """A target passing 15 m from the origin at 2 m/s, moment (A·m²) constant."""
+    t = np.arange(steps) * T
+    x = np.column_stack([-40 + 2.0 * t, np.full(steps, 15.0), np.full(steps, 10.0),
+                         np.full(steps, 2.0), np.zeros(steps),
+                         np.tile([2e3, -1e3, 3e3], (steps, 1))])
+    return x
+
+
+def test_pcrlb_takes_the_magnetic_kinds():
+    track = magnetic_track()
+    det = dict(sigma_a=0.0, alpha=0.0)  # deterministic: the information is Γᵀ R⁻¹ Γ
+    b = core.pcrlb(track, core.SensorModel([[0.0, 0.0, 0.0]], noise=0.01, kind="B"), **det)
+    bg = core.pcrlb(track, core.SensorModel([[0.0, 0.0, 0.0]], noise=(0.01, 0.01), kind="BG"), **det)
+    assert not b.observable.any()  # one magnetometer: the scale symmetry, whatever the track
+    assert bg.observable[1:].all() and bg.cov.shape == (40, 8, 8)
+    # deterministic PCRLB at step k = the Fisher bound of Γ over the steps 0 … k, seen from step 0
+    k = 5
+    f = core.fisher_information(track[0], [[0.0, 0.0, 0.0]], steps=k + 1,
+                                sensor=core.Sensor("BG", noise=(0.01, 0.01)))
+    F, _ = core.dwna_model(1.0, 0.0, 0.0, n_states=8)
+    Fk = np.linalg.matrix_power(F, k)
+    cov0 = np.linalg.inv(f)
+    np.testing.assert_allclose(bg.cov[k], Fk @ cov0 @ Fk.T, rtol=1e-6,
+                               atol=1e-9 * np.abs(bg.cov[k]).max())
+
+
+def test_sensor_model_carries_the_kind():
+    m = core.SensorModel([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], noise=(0.1, 0.02), kind="BG", baseline=0.5)
+    assert m.n_meas == 16 and m.n_states == 8
+    np.testing.assert_allclose(np.diag(m.R)[:8], [0.1**2] * 3 + [0.02**2] * 5, rtol=1e-15)
+    x = magnetic_track(2)
+    h, J = m.h_and_jacobian(x)
+    h_ref, J_ref = core.magnetic_jacobian(x, m.stations, sensor="BG", baseline=0.5)
+    np.testing.assert_allclose(h, h_ref.reshape(2, -1), rtol=1e-12, atol=1e-12 * np.abs(h_ref).max())
+    np.testing.assert_array_equal(J, J_ref.reshape(2, 16, 8))
+    with pytest.raises(ValueError, match="axes=2"):
+        core.SensorModel([[0.0, 0.0, 0.0]], axes=2, kind="B", noise=0.1)
