@@ -4,6 +4,7 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 :func:`observable_rank`; the rest builds on them. No web stack is imported here.
 """
 
+from . import kernel_cache  # noqa: F401  (first: it refreshes the kernels' cache on import)
 from .bank import (
     BANK_BEARINGS,
     BANK_STRENGTHS,
