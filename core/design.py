@@ -461,13 +461,38 @@ def _check_criterion(criterion, threshold):
     return validation.positive("threshold", threshold, "m")
 
 
-def _region_states(region, velocity, moments):
+def _region_states(region, velocity, moments, sensor=None):
     if not isinstance(region, Plane):
         raise ValueError(
             "region must be a core.Plane (an x–y rectangle at a target depth, or an x–z band of "
             f"depths); got {type(region).__name__}"
         )
-    return _plane_states(region, velocity, moments)
+    return _plane_states(region, velocity, moments, sensor)
+
+
+def _magnetic_criterion(states, stations, criterion, threshold, steps, T, known, sensor):
+    """:func:`_criterion` of a magnetic kind: the Fisher measures of the whitened Γ."""
+    near = validation.ON_STATION
+    if sensor.kind in ("G", "BG"):
+        near = max(near, magnetic.baseline_value(sensor.baseline))
+    states = states[np.min(validation.station_distances(states, stations), axis=1) >= near]
+    if states.shape[0] == 0:
+        raise ValueError("every point of the region lies on a station; nothing to evaluate")
+    m, _, _ = magnetic_fisher(states, stations, sensor, T, steps, known)
+    frac = float(np.mean(m.observable))
+    if criterion == "area_crlb":
+        return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
+    d_opt = m.d_optimal.copy()
+    bad = np.flatnonzero(~m.observable)
+    if bad.size:  # the D-optimal floor of the module notes, on the whitened Γ (noise 1)
+        g = sensors.magnetic_gamma(states[bad], stations, sensor, T=T, steps=steps, known=known,
+                                   whiten=True)
+        with np.errstate(divide="ignore"):
+            log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
+        n = g.shape[-1]
+        d_opt[bad] = np.log10(RANK_RTOL * np.sqrt(np.e * n)) + log_norms
+    value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
+    return CriterionResult(float(value), frac)
 
 
 def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, sea, known):
@@ -494,8 +519,9 @@ def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, m
 
 
 def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 20.0),
-                     criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
-                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=()):
+                     criterion="mean_dopt", threshold=10.0, noise=None,
+                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=(),
+                     sensor=None):
     """How well a station layout covers a surveillance region.
 
     Parameters
@@ -507,8 +533,8 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
         depths at y = ``fixed``.
     velocity : (vx, vy)
         Target velocity (m/s), the same at every region point.
-    moments : (Ph, Pv)
-        Dipole moments (A·m).
+    moments : (Ph, Pv) or (mx, my, mz)
+        Dipole moments: (Ph, Pv) A·m electric, the moment vector A·m² for magnetic kinds.
     criterion : {"mean_dopt", "worst_dopt", "area_crlb"}
         ``"mean_dopt"``: mean D-optimal measure over the region's points; ``"worst_dopt"``: its
         minimum; ``"area_crlb"``: fraction of the points whose CRLB position error
@@ -516,7 +542,7 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
         D-optimal floor (module notes) or as failing the threshold.
     threshold : float
         Position error threshold (m) for ``"area_crlb"``, > 0.
-    noise, steps, T, sigma, model, sea, known
+    noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`.
 
     Returns
@@ -534,9 +560,15 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
     (0.0, 1.0, True)
     """
     threshold = _check_criterion(criterion, threshold)
-    noise = validation.positive("noise", noise, "V/m")
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        return _magnetic_criterion(_region_states(region, velocity, moments, sensor),
+                                   validation.stations(stations), criterion, threshold, steps,
+                                   validation.positive("T", T, "s"), known, sensor)
+    noise = sensor.noise_vector[0]
     return _criterion(_region_states(region, velocity, moments), validation.stations(stations),
-                      criterion, threshold, noise, steps, T, sigma, model, sea, known)
+                      criterion, threshold, noise, steps, T, sensor.sigma, sensor.model,
+                      sensor.sea, known)
 
 
 def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,

@@ -165,3 +165,15 @@ def test_sensor_model_carries_the_kind():
     np.testing.assert_array_equal(J, J_ref.reshape(2, 16, 8))
     with pytest.raises(ValueError, match="axes=2"):
         core.SensorModel([[0.0, 0.0, 0.0]], axes=2, kind="B", noise=0.1)
+
+
+def test_layout_criterion_takes_the_sensor():
+    region = core.Plane("xy", (-40, 40), (-40, 40), 12.0, 7)
+    kw = dict(velocity=(1.0, 1.0), moments=(1e3, -2e3, 5e2), steps=3)
+    one_b = core.layout_criterion([[0.0, 0.0, 0.0]], region, sensor="B", **kw)
+    two_b = core.layout_criterion([[0.0, 0.0, 0.0], [20.0, 0.0, 0.0]], region, sensor="B", **kw)
+    assert one_b.observable_fraction == 0.0 and two_b.observable_fraction == 1.0
+    assert two_b.value > one_b.value
+    bg = core.layout_criterion([[0.0, 0.0, 0.0]], region, sensor="BG", criterion="area_crlb",
+                               threshold=1.0, **kw)
+    assert bg.observable_fraction == 1.0
