@@ -1,26 +1,25 @@
 """Keep numba's on-disk kernel cache in step with the kernels' sources.
 
-Numba invalidates a cached kernel when *its own* source file changes (its documented rule: the
-index is keyed by the file's modification time and size). Our cached kernels inline functions
-and constants from other files (:mod:`core.kernels` inlines :mod:`core.fields` and
-:mod:`core.sea`), so an edit to the physics in one file left kernels cached from another file
-returning the old result until the cache files were deleted.
+numba reuses a cached kernel while *its own* source file is unchanged (numba 0.68 keys the
+index by that file's contents; older versions by its modification time and size). Our cached
+kernels inline functions and constants from other files (:mod:`core.kernels` inlines
+:mod:`core.fields` and :mod:`core.sea`), so an edit to the physics in one file left kernels
+cached from another file returning the old result until the cache files were deleted by hand.
 
 :func:`refresh` keys the whole cache by the sources instead: it hashes every file that holds
-compiled kernels (:data:`KERNEL_SOURCES`, plus numba's version) and, when the hash differs
-from the one recorded at the last refresh, touches each of those files (new modification
-time), which numba's own rule then reads as "changed": every cached kernel recompiles on its
-next call and rewrites its cache entry. Nothing is deleted. Importing this module calls it,
-and ``core/__init__.py`` imports it first, before any kernel can run.
+compiled kernels (:data:`KERNEL_SOURCES`, plus numba's version) and, when the hash differs from
+the one recorded at the last refresh, removes the cache files (``*.nbi``, ``*.nbc``) of those
+modules, so that every kernel recompiles on its next call and caches itself again. Importing
+this module calls it, and ``core/__init__.py`` imports it first, before any kernel is even
+defined (numba reads a kernel's cache index when it is decorated).
 
-Where the sources cannot be touched (a read-only install, e.g. the container image, whose
-sources never change after its build compiled the cache) it does nothing.
+Where the cache cannot be written (a read-only install, e.g. the container image, whose sources
+never change after its build compiled the cache) it does nothing.
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
 from pathlib import Path
 
 import numba
@@ -53,23 +52,38 @@ def stamp_path(root=_HERE):
     return base / STAMP
 
 
+def cache_files(root=_HERE):
+    """numba's cache files of the :data:`KERNEL_SOURCES` modules: in ``__pycache__`` beside the
+    sources, and (when NUMBA_CACHE_DIR is set) anywhere under that directory."""
+    stems = [Path(name).stem for name in KERNEL_SOURCES]
+    dirs = [Path(root) / "__pycache__"]
+    if numba.config.CACHE_DIR:
+        dirs.append(Path(numba.config.CACHE_DIR))
+    found = []
+    for d in dirs:
+        if d.is_dir():
+            for stem in stems:
+                found += [p for p in d.rglob(f"{stem}.*") if p.suffix in (".nbi", ".nbc")]
+    return found
+
+
 def refresh(root=_HERE):
-    """Invalidate numba's cache of every kernel if any kernel source changed since the last
-    call (see module notes). Returns True if it invalidated."""
+    """Remove numba's cache of every kernel if any kernel source changed since the last call
+    (see module notes). Returns True if it did."""
     digest = sources_hash(root)
     stamp = stamp_path(root)
     try:
         if stamp.read_text() == digest:
             return False
     except OSError:
-        pass  # no stamp yet (a fresh checkout): treat as changed
+        pass  # no stamp yet (a fresh checkout): any cache there is of unknown sources
     try:
-        for name in KERNEL_SOURCES:
-            os.utime(Path(root) / name)  # numba's rule: a new mtime invalidates its cache
+        for path in cache_files(root):
+            path.unlink(missing_ok=True)
         stamp.parent.mkdir(parents=True, exist_ok=True)
         stamp.write_text(digest)
     except OSError:
-        return False  # read-only sources: they cannot have changed since the cache was built
+        return False  # a read-only cache: its sources cannot have changed since it was built
     return True
 
 
