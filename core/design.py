@@ -38,7 +38,7 @@ import numpy as np
 from scipy import optimize
 
 from . import magnetic, sensors, validation
-from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures, magnetic_fisher
+from .fisher import DEFAULT_STEPS, fisher_measures, magnetic_fisher
 from .grids import Plane
 from .observability import RANK_RTOL, gamma
 
@@ -508,8 +508,12 @@ def _magnetic_criterion(states, stations, criterion, threshold, steps, T, known,
     return CriterionResult(float(value), frac)
 
 
-def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, sea, known):
-    """Criterion over (P, 7) region states; on-station points are left out."""
+def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, sea, known,
+               sensor=None):
+    """Criterion over (P, 7) region states; on-station points are left out. A magnetic
+    ``sensor`` (its (P, 8) states) goes to :func:`_magnetic_criterion`."""
+    if sensor is not None and sensor.magnetic:
+        return _magnetic_criterion(states, stations, criterion, threshold, steps, T, known, sensor)
     states = states[_off_station(states, stations)]
     if states.shape[0] == 0:
         raise ValueError("every point of the region lies on a station; nothing to evaluate")
@@ -584,20 +588,29 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
                       sensor.sea, known)
 
 
+def _sensor_args(sensor, sigma, model, sea, noise):
+    """The optimisers' measurement model: (noise, sigma, model, sea, magnetic Sensor or None)
+    from ``sensor=`` or the old keywords (electric: the keywords of :func:`_criterion`)."""
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        return None, 4.0, "exact", None, sensor
+    return sensor.noise_vector[0], sensor.sigma, sensor.model, sensor.sea, None
+
+
 def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                             threshold, noise, steps, T, sigma, model, sea, known):
+                             threshold, noise, steps, T, sigma, model, sea, known, sensor=None):
     """Validate once; return f(d) -> criterion value for a scaled layout."""
     if kind not in ("line", "triangle", "square"):
         raise ValueError(f"a spaced layout kind must be 'line', 'triangle' or 'square'; got {kind!r}")
     n_stations = _n_stations(n_stations)
     threshold = _check_criterion(criterion, threshold)
-    noise = validation.positive("noise", noise, "V/m")
-    states = _region_states(region, velocity, moments)
+    noise, sigma, model, sea, mag = _sensor_args(sensor, sigma, model, sea, noise)
+    states = _region_states(region, velocity, moments, mag)
     station_layout(kind, n_stations, d=1.0, h=h)  # validates h
 
     def value(d):
         return _criterion(states, station_layout(kind, n_stations, d=d, h=h), criterion,
-                          threshold, noise, steps, T, sigma, model, sea, known).value
+                          threshold, noise, steps, T, sigma, model, sea, known, mag).value
     return value
 
 
@@ -619,8 +632,8 @@ def _map(f, values, client):
 
 def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
                   moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                  noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
-                  sea=None, known=(), client=None):
+                  noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                  sea=None, known=(), client=None, sensor=None):
     """Criterion against station spacing d (default: the paper's dual, a 2-station line).
 
     Parameters
@@ -635,7 +648,7 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
         N, 1 … :data:`MAX_STATIONS`.
     h : float
         Station depth (m).
-    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known
+    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`layout_criterion`.
     client : distributed.Client, optional
         Evaluate the K spacings as tasks on this Dask cluster (see :mod:`core.dask_backend`);
@@ -655,7 +668,7 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
     """
     d = _d_values(d_values)
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                                 threshold, noise, steps, T, sigma, model, sea, known)
+                                 threshold, noise, steps, T, sigma, model, sea, known, sensor)
     return _map(f, d, client)
 
 
@@ -687,9 +700,9 @@ class SpacingResult:
 
 def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
                  kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
-                 criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
+                 criterion="mean_dopt", threshold=10.0, noise=None,
                  steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=(),
-                 client=None):
+                 client=None, sensor=None):
     """Spacing d that maximises a region criterion.
 
     Parameters
@@ -748,7 +761,7 @@ model, sea, known
             raise ValueError(f"d_values must hold at least 3 distinct spacings; got {d_values!r}")
     xatol = validation.positive("xatol", xatol, "m")
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                                 threshold, noise, steps, T, sigma, model, sea, known)
+                                 threshold, noise, steps, T, sigma, model, sea, known, sensor)
     curve = _map(f, d, client)
     i = int(np.argmax(curve))
     lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
@@ -843,9 +856,9 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None)
 
 def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                    noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                    noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
                     sea=None, known=(), d_range=None, n_curve=25, x0=None, bounds=None,
-                    maxfev=400, client=None):
+                    maxfev=400, client=None, sensor=None):
     """Optimise an N-station layout for a region criterion.
 
     Parameters
@@ -861,7 +874,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         N, 1 … :data:`MAX_STATIONS`.
     region : core.Plane
         Surveillance region.
-    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known
+    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`spacing_curve`.
     d_range : (float, float), optional
         (min, max) spacing (m) of the scaled kinds, 0 < min < max, and of the default start of
@@ -898,13 +911,15 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     """
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
+    the_sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    noise, sigma, model, sea, mag = _sensor_args(the_sensor, 4.0, "exact", None, None)
     common = {"h": h, "velocity": velocity, "moments": moments, "criterion": criterion,
-              "threshold": threshold, "noise": noise, "steps": steps, "T": T, "sigma": sigma,
-              "model": model, "sea": sea, "known": known}
+              "threshold": threshold, "steps": steps, "T": T, "known": known,
+              "sensor": the_sensor}
     n = _n_stations(n_stations)
     if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
         raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
-    states = _region_states(region, velocity, moments)
+    states = _region_states(region, velocity, moments, mag)
     (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
         _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
     if not (xlo < xhi and ylo < yhi):
@@ -918,12 +933,11 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         if not lo < hi:
             raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
         threshold = _check_criterion(criterion, threshold)
-        noise = validation.positive("noise", noise, "V/m")
         h = station_layout("line", 1, h=h)[0, 2]  # validates h
 
         def objective(st):
             return _criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
-                              sea, known).value
+                              sea, known, mag).value
 
         d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective,
                                                     client)
@@ -940,13 +954,12 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                              f"got shape {xy.shape}")
     xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
     threshold = _check_criterion(criterion, threshold)
-    noise = validation.positive("noise", noise, "V/m")
     station_layout("line", 1, h=h)  # validates h
 
     def objective(p):
         st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
         return -_criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
-                           sea, known).value
+                           sea, known, mag).value
 
     res = optimize.minimize(objective, xy.ravel(), method="Powell",
                             bounds=[(xlo, xhi), (ylo, yhi)] * n,

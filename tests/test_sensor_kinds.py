@@ -191,3 +191,20 @@ def test_magnetic_maps_mask_targets_that_reach_a_station():
         assert np.isnan(m.value[i, j]) and not m.observable[i, j] and np.isnan(e.position[i, j])
     assert np.isfinite(m.value[0, 4])
     np.testing.assert_allclose(e.position, m.value, rtol=1e-10)
+
+
+def test_layout_optimisers_take_the_sensor():
+    """The spacing of two magnetometers: one is unobservable (a D-optimal floor), so the curve
+    over d rises from the tiny spacings; the optimisers run on the magnetic kind."""
+    region = core.Plane("xy", (-30, 30), (-30, 30), 12.0, 5)
+    kw = dict(velocity=(1.0, 1.0), moments=(1e3, -2e3, 5e2), h=0.0, sensor="B")
+    curve = core.spacing_curve([0.5, 5.0, 20.0], region, **kw)
+    assert np.all(np.isfinite(curve)) and curve[1] > curve[0]
+    best = core.best_spacing(region, d_range=(1.0, 40.0), n_curve=5, **kw)
+    assert 1.0 <= best.d <= 40.0
+    lay = core.optimise_layout("line", 2, region, d_range=(1.0, 40.0), n_curve=5, **kw)
+    assert lay.stations.shape == (2, 3) and np.isfinite(lay.value)
+    free = core.optimise_layout("free", 2, region, x0=[[-5.0, 0.0], [5.0, 0.0]], maxfev=30, **kw)
+    assert free.value >= core.layout_criterion(
+        [[-5.0, 0.0, 0.0], [5.0, 0.0, 0.0]], region, velocity=(1.0, 1.0),
+        moments=(1e3, -2e3, 5e2), sensor="B").value - 1e-9
