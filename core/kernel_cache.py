@@ -24,8 +24,9 @@ from pathlib import Path
 
 import numba
 
-#: Files of core/ that define or inline cached (``cache=True``) numba kernels. A module that
-#: gains a cached kernel must be listed here (tests/test_kernel_cache.py checks the list).
+#: Files of core/ (paths relative to it) that define or inline cached (``cache=True``) numba
+#: kernels. A module that gains a cached kernel must be listed here (tests/test_kernel_cache.py
+#: checks the list against every file under core/, subpackages included).
 KERNEL_SOURCES = ("fields.py", "sea.py", "kernels.py", "filters.py", "pcrlb.py",
                   "magnetic_kernels.py")
 #: Name of the file that records the sources' hash at the last refresh.
@@ -56,7 +57,7 @@ def cache_files(root=_HERE):
     """numba's cache files of the :data:`KERNEL_SOURCES` modules: in ``__pycache__`` beside the
     sources, and (when NUMBA_CACHE_DIR is set) anywhere under that directory."""
     stems = [Path(name).stem for name in KERNEL_SOURCES]
-    dirs = [Path(root) / "__pycache__"]
+    dirs = sorted({(Path(root) / name).parent / "__pycache__" for name in KERNEL_SOURCES})
     if numba.config.CACHE_DIR:
         dirs.append(Path(numba.config.CACHE_DIR))
     found = []

@@ -30,7 +30,7 @@ PROBE = (
 
 
 def test_every_cached_kernel_source_is_listed():
-    cached = {p.name for p in CORE.glob("*.py")
+    cached = {p.relative_to(CORE).as_posix() for p in CORE.rglob("*.py")
               if re.search(r"cache=True|\*\*JIT\)", p.read_text())} - {"kernel_cache.py"}
     assert cached == set(kernel_cache.KERNEL_SOURCES)
 
