@@ -4,6 +4,7 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 :func:`observable_rank`; the rest builds on them. No web stack is imported here.
 """
 
+from . import kernel_cache  # noqa: F401  (first: it refreshes the kernels' cache on import)
 from .bank import (
     BANK_BEARINGS,
     BANK_STRENGTHS,
@@ -72,6 +73,16 @@ from .fisher import (
     fisher_measures,
 )
 from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
+from .magnetic import (
+    MAGNETIC_STATE_NAMES,
+    MAGNETIC_STATE_UNITS,
+    TensorInvariants,
+    euler_locate,
+    gradient_tensor,
+    magnetic_field,
+    magnetic_jacobian,
+    tensor_invariants,
+)
 from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
 from .measurement import AXES, SensorModel
 from .motion import dwna_model, sample_tracks, straight_track
@@ -85,6 +96,7 @@ from .observability import (
 )
 from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
 from .sea import Sea
+from .sensors import KINDS, MAGNETIC_NOISE, Sensor
 from .validation import STATE_NAMES
 
 __all__ = [
@@ -94,8 +106,13 @@ __all__ = [
     "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
     "log10_ratio", "observability_index", "observable_rank", "single_station",
     "unobservable_direction", "velocity_from_heading",
+    # magnetic sensing (core.magnetic, spec §11)
+    "MAGNETIC_STATE_NAMES", "MAGNETIC_STATE_UNITS", "TensorInvariants", "euler_locate",
+    "gradient_tensor", "magnetic_field", "magnetic_jacobian", "tensor_invariants",
     # the layered sea (core.sea)
     "Sea",
+    # the measurement model (core.sensors)
+    "KINDS", "MAGNETIC_NOISE", "Sensor",
     # sensor-layout design (core.design)
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
