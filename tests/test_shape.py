@@ -121,3 +121,19 @@ def test_cli_bad_input_one_message_exit_2(tmp_path, args, says):
     assert len(lines) == 1 and lines[0].startswith("python -m core.shape: error:"), p.stderr
     assert says in lines[0], lines[0]
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_bound_scales_with_noise_and_grows_with_range():
+    """The CRLB is linear in σ (×10 noise: ×10 every σ, to 1e-9 relative); the rigid line,
+    a constrained model, never bounds worse than the free 15-state model; the main scale's
+    bound grows with the closest approach."""
+    from core.shape import bound as bd
+
+    a = bd.shape_bound(noise=0.01)
+    b = bd.shape_bound(noise=0.1)
+    for k in ("centroid_m", "main_scale_m", "axis_deg", "rigid_main_scale_m"):
+        assert getattr(b, k) == pytest.approx(10 * getattr(a, k), rel=1e-9), k
+    assert a.rigid_main_scale_m < a.main_scale_m and a.rigid_centroid_m <= a.centroid_m * (1 + 1e-9)
+    curve = bd.shape_bound_curve([5.0, 10.0, 20.0])
+    scales = [c.main_scale_m for c in curve]
+    assert scales[0] < scales[1] < scales[2]
