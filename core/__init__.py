@@ -40,6 +40,16 @@ from .fisher import (
     fisher_measures,
 )
 from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
+from .magnetic import (
+    MAGNETIC_STATE_NAMES,
+    MAGNETIC_STATE_UNITS,
+    TensorInvariants,
+    euler_locate,
+    gradient_tensor,
+    magnetic_field,
+    magnetic_jacobian,
+    tensor_invariants,
+)
 from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
 from .measurement import AXES, SensorModel
 from .motion import dwna_model, sample_tracks, straight_track
@@ -63,6 +73,9 @@ __all__ = [
     "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
     "log10_ratio", "observability_index", "observable_rank", "single_station",
     "unobservable_direction", "velocity_from_heading",
+    # magnetic sensing (core.magnetic, spec §11)
+    "MAGNETIC_STATE_NAMES", "MAGNETIC_STATE_UNITS", "TensorInvariants", "euler_locate",
+    "gradient_tensor", "magnetic_field", "magnetic_jacobian", "tensor_invariants",
     # the layered sea (core.sea)
     "Sea",
     # sensor-layout design (core.design)
