@@ -35,7 +35,7 @@ def _row(res):
     for name in FILTERS:
         f = dict(s[name])
         err = res.errors[name]
-        f["centroid_error_p90_m"] = float(np.percentile(err[:, -1], 90))
+        f["centroid_error_p90_m"] = float(np.nanpercentile(err[:, -1], 90))
         if name in res.final:
             f["main_scale_p10_p90_m"] = [float(v) for v in np.percentile(res.final[name]["main_scale_m"], [10, 90])]
             f["axis_error_p90_deg"] = float(np.percentile(res.final[name]["axis_error_deg"], 90))
@@ -53,7 +53,7 @@ def numbers(fig_runs=FIG_RUNS, table_runs=TABLE_RUNS):
         hit = res.outlier_samples
         d["outlier_samples"] = hit
         if hit:  # error at the outlier samples and just after, median over runs
-            d["at_outliers_m"] = {n: [float(np.median(res.errors[n][:, k])) for k in hit] for n in FILTERS}
+            d["at_outliers_m"] = {n: [float(np.nanmedian(res.errors[n][:, k])) for k in hit] for n in FILTERS}
         out["fig"][key] = d
     lagged = ex.run_case(ex.Case("fig4-lag", lag=md.LAG), runs=fig_runs, seed=SEED)
     out["lagged"] = _row(lagged)

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import unscented as uk
+from ..magnetic import EULER_RCOND, euler_locate
 from . import model as md
 from .pca import axis_angle_deg, pca_shape
 from .targets import Outliers, Pass, Target
@@ -35,6 +36,8 @@ BASELINE = 0.5
 #: "0.01 nT" measurement precision, read as nT/m for the tensor.
 NOISE_G = 0.01
 NOISE_B = 0.01
+#: Condition number of G above which an Euler fix is flagged (near the plane m ⊥ r).
+EULER_FLAG_COND = 100.0
 #: Samples after which peak errors and NEES are counted.
 SETTLE = 10
 
@@ -66,14 +69,26 @@ def simulate(case):
     """Noise-free readings of the truth: B (K, 3) nT and the 5 tensor components (K, 5) nT/m of
     the target's cells seen by the finite-baseline gradiometer along the pass."""
     t = case.target
-    B, G = md._field_tensor(t.positions, t.moments, case.track.positions, case.baseline)
-    B, G = B.sum(axis=0), G.sum(axis=0)  # (K, 3), (K, 3, 3)
+    st = case.track.positions
+    B = md.dipole_field(t.positions, t.moments, st).sum(axis=0)  # (K, 3): the magnetometers' mean
+    G = md.dipole_tensor(t.positions, t.moments, st, case.baseline).sum(axis=0)  # (K, 3, 3)
     i, j = zip(*md.G_COMPONENTS)
     return B, G[:, i, j]
 
 
+def full_tensor(g5):
+    """The symmetric traceless 3 × 3 tensor (..., 3, 3) of the 5 components (..., 5)."""
+    g5 = np.asarray(g5, float)
+    G = np.empty(g5.shape[:-1] + (3, 3))
+    for c, (i, j) in enumerate(md.G_COMPONENTS):
+        G[..., i, j] = G[..., j, i] = g5[..., c]
+    G[..., 2, 2] = -g5[..., 0] - g5[..., 3]
+    return G
+
+
 def euler_point(B, g5):
-    """Euler's point fix from one reading: r = −3 G⁻¹ B (r = sensor − source), with cond(G).
+    """Euler's point fix from each reading, r = −3 G⁻¹ B (:func:`core.euler_locate`;
+    r = sensor − source), with G's condition number.
 
     Parameters
     ----------
@@ -85,11 +100,18 @@ def euler_point(B, g5):
     Returns
     -------
     r : ndarray, shape (..., 3)
+        NaN where G is singular (the plane m ⊥ r: core's EULER_RCOND).
     cond : ndarray, shape (...)
+        σmax / σmin of G: large near that plane, where a small error moves the fix far (seed
+        003's remark on the third-order method; flagged above :data:`EULER_FLAG_COND`).
     """
-    from . import _physics
-
-    return _physics.euler(B, g5)
+    G = full_tensor(g5)
+    sv = np.linalg.svd(G, compute_uv=False)
+    cond = sv[..., 0] / sv[..., -1]
+    ok = sv[..., -1] >= EULER_RCOND * sv[..., 0]
+    r = np.full(np.shape(B), np.nan)
+    r[ok] = euler_locate(np.asarray(B)[ok], G[ok])
+    return r, cond
 
 
 @dataclass
@@ -122,10 +144,8 @@ def _noisy(case, B, g5, runs, seed):
 def _point_moment(r_src, B, station):
     """Total moment that makes a point dipole at r_src give B at one station (least squares on
     the core's field, which is linear in the moment)."""
-    cols = []
-    for e in np.eye(3):
-        b, _ = md._field_tensor(r_src, np.broadcast_to(e, r_src.shape), station[None])
-        cols.append(b[:, 0, :])
+    cols = [md.dipole_field(r_src, np.broadcast_to(e, r_src.shape), station[None])[:, 0, :]
+            for e in np.eye(3)]
     M = np.stack(cols, axis=-1)  # (R, 3, 3)
     return np.linalg.solve(M, B[..., None])[..., 0]
 
@@ -183,8 +203,9 @@ def summarise(res):
     out = {"case": case.to_dict(), "runs": res.runs, "outlier_samples": res.outlier_samples,
            "filters": {}}
     for name, err in res.errors.items():
-        d = {"centroid_error_m": float(np.median(err[:, -1])),
-             "peak_error_m": float(np.median(err[:, SETTLE:].max(axis=1)))}
+        with np.errstate(invalid="ignore"):  # Euler is NaN where G is singular
+            d = {"centroid_error_m": float(np.nanmedian(err[:, -1])),
+                 "peak_error_m": float(np.nanmedian(np.nanmax(err[:, SETTLE:], axis=1)))}
         if name in res.final:
             f = res.final[name]
             kinds, counts = np.unique(f["kind"], return_counts=True)
@@ -200,7 +221,8 @@ def summarise(res):
             })
         else:
             d["median_condition_number"] = float(np.median(res.euler_cond))
+            d["flagged_share"] = float(np.mean(res.euler_cond > EULER_FLAG_COND))
         if res.runs > 1:
-            d["centroid_error_p90_m"] = float(np.percentile(err[:, -1], 90))
+            d["centroid_error_p90_m"] = float(np.nanpercentile(err[:, -1], 90))
         out["filters"][name] = d
     return out

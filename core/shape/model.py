@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..magnetic import gradient_tensor, magnetic_field, magnetic_jacobian
+
 __all__ = ["G_COMPONENTS", "LAG", "N_DIPOLES", "P0_MOMENT_REL", "P0_POSITION", "Q_MOMENT",
            "Q_POSITION", "START_SPREAD", "DipoleModel", "collapsed", "start_state",
            "tetrahedron"]
@@ -52,12 +54,25 @@ Q_POSITION = 1e-6
 Q_MOMENT = 1e-2
 
 
-def _field_tensor(sources, moments, stations, baseline=0.0):
-    """B (P, S, 3) nT and G (P, S, 3, 3) nT/m of P dipoles (positions and moments (P, 3)) at S
-    stations, from the core's one magnetic kernel."""
-    from . import _physics
+def _states8(sources, moments):
+    """Magnetic states (P, 8) of :mod:`core.magnetic` for dipoles at rest (velocity unused)."""
+    sources = np.asarray(sources, float)
+    st = np.zeros(sources.shape[:-1] + (8,))
+    st[..., :3] = sources
+    st[..., 5:] = moments
+    return st
 
-    return _physics.field_tensor(sources, moments, stations, baseline)
+
+def dipole_field(sources, moments, stations):
+    """B (P, S, 3) nT of P dipoles (positions, moments (P, 3)) at S stations:
+    :func:`core.magnetic_field`, the one magnetic kernel."""
+    return magnetic_field(_states8(sources, moments), stations)
+
+
+def dipole_tensor(sources, moments, stations, baseline=None):
+    """G (P, S, 3, 3) nT/m of P dipoles at S stations: :func:`core.gradient_tensor` (point
+    tensor, or the finite-baseline array)."""
+    return gradient_tensor(_states8(sources, moments), stations, baseline=baseline)
 
 
 def tetrahedron(n=N_DIPOLES, radius=START_SPREAD):
@@ -160,7 +175,7 @@ class DipoleModel:
         lead = x.shape[:-1]
         pos = x[..., : 3 * n].reshape(-1, 3)  # (P·N, 3)
         mom = np.repeat(x[..., 3 * n:].reshape(-1, 3), n, axis=0)
-        _, G = _field_tensor(pos, mom, stations)  # (P·N, S, 3, 3)
+        G = dipole_tensor(pos, mom, stations)  # (P·N, S, 3, 3)
         G = G.reshape((-1, n) + G.shape[1:]).sum(axis=1)  # sum over the dipoles
         i, j = zip(*G_COMPONENTS)
         return G[..., i, j].reshape(lead + (stations.shape[0], 5))
@@ -183,12 +198,19 @@ class DipoleModel:
             out[..., k0:, 5 * w: 5 * w + 5] = z5[..., k0 + off: K + off, :]
         return out
 
-    def jacobian(self, x, k, step=1e-6):
-        """∂h/∂X at step k, (n_meas, 3N + 3), by central differences of :meth:`hx` (the bound's
-        linearisation; step in m and A·m², relative error ~1e-9 for this smooth field)."""
+    def jacobian(self, x, k):
+        """∂h/∂X at step k for one state x (3N + 3,): (n_meas, 3N + 3), exact, from
+        :func:`core.magnetic_jacobian` (each dipole's position columns; the moment columns
+        summed over the dipoles, which share m)."""
         x = np.asarray(x, float)
-        n = x.size
-        scale = np.where(np.arange(n) < 3 * self.n_dipoles, 1.0, max(1.0, np.abs(x[3 * self.n_dipoles:]).max()))
-        E = np.eye(n) * (step * scale)[:, None]
-        h = self.hx(np.concatenate([x + E, x - E]), k)
-        return ((h[:n] - h[n:]) / (2 * step * scale)[:, None]).T
+        n = self.n_dipoles
+        idx = np.clip(np.asarray(self.window) + k, 0, None)
+        pos = x[: 3 * n].reshape(n, 3)
+        _, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))),
+                                 self.stations[idx], sensor="G")  # (N, w, 5, 8)
+        J = J.reshape(n, -1, 8)  # (N, n_meas, 8), window-major then component
+        out = np.empty((J.shape[1], 3 * n + 3))
+        for j in range(n):
+            out[:, 3 * j: 3 * j + 3] = J[j, :, :3]
+        out[:, 3 * n:] = J[:, :, 5:].sum(axis=0)
+        return out
