@@ -36,7 +36,13 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="python -m bench.bench_shape")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--runs", type=int, default=100)
+    p.add_argument("--threads", type=int, default=0,
+                   help="numba threads (default: numba's); 1 avoids thread start-up on the many "
+                        "small kernel calls of one pass, which dominates on a loaded machine")
     a = p.parse_args(argv)
+    if a.threads:
+        import numba
+        numba.set_num_threads(a.threads)
     case = Case("fig4")
     one = median_time(lambda: run_case(case, runs=1), a.repeat)
     mc = median_time(lambda: run_case(case, runs=a.runs), max(1, a.repeat // 2))
@@ -46,6 +52,8 @@ def main(argv=None):
     x0, P0 = md.start_state(np.zeros(3), 2400 * np.array([-3.0, 1.0, 5.0]))
     filt = median_time(lambda: uk.run_ukf(x0[None], P0, g5[None], mdl.hx, 1e-4 * np.eye(5), u=1.345),
                        a.repeat)
+    import numba
+    print(f"numba threads: {numba.get_num_threads()}")
     print(f"one fig4 pass (simulate, Euler, UKF + NHUKF, PCA): {one * 1e3:.0f} ms (target ≤ 1000 ms)")
     print(f"{a.runs} Monte-Carlo passes: {mc:.2f} s (target ≤ 30 s)")
     print(f"  parts: truth simulation {sim * 1e3:.0f} ms; one NHUKF over 81 steps {filt * 1e3:.0f} ms")
