@@ -153,3 +153,31 @@ def test_model_jacobian_matches_central_differences(lag):
         e[i] = steps[i]
         fd = (mdl.hx(X_TRUE + e, k) - mdl.hx(X_TRUE - e, k)) / (2 * steps[i])
         np.testing.assert_allclose(J[:, i], fd, rtol=0, atol=1e-6 * np.abs(J[:, i]).max())
+
+
+def test_euler_point_is_nan_on_the_singular_plane_and_flags_conditioning():
+    """One dipole: Euler's fix is exact off the plane m ⊥ r (1e-9 m) and NaN on it (det G = 0),
+    where the condition number blows up."""
+    from core.shape.experiment import euler_point
+
+    m = np.array([0.0, 0.0, 1000.0])
+    src = np.array([[0.0, 0.0, 0.0]])
+    stations = np.array([[3.0, 4.0, 12.0], [5.0, 0.0, 0.0]])  # the second: r ⊥ m
+    B = md.dipole_field(src, m[None], stations)[0]
+    G = md.dipole_tensor(src, m[None], stations)[0]
+    i, j = zip(*md.G_COMPONENTS)
+    r, cond = euler_point(B, G[:, i, j])
+    np.testing.assert_allclose(r[0], stations[0], atol=1e-9)
+    assert np.all(np.isnan(r[1])) and cond[1] > 1e10 > 1e3 > cond[0]
+
+
+def test_cli_run_writes_plots(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "core.shape", "--case", "seed003-fig5", "--out", str(tmp_path)],
+                       cwd=ROOT, capture_output=True, text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin"})
+    assert p.returncode == 0, p.stderr
+    from PIL import Image
+    for name in ("errors_row0.png", "shape_row0.png"):
+        with Image.open(tmp_path / name) as im:
+            assert im.size[0] > 300 and len(im.convert("RGB").getcolors(1 << 16) or range(99)) > 20
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["rows"][0]["outlier_samples"] == [20, 30, 40]

@@ -107,7 +107,8 @@ def euler_point(B, g5):
     """
     G = full_tensor(g5)
     sv = np.linalg.svd(G, compute_uv=False)
-    cond = sv[..., 0] / sv[..., -1]
+    with np.errstate(divide="ignore"):  # σmin = 0 exactly: cond = inf, r = NaN
+        cond = sv[..., 0] / sv[..., -1]
     ok = sv[..., -1] >= EULER_RCOND * sv[..., 0]
     r = np.full(np.shape(B), np.nan)
     r[ok] = euler_locate(np.asarray(B)[ok], G[ok])
