@@ -170,7 +170,8 @@ def huber_weights(e, u=HUBER_U):
     [1.0, 0.5, 0.1]
     """
     e = np.abs(np.asarray(e, dtype=float))
-    if not (u > 0):
+    u = np.asarray(u, dtype=float)
+    if not np.all(u > 0):
         raise ValueError(f"Huber threshold u must be > 0 (inf = plain UKF); got {u!r}")
     with np.errstate(divide="ignore"):
         return np.where(e > u, u / np.where(e > u, e, 1.0), 1.0)
@@ -191,8 +192,9 @@ def ukf_update(x, P, z, hx, R, *, u=np.inf, alpha=ALPHA, beta=BETA, kappa=KAPPA)
         Measurement function on (..., n) arrays returning (..., m).
     R : array_like, shape (m, m)
         Measurement-noise covariance (positive definite).
-    u : float
+    u : float or array_like, shape (N,)
         Huber threshold (whitened units); inf (default) is the plain UKF, 1.345 the NHUKF's.
+        One per filter runs UKFs and NHUKFs in one stack (one measurement call a step).
     alpha, beta, kappa : float
         Sigma-point parameters.
 
@@ -218,12 +220,13 @@ def ukf_update(x, P, z, hx, R, *, u=np.inf, alpha=ALPHA, beta=BETA, kappa=KAPPA)
     Pxz = np.einsum("s,nsi,nsr->nir", wc, dx, dz)
     nu = z - zm
     Lr = np.linalg.cholesky(R)
-    if np.isinf(u):
+    u = np.asarray(u, dtype=float)
+    if np.all(np.isinf(u)):
         psi = np.ones_like(nu)
         Rt = R
     else:
         e = np.linalg.solve(Lr, nu.T).T  # whitened residuals R^-½ (z − ẑ), (N, m)
-        psi = huber_weights(e, u)
+        psi = huber_weights(e, u[..., None] if u.ndim else u)
         Rt = np.einsum("ra,na,qa->nrq", Lr, 1.0 / psi, Lr)  # R^½ Ψ⁻¹ R^½ᵀ
     S = Pzz + Rt
     K = np.swapaxes(np.linalg.solve(S, np.swapaxes(Pxz, -1, -2)), -1, -2)  # P_xz S⁻¹ (S symmetric)
@@ -276,8 +279,9 @@ def run_ukf(x0, P0, zs, hx, R, *, fx=None, Q=None, u=np.inf, truth=None, alpha=A
         Process function on (..., n) arrays; default the identity (a static state).
     Q : array_like, shape (n, n), optional
         Process-noise covariance; default zero.
-    u : float
-        Huber threshold; inf (default) = UKF, 1.345 = seed 003's NHUKF.
+    u : float or array_like, shape (N,)
+        Huber threshold; inf (default) = UKF, 1.345 = seed 003's NHUKF; one per filter to run
+        both kinds in one stack.
     truth : array_like, shape (N, K, n), optional
         True states, for the NEES.
     alpha, beta, kappa : float
