@@ -4,6 +4,7 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 :func:`observable_rank`; the rest builds on them. No web stack is imported here.
 """
 
+from . import kernel_cache  # noqa: F401  (first: it refreshes the kernels' cache on import)
 from .bank import (
     BANK_BEARINGS,
     BANK_STRENGTHS,
@@ -63,6 +64,7 @@ from .observability import (
 )
 from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
 from .sea import Sea
+from .sensors import KINDS, MAGNETIC_NOISE, Sensor
 from .unscented import UkfRun, huber_weights, run_ukf, sigma_points, ukf_predict, ukf_update
 from .validation import STATE_NAMES
 
@@ -78,6 +80,8 @@ __all__ = [
     "gradient_tensor", "magnetic_field", "magnetic_jacobian", "tensor_invariants",
     # the layered sea (core.sea)
     "Sea",
+    # the measurement model (core.sensors)
+    "KINDS", "MAGNETIC_NOISE", "Sensor",
     # sensor-layout design (core.design)
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",

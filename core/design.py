@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from . import validation
-from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures
+from . import magnetic, sensors, validation
+from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, fisher_measures, magnetic_fisher
 from .grids import Plane
 from .observability import RANK_RTOL, gamma
 
@@ -104,8 +104,8 @@ def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model
     return cov
 
 
-def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
-                    sigma=4.0, model="exact", sea=None, known=()):
+def crlb_covariance(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
+                    sigma=4.0, model="exact", sea=None, known=(), sensor=None):
     """Full Cramér–Rao covariance F⁻¹ of the 7 states.
 
     Parameters
@@ -118,12 +118,13 @@ def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
         Sensor noise standard deviation (V/m) on every field component, > 0.
     steps : int
         Number of instants N ≥ 1 (all rows of all stations).
-    T, sigma, model, sea, known
-        As for :func:`core.gamma` (``sea``: whole space or a :class:`core.Sea`).
+    T, sigma, model, sea, known, sensor
+        As for :func:`core.gamma` (``sea``: whole space or a :class:`core.Sea`; ``sensor``: the
+        measurement model, whose magnetic kinds take 8 states and noise in nT, nT/m).
 
     Returns
     -------
-    cov : ndarray, shape (..., 7, 7)
+    cov : ndarray, shape (..., 7, 7) (8 × 8 for magnetic kinds)
         Covariance in state units (m², m²/s, …, (A·m)²), always 7 × 7 in the state order of
         :data:`core.STATE_NAMES`. Rows and columns of ``known`` states are 0. Where the point
         is unobservable (the flag of :func:`core.fisher_measures`) the unknown block has +inf on
@@ -142,6 +143,14 @@ def crlb_covariance(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
     >>> cov.shape, bool(ok)
     ((7, 7), True)
     """
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        m, block, lead = magnetic_fisher(states, stations, sensor, T, steps, known)
+        free = sensor.free_columns(known)
+        cov = np.zeros((block.shape[0], 8, 8))
+        cov[:, free[:, None], free[None, :]] = block
+        return cov.reshape(lead + (8, 8)), m.observable.reshape(lead)
+    sigma, model, sea, noise = sensor.sigma, sensor.model, sensor.sea, sensor.noise_vector[0]
     m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
                         model=model, sea=sea, known=known)  # validates everything, flags observability
     flat, lead = validation.states(states)
@@ -209,8 +218,8 @@ def _errors_from_cov(states, cov, observable):
             "observable": observable.copy()}
 
 
-def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
-                             T=1.0, sigma=4.0, model="exact", sea=None, known=()):
+def horizontal_error_ellipse(states, stations, *, noise=None, steps=DEFAULT_STEPS,
+                             T=1.0, sigma=4.0, model="exact", sea=None, known=(), sensor=None):
     """1-σ horizontal position error ellipse, depth and speed errors from the CRLB.
 
     Parameters
@@ -219,7 +228,7 @@ def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEF
         ``[x, y, z, vx, vy, Ph, Pv]`` in m, m/s, A·m (speed > 0).
     stations : array_like, shape (S, 3)
         Station positions (m).
-    noise, steps, T, sigma, model, sea, known
+    noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`. A known state has zero error.
 
     Returns
@@ -244,20 +253,42 @@ def horizontal_error_ellipse(states, stations, *, noise=DEFAULT_NOISE, steps=DEF
     ...      == float("inf"))
     True
     """
-    cov, observable = crlb_covariance(states, stations, noise=noise, steps=steps, T=T,
-                                      sigma=sigma, model=model, sea=sea, known=known)
-    flat, lead = validation.states(states)
-    fields = _errors_from_cov(flat, cov.reshape(-1, 7, 7), observable.reshape(-1))
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    cov, observable = crlb_covariance(states, stations, steps=steps, T=T, known=known,
+                                      sensor=sensor)
+    flat, lead = (magnetic.states if sensor.magnetic else validation.states)(states)
+    n = sensor.n_states
+    fields = _errors_from_cov(flat, cov.reshape(-1, n, n), observable.reshape(-1))
     return CrlbErrors(**{k: v.reshape(lead) for k, v in fields.items()})
 
 
-def _plane_states(plane, velocity, moments):
+def _plane_states(plane, velocity, moments, sensor=None):
     if not isinstance(plane, Plane):  # ValueError for all bad input, as core does
         raise ValueError(
             f"plane must be a core.Plane; got {type(plane).__name__}")
+    if sensor is not None and sensor.magnetic:
+        return magnetic_plane_states(plane, velocity, moments)
     template, _ = validation.states([0.0, 0.0, 0.0, *_pair("velocity", velocity),
                                      *_pair("moments", moments)])  # checks speed > 0
     return plane.states(template[0, 3:5], template[0, 5:7]).reshape(-1, 7)
+
+
+def magnetic_plane_states(plane, velocity, moments, rows=slice(None)):
+    """Magnetic target states (rows · n, 8) on a plane's grid: velocity (vx, vy) m/s and moment
+    (mx, my, mz) A·m² everywhere."""
+    vel = _pair("velocity", velocity)
+    mom = np.asarray(moments, dtype=np.float64) if np.ndim(moments) == 1 else None
+    if mom is None or mom.shape != (3,) or not np.all(np.isfinite(mom)):
+        raise ValueError(f"moments of a magnetic kind must be (mx, my, mz) in A·m², finite; got {moments!r}")
+    u, v = plane.axes
+    v = v[rows]
+    out = np.empty((v.size, u.size, 8))
+    out[..., 0] = u[None, :]
+    out[..., 1] = v[:, None] if plane.kind == "xy" else plane.fixed
+    out[..., 2] = plane.fixed if plane.kind == "xy" else v[:, None]
+    out[..., 3:5] = vel
+    out[..., 5:8] = mom
+    return out.reshape(-1, 8)
 
 
 def _pair(name, value):
@@ -271,8 +302,8 @@ def _off_station(states, stations):
     return np.min(validation.station_distances(states, stations), axis=1) >= validation.ON_STATION
 
 
-def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS,
-              T=1.0, sigma=4.0, model="exact", sea=None, known=()):
+def crlb_maps(plane, stations, *, velocity, moments, noise=None, steps=DEFAULT_STEPS,
+              T=1.0, sigma=4.0, model="exact", sea=None, known=(), sensor=None):
     """CRLB errors (ellipse, depth, speed, position) over a :class:`core.Plane`.
 
     Parameters
@@ -282,9 +313,9 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=
         Station positions (m).
     velocity : (vx, vy)
         Target velocity (m/s), speed > 0.
-    moments : (Ph, Pv)
-        Dipole moments (A·m).
-    noise, steps, T, sigma, model, sea, known
+    moments : (Ph, Pv) or (mx, my, mz)
+        Dipole moments: (Ph, Pv) A·m for the electric kind, the moment vector A·m² for magnetic.
+    noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`.
 
     Returns
@@ -302,18 +333,22 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=DEFAULT_NOISE, steps=
     >>> e.semi_major.shape
     (11, 11)
     """
-    states = _plane_states(plane, velocity, moments)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    states = _plane_states(plane, velocity, moments, sensor)
     stations = validation.stations(stations)
-    ok = np.flatnonzero(_off_station(states, stations))
+    near = validation.ON_STATION
+    if sensor.kind in ("G", "BG"):  # a gradiometer array's magnetometers sit ±L/2 about it
+        near = max(near, magnetic.baseline_value(sensor.baseline))
+    ok = np.flatnonzero(np.min(validation.station_distances(states, stations), axis=1) >= near)
     out = {k: np.full(states.shape[0], np.nan) for k in
            ("semi_major", "semi_minor", "orientation", "sigma_z", "sigma_speed", "position")}
     out["observable"] = np.zeros(states.shape[0], dtype=bool)
-    rows = 3 * stations.shape[0] * validation.steps(steps, 1)
-    chunk = max(1, _CHUNK_ENTRIES // (rows * 7))
+    rows = sensor.n_components * stations.shape[0] * validation.steps(steps, 1)
+    chunk = max(1, _CHUNK_ENTRIES // (rows * sensor.n_states))
     for c0 in range(0, ok.size, chunk):
         idx = ok[c0:c0 + chunk]
-        e = horizontal_error_ellipse(states[idx], stations, noise=noise, steps=steps, T=T,
-                                     sigma=sigma, model=model, sea=sea, known=known)
+        e = horizontal_error_ellipse(states[idx], stations, steps=steps, T=T, known=known,
+                                     sensor=sensor)
         for k, arr in out.items():
             arr[idx] = getattr(e, k)
     n = plane.n
@@ -426,13 +461,38 @@ def _check_criterion(criterion, threshold):
     return validation.positive("threshold", threshold, "m")
 
 
-def _region_states(region, velocity, moments):
+def _region_states(region, velocity, moments, sensor=None):
     if not isinstance(region, Plane):
         raise ValueError(
             "region must be a core.Plane (an x–y rectangle at a target depth, or an x–z band of "
             f"depths); got {type(region).__name__}"
         )
-    return _plane_states(region, velocity, moments)
+    return _plane_states(region, velocity, moments, sensor)
+
+
+def _magnetic_criterion(states, stations, criterion, threshold, steps, T, known, sensor):
+    """:func:`_criterion` of a magnetic kind: the Fisher measures of the whitened Γ."""
+    near = validation.ON_STATION
+    if sensor.kind in ("G", "BG"):
+        near = max(near, magnetic.baseline_value(sensor.baseline))
+    states = states[np.min(validation.station_distances(states, stations), axis=1) >= near]
+    if states.shape[0] == 0:
+        raise ValueError("every point of the region lies on a station; nothing to evaluate")
+    m, _, _ = magnetic_fisher(states, stations, sensor, T, steps, known)
+    frac = float(np.mean(m.observable))
+    if criterion == "area_crlb":
+        return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
+    d_opt = m.d_optimal.copy()
+    bad = np.flatnonzero(~m.observable)
+    if bad.size:  # the D-optimal floor of the module notes, on the whitened Γ (noise 1)
+        g = sensors.magnetic_gamma(states[bad], stations, sensor, T=T, steps=steps, known=known,
+                                   whiten=True)
+        with np.errstate(divide="ignore"):
+            log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
+        n = g.shape[-1]
+        d_opt[bad] = np.log10(RANK_RTOL * np.sqrt(np.e * n)) + log_norms
+    value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
+    return CriterionResult(float(value), frac)
 
 
 def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, sea, known):
@@ -459,8 +519,9 @@ def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, m
 
 
 def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 20.0),
-                     criterion="mean_dopt", threshold=10.0, noise=DEFAULT_NOISE,
-                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=()):
+                     criterion="mean_dopt", threshold=10.0, noise=None,
+                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=(),
+                     sensor=None):
     """How well a station layout covers a surveillance region.
 
     Parameters
@@ -472,8 +533,8 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
         depths at y = ``fixed``.
     velocity : (vx, vy)
         Target velocity (m/s), the same at every region point.
-    moments : (Ph, Pv)
-        Dipole moments (A·m).
+    moments : (Ph, Pv) or (mx, my, mz)
+        Dipole moments: (Ph, Pv) A·m electric, the moment vector A·m² for magnetic kinds.
     criterion : {"mean_dopt", "worst_dopt", "area_crlb"}
         ``"mean_dopt"``: mean D-optimal measure over the region's points; ``"worst_dopt"``: its
         minimum; ``"area_crlb"``: fraction of the points whose CRLB position error
@@ -481,7 +542,7 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
         D-optimal floor (module notes) or as failing the threshold.
     threshold : float
         Position error threshold (m) for ``"area_crlb"``, > 0.
-    noise, steps, T, sigma, model, sea, known
+    noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`.
 
     Returns
@@ -499,9 +560,15 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
     (0.0, 1.0, True)
     """
     threshold = _check_criterion(criterion, threshold)
-    noise = validation.positive("noise", noise, "V/m")
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        return _magnetic_criterion(_region_states(region, velocity, moments, sensor),
+                                   validation.stations(stations), criterion, threshold, steps,
+                                   validation.positive("T", T, "s"), known, sensor)
+    noise = sensor.noise_vector[0]
     return _criterion(_region_states(region, velocity, moments), validation.stations(stations),
-                      criterion, threshold, noise, steps, T, sigma, model, sea, known)
+                      criterion, threshold, noise, steps, T, sensor.sigma, sensor.model,
+                      sensor.sea, known)
 
 
 def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,

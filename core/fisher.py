@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels, validation
-from .observability import _full_rank, _prepare, gamma
+from . import kernels, magnetic, sensors, validation
+from .observability import _full_rank, _prepare, _svd_rank, gamma
 
 __all__ = ["DEFAULT_NOISE", "DEFAULT_STEPS", "FisherMeasures", "fisher_information", "fisher_measures"]
 
@@ -54,18 +54,21 @@ class FisherMeasures:
     free: tuple
 
 
-def fisher_measures(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
-                    sigma=4.0, model="exact", sea=None, known=()):
+def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
+                    sigma=4.0, model="exact", sea=None, known=(), sensor=None):
     """D-optimal measure and Cramér–Rao bounds at every state.
 
     Parameters
     ----------
     states, stations, T, sigma, model, sea, known
         As for :func:`core.gamma`.
-    noise : float
-        Sensor noise standard deviation (V/m) on each field component, > 0.
+    noise : float or None
+        Sensor noise standard deviation on each component, > 0: V/m (electric; None is
+        :data:`DEFAULT_NOISE`), nT (B), nT/m (G), (nT, nT/m) (BG). None: the sensor's own.
     steps : int
         Number of instants N ≥ 1 (all rows of all stations).
+    sensor : {"E", "B", "G", "BG"} or core.Sensor or None
+        The measurement model, as for :func:`core.gamma`.
 
     Returns
     -------
@@ -80,9 +83,14 @@ def fisher_measures(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEP
     >>> bool(core.fisher_measures([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]]).observable)
     False
     """
-    noise = validation.positive("noise", noise, "V/m")
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
-    m = _fisher_from_kernel(args[0], args[1:], n_rows, noise)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        m, _, lead = magnetic_fisher(states, stations, sensor, T, steps, known)
+    else:
+        noise = sensor.noise_vector[0]
+        args, n_rows, lead = _prepare(states, stations, T, sensor.sigma, sensor.model, known,
+                                      steps, sensor.sea)
+        m = _fisher_from_kernel(args[0], args[1:], n_rows, noise)
     return FisherMeasures(
         d_optimal=m.d_optimal.reshape(lead),
         log10_eta=m.log10_eta.reshape(lead),
@@ -117,15 +125,59 @@ def _fisher_from_kernel(states, options, n_rows, noise):
     )
 
 
-def fisher_information(states, stations, *, noise=DEFAULT_NOISE, steps=DEFAULT_STEPS, T=1.0,
-                       sigma=4.0, model="exact", sea=None, known=()):
-    """Fisher information matrix F = ΓᵀΓ / noise².
+def fisher_information(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
+                       sigma=4.0, model="exact", sea=None, known=(), sensor=None):
+    """Fisher information matrix F = Γᵀ R⁻¹ Γ, R = diag(noise²) of each component.
+
+    Parameters are those of :func:`fisher_measures`.
 
     Returns
     -------
     ndarray, shape (..., n, n)
-        In 1 / (state unit × state unit), n = 7 − len(known).
+        In 1 / (state unit × state unit), n = 7 − len(known) (8 − len(known) magnetic).
     """
-    noise = validation.positive("noise", noise, "V/m")
-    g = gamma(states, stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps, known=known)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        g = sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known,
+                                   whiten=True)
+        return np.einsum("...ri,...rj->...ij", g, g)
+    noise = sensor.noise_vector[0]
+    g = gamma(states, stations, T=T, steps=steps, known=known, sensor=sensor)
     return np.einsum("...ri,...rj->...ij", g, g) / noise**2  # (..., n, n)
+
+
+def magnetic_fisher(states, stations, sensor, T, steps, known):
+    """Fisher measures of a magnetic kind from the whitened all-rows Γ (numpy: QR of the
+    column-scaled Γ, as the electric CRLB covariance). Returns (FisherMeasures with flat (P,)
+    arrays, covariance of the free states (P, n, n), leading shape)."""
+    flat, lead = magnetic.states(states)
+    g = sensors.magnetic_gamma(flat, stations, sensor, T=T, steps=steps, known=known, whiten=True)
+    free = sensor.free_columns(known)
+    npts, n = flat.shape[0], free.size
+    observable = _svd_rank(g) == n
+    norms = np.linalg.norm(g, axis=-2)  # (P, n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (P, n, n)
+        diag = np.abs(np.diagonal(r, axis1=-2, axis2=-1))
+        log_eta = np.sum(np.log10(diag), axis=-1)
+        log_norms = np.sum(np.log10(norms), axis=-1)
+    cov = np.full((npts, n, n), np.nan)
+    cov[:, np.arange(n), np.arange(n)] = np.inf
+    idx = np.flatnonzero(observable)
+    if idx.size:
+        rinv = np.linalg.solve(r[idx], np.broadcast_to(np.eye(n), (idx.size, n, n)))
+        inv_s = rinv @ np.swapaxes(rinv, -1, -2)
+        cov[idx] = inv_s / (norms[idx, :, None] * norms[idx, None, :])
+    var = np.diagonal(cov, axis1=-2, axis2=-1)
+    pos = [q for q, j in enumerate(free) if j < 3]
+    pos_std = np.sqrt(var[:, pos].sum(axis=1)) if pos else np.zeros(npts)
+    m = FisherMeasures(
+        d_optimal=np.where(observable, log_eta + log_norms, -np.inf),
+        log10_eta=log_eta,
+        observable=observable,
+        std=np.sqrt(var),
+        position_std=pos_std,
+        free=tuple(sensor.state_names[j] for j in free),
+    )
+    return m, cov, lead
+

@@ -10,9 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels, validation
+from . import kernels, magnetic, sensors, validation
 from . import sea as sea_module
-from .fisher import DEFAULT_NOISE, DEFAULT_STEPS, _fisher_from_kernel
+from .design import magnetic_plane_states
+from .fisher import DEFAULT_STEPS, _fisher_from_kernel, magnetic_fisher
 from .observability import _full_rank, _options
 
 __all__ = ["MEASURES", "MapResult", "evaluate_map", "log10_positive_difference", "log10_ratio"]
@@ -38,7 +39,7 @@ class MapResult:
 
 
 def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1.0, sigma=4.0,
-                 model="exact", sea=None, known=(), noise=DEFAULT_NOISE, steps=DEFAULT_STEPS):
+                 model="exact", sea=None, known=(), noise=None, steps=DEFAULT_STEPS, sensor=None):
     """Evaluate one measure over a :class:`core.grids.Plane`.
 
     Parameters
@@ -48,11 +49,13 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
         Station positions (m).
     velocity : (vx, vy)
         Target velocity (m/s), speed > 0.
-    moments : (Ph, Pv)
-        Dipole moments (A·m).
+    moments : (Ph, Pv) or (mx, my, mz)
+        Dipole moments: (Ph, Pv) A·m for the electric kind, the moment vector A·m² for magnetic.
     measure : {"log10_det", "log10_eta", "d_optimal", "crlb_position"}
-        See :data:`MEASURES`. The first two use the paper's square Γ; the others all rows of
-        ``steps`` instants and the sensor ``noise`` (V/m).
+        See :data:`MEASURES`. The first two use the paper's square Γ (electric only); the others
+        all rows of ``steps`` instants and the sensor ``noise`` (V/m; nT, nT/m magnetic).
+    sensor : {"E", "B", "G", "BG"} or core.Sensor or None
+        The measurement model, as for :func:`core.gamma`.
     sea : core.Sea or None
         The whole space (``None``) or a layered sea (:mod:`core.sea`): then the plane must lie
         in the water column (an x–y plane at 0 ≤ z ≤ D; an x–z plane with 0 ≤ z ≤ D).
@@ -73,6 +76,12 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     if measure not in MEASURES:
         raise ValueError(f"measure must be one of {sorted(MEASURES)}; got {measure!r}")
     square = MEASURES[measure][2]
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    if sensor.magnetic:
+        if square:
+            sensors.refuse_square(sensor, f"measure {measure!r}")
+        return _magnetic_map(plane, stations, velocity, moments, measure, T, known, steps, sensor)
+    sigma, model, sea, noise = sensor.sigma, sensor.model, sensor.sea, sensor.noise_vector[0]
     options, n_rows = _options(stations, T, sigma, model, known, None if square else steps, sea)
     template, _ = validation.states([0.0, 0.0, 0.0, *velocity, *moments])  # checks speed > 0
     if sea is not None:  # the plane's depths: its fixed z, or its z range
@@ -103,6 +112,35 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
             out[:] = m.d_optimal if measure == "d_optimal" else m.position_std
             observable[rows] = m.observable.reshape(-1, n)
     return MapResult(value=value, observable=observable, measure=measure)
+
+
+def _magnetic_map(plane, stations, velocity, moments, measure, T, known, steps, sensor):
+    """:func:`evaluate_map` for a magnetic kind (all-rows measures only)."""
+    stations = validation.stations(stations)
+    T = validation.positive("T", T, "s")
+    near = validation.ON_STATION
+    if sensor.kind in ("G", "BG"):  # the gradiometer's magnetometers sit ±L/2 about it
+        near = max(near, magnetic.baseline_value(sensor.baseline))
+    n = plane.n
+    value = np.full(n * n, np.nan)
+    observable = np.zeros(n * n, dtype=bool)
+    rows_per_chunk = max(1, CHUNK_POINTS // (4 * n))
+    for r0 in range(0, n, rows_per_chunk):
+        rows = slice(r0, min(n, r0 + rows_per_chunk))
+        states = magnetic_plane_states(plane, velocity, moments, rows)
+        # a moving target must stay off the stations at every instant of Γ
+        moved = [states[:, :3] + i * T * np.column_stack([states[:, 3:5], np.zeros(len(states))])
+                 for i in range(validation.steps(steps, 1))]
+        dist = np.min([np.min(np.linalg.norm(p[:, None, :] - stations[None], axis=-1), axis=1)
+                       for p in moved], axis=0)
+        ok = np.flatnonzero(dist >= near)
+        base = rows.start * n
+        if ok.size:
+            m, _, _ = magnetic_fisher(states[ok], stations, sensor, T, steps, known)
+            value[base + ok] = m.d_optimal if measure == "d_optimal" else m.position_std
+            observable[base + ok] = m.observable
+    return MapResult(value=value.reshape(n, n), observable=observable.reshape(n, n),
+                     measure=measure)
 
 
 def log10_positive_difference(log_a, log_b):

@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import validation
-from .fields import MODELS, field_jacobian
+from . import magnetic, validation
+from .fields import field_jacobian
+from .sensors import Sensor
 
 __all__ = ["AXES", "SensorModel"]
 
@@ -42,6 +43,11 @@ class SensorModel:
         None is the homogeneous whole space.
     model : {"exact", "paper"}
         Field model of :func:`core.dipole_field`.
+    kind : {"E", "B", "G", "BG"}
+        Sensor kind of :class:`core.Sensor`: the magnetic kinds take states (..., 8) and noise
+        in nT (B), nT/m (G) or a pair (BG); they report all their components (``axes`` = 3).
+    baseline : float or None
+        A gradiometer's baseline (m), as for :func:`core.gradient_tensor`.
 
     Examples
     --------
@@ -57,6 +63,8 @@ class SensorModel:
     sigma: float = 4.0
     sea: object = None
     model: str = "exact"
+    kind: str = "E"
+    baseline: object = None
     _rows: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -64,12 +72,33 @@ class SensorModel:
         if isinstance(self.axes, bool) or self.axes not in AXES:
             raise ValueError(f"axes must be 3 (Ex, Ey, Ez) or 2 (Ex, Ey horizontal); got {self.axes!r}")
         object.__setattr__(self, "axes", int(self.axes))
-        object.__setattr__(self, "noise", validation.positive("noise", self.noise, "V/m"))
-        object.__setattr__(self, "sigma", validation.positive("sigma", self.sigma, "S/m"))
-        validation.model_code(self.model, MODELS)
-        n_s = self.stations.shape[0]
-        rows = (3 * np.arange(n_s)[:, None] + np.arange(self.axes)[None, :]).ravel()
-        object.__setattr__(self, "_rows", rows)  # indices into the flattened (S·3) components
+        sensor = self.sensor  # validates kind, noise, sigma, sea, model, baseline together
+        if sensor.magnetic and self.axes != 3:
+            raise ValueError(f"axes=2 is for the electric kind only; sensor kind {self.kind!r} "
+                             "reports all its components")
+        if not sensor.magnetic:
+            object.__setattr__(self, "noise", sensor.noise_vector[0])
+        object.__setattr__(self, "sigma", float(self.sigma))
+        n_s, n_c = self.stations.shape[0], sensor.n_components
+        rows = (n_c * np.arange(n_s)[:, None] + np.arange(min(self.axes, n_c) if not sensor.magnetic
+                                                           else n_c)[None, :]).ravel()
+        object.__setattr__(self, "_rows", rows)  # indices into the flattened (S·C) components
+
+    @property
+    def sensor(self):
+        """The :class:`core.Sensor` of this model (kind, noise, medium, baseline)."""
+        return Sensor(self.kind, self.noise, self.sigma, self.sea, self.model, self.baseline)
+
+    @property
+    def n_states(self):
+        """State size: 7 (electric) or 8 (magnetic kinds)."""
+        return 8 if self.kind != "E" else 7
+
+    @property
+    def noise_vector(self):
+        """Noise standard deviation of every measured component, shape (m,)."""
+        per_station = np.asarray(self.sensor.noise_vector)
+        return np.tile(per_station, self.stations.shape[0])[self._rows]
 
     @property
     def n_meas(self):
@@ -78,8 +107,8 @@ class SensorModel:
 
     @property
     def R(self):
-        """Measurement noise covariance noise² I, shape (m, m), (V/m)²."""
-        return self.noise**2 * np.eye(self.n_meas)
+        """Measurement noise covariance diag(noise²), shape (m, m): (V/m)², nT², (nT/m)²."""
+        return np.diag(self.noise_vector**2)
 
     @property
     def depth_range(self):
@@ -94,7 +123,11 @@ class SensorModel:
         return kw
 
     def jacobian(self, states):
-        """∂h/∂X of the measurement at ``states`` (..., 7): shape (..., m, 7)."""
+        """∂h/∂X of the measurement at ``states`` (..., n): shape (..., m, n), n = 7 or 8."""
+        if self.kind != "E":
+            _, J = magnetic.magnetic_jacobian(states, self.stations, sensor=self.kind,
+                                              baseline=self.baseline)  # (..., S, C, 8)
+            return J.reshape(J.shape[:-3] + (-1, 8))
         J = field_jacobian(states, self.stations, **self._core_kwargs())  # (..., S, 3, 7)
         J = J.reshape(J.shape[:-3] + (-1, 7))  # (..., S·3, 7), station-major
         return J[..., self._rows, :]
@@ -109,7 +142,10 @@ class SensorModel:
         """
         states = np.asarray(states, dtype=float)
         J = self.jacobian(states)
-        h = J[..., 5] * states[..., None, 5] + J[..., 6] * states[..., None, 6]
+        if J.shape[-1] == 7:
+            h = J[..., 5] * states[..., None, 5] + J[..., 6] * states[..., None, 6]
+        else:  # the moment vector (mx, my, mz): B and G are linear in it too
+            h = np.einsum("...mk,...k->...m", J[..., 5:], states[..., 5:])
         return h, J
 
     def h(self, states):

@@ -43,7 +43,7 @@ def _nonnegative(name, value, unit):
     return v
 
 
-def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001):
+def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=7):
     """Transition matrix F and process-noise covariance Q of the DWNA model.
 
     Parameters
@@ -55,13 +55,15 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001):
         (seed 001: 0.1).
     alpha : float
         Variance of the moment random walk per step ((A·m)²), ≥ 0, on ``Ph`` and ``Pv``
-        (seed 001: 0.001).
+        (seed 001: 0.001); on the moment vector (mx, my, mz) in (A·m²)² for magnetic states.
+    n_states : {7, 8}
+        7: the electric ``[x, y, z, vx, vy, Ph, Pv]``; 8: the magnetic ``[…, mx, my, mz]``.
 
     Returns
     -------
-    F : ndarray, shape (7, 7)
+    F : ndarray, shape (n, n)
         ``X_{k+1} = F X_k + w_k``.
-    Q : ndarray, shape (7, 7)
+    Q : ndarray, shape (n, n)
         Covariance of ``w_k`` in state units squared (m², m²/s, m²/s², (A·m)²). Singular in z
         (no vertical motion), and everywhere but the moments when σa = 0.
 
@@ -75,14 +77,17 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001):
     T = validation.positive("T", T, "s")
     sa2 = _nonnegative("sigma_a", sigma_a, "m/s²") ** 2
     alpha = _nonnegative("alpha", alpha, "(A·m)² per step")
-    F = np.eye(7)
+    if n_states not in (7, 8):
+        raise ValueError(f"n_states must be 7 (electric) or 8 (magnetic); got {n_states!r}")
+    F = np.eye(n_states)
     F[0, 3] = F[1, 4] = T
-    Q = np.zeros((7, 7))
+    Q = np.zeros((n_states, n_states))
     for p, v in ((0, 3), (1, 4)):  # Γ Σ Γᵀ with Γ = (T²/2, T)ᵀ on (position, velocity)
         Q[p, p] = sa2 * T**4 / 4.0
         Q[p, v] = Q[v, p] = sa2 * T**3 / 2.0
         Q[v, v] = sa2 * T**2
-    Q[5, 5] = Q[6, 6] = alpha
+    for k in range(5, n_states):
+        Q[k, k] = alpha
     return F, Q
 
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels, validation
+from . import kernels, sensors, validation
 from . import sea as sea_module
 from .fields import MODELS
 
@@ -80,7 +80,8 @@ def _prepare(states, stations, T, sigma, model, known, steps, sea=None):
     return (states, *options), n_rows, lead
 
 
-def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None, known=()):
+def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None, known=(),
+          sensor=None):
     """Observability matrix Γ.
 
     Parameters
@@ -102,11 +103,17 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=
         ``None``: paper rule, square Γ of the first n rows. ``N ≥ 1``: all rows of N instants.
     known : sequence of str
         States treated as known (their columns dropped), e.g. ``("Ph", "Pv")``.
+    sensor : {"E", "B", "G", "BG"} or core.Sensor or None
+        The measurement model (:class:`core.Sensor`). None or ``"E"``: the electric field with
+        ``sigma``, ``model``, ``sea`` (a Sensor carries those itself; do not pass both). The
+        magnetic kinds take states ``(..., 8)`` = ``[x, y, z, vx, vy, mx, my, mz]`` (m, m/s,
+        A·m²), need ``steps=N`` (the paper's square rule is the electric paper's) and give
+        C = 3 (B, nT), 5 (G, nT/m) or 8 (BG) rows per station and instant.
 
     Returns
     -------
-    ndarray, shape (..., n, n) for the paper rule or (..., 3·S·N, n)
-        n = 7 − len(known). Units: (V/m) per state unit.
+    ndarray, shape (..., n, n) for the paper rule or (..., C·S·N, n)
+        n = 7 − len(known) (8 for magnetic kinds). Units: (V/m) per state unit (electric).
 
     Notes
     -----
@@ -120,7 +127,13 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=
     (7, 7)
     >>> core.gamma([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]], steps=4).shape
     (12, 7)
+    >>> core.gamma([30, 40, 20, 2, 2, 10, 20, 30], [[0, 0, 0]], steps=2, sensor="BG").shape
+    (16, 8)
     """
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    if sensor.magnetic:
+        return sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known)
+    sigma, model, sea = sensor.sigma, sensor.model, sensor.sea
     args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
     n_free = args[-1].size
     out = np.empty((args[0].shape[0], n_rows, n_free))
@@ -136,7 +149,7 @@ def _square(states, stations, T, sigma, model, known, sea=None):
 
 
 def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None,
-                        known=()):
+                        known=(), sensor=None):
     """The paper's measure, log10 |det Γ| of the square (paper-rule) Γ.
 
     Parameters are those of :func:`gamma`.
@@ -156,11 +169,13 @@ def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", se
     >>> v.shape
     ()
     """
-    return _square(states, stations, T, sigma, model, known, sea)[0]
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    sensors.refuse_square(sensor, "log10_abs_det_gamma")
+    return _square(states, stations, T, sensor.sigma, sensor.model, known, sensor.sea)[0]
 
 
 def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None,
-                        steps=None, known=()):
+                        steps=None, known=(), sensor=None):
     """Scale-free observability index log10 η, η = sqrt(det Γ_sᵀΓ_s) ∈ [0, 1].
 
     ``Γ_s`` is Γ with unit columns, so η does not depend on units or moment scale. For the
@@ -173,6 +188,14 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", se
     ndarray, shape (...)
         log10 η (dimensionless, ≤ 0).
     """
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    if sensor.magnetic:
+        g = sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known,
+                                   whiten=True)
+        (_, s, _), _ = _scaled_svd(g)
+        with np.errstate(divide="ignore"):
+            return np.sum(np.log10(s), axis=-1)
+    sigma, model, sea = sensor.sigma, sensor.model, sensor.sea
     if steps is None:
         return _square(states, stations, T, sigma, model, known, sea)[1]
     args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
@@ -218,8 +241,18 @@ def _full_rank(log_rcond, states, options, n_rows):
     return out
 
 
+def _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor):
+    """Γ of the electric kind (one noise for every row: whitening changes nothing), or R^-½ Γ
+    of a magnetic kind (its rows in nT and nT/m made commensurate by their noise)."""
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    if sensor.magnetic:
+        return sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known,
+                                      whiten=True)
+    return gamma(states, stations, T=T, steps=steps, known=known, sensor=sensor)
+
+
 def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None,
-                    known=()):
+                    known=(), sensor=None):
     """Structural rank of Γ from the SVD of the column-scaled Γ.
 
     A singular value counts when it exceeds :data:`RANK_RTOL` times the largest. Column scaling
@@ -239,12 +272,12 @@ def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=No
     >>> int(core.observable_rank([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100], [15, 0, 100]]))
     7
     """
-    g = gamma(states, stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps, known=known)
+    g = _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor)
     return _svd_rank(g)
 
 
 def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None,
-                           known=()):
+                           known=(), sensor=None):
     """Unit vector n (in state units) with Γ n ≈ 0: the direction the data cannot resolve.
 
     The right singular vector of the smallest singular value of the column-scaled Γ, mapped
@@ -257,7 +290,7 @@ def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact",
     -------
     ndarray, shape (..., n)
     """
-    g = gamma(states, stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps, known=known)
+    g = _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor)
     (_, _, vt), norms = _scaled_svd(g)
     v = vt[..., -1, :] / norms[..., 0, :]  # back from scaled coordinates to state units
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)

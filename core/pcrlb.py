@@ -45,15 +45,15 @@ class PcrlbResult:
 
     Attributes
     ----------
-    information : ndarray, shape (steps, 7, 7)
+    information : ndarray, shape (steps, n, n)
         J_k, in 1 / (state unit × state unit).
-    cov : ndarray, shape (steps, 7, 7)
+    cov : ndarray, shape (steps, n, n)
         J_k⁻¹ (state units squared); +inf on the diagonal and NaN elsewhere where singular.
     position_std : ndarray, shape (steps,)
         sqrt(σx² + σy² + σz²) (m); +inf where J_k is singular.
     horizontal_std : ndarray, shape (steps,)
         sqrt(σx² + σy²) (m).
-    std : ndarray, shape (steps, 7)
+    std : ndarray, shape (steps, n)
         Bound on each state's standard deviation (m, m/s, A·m).
     observable : ndarray of bool, shape (steps,)
         J_k not singular.
@@ -67,12 +67,12 @@ class PcrlbResult:
     observable: np.ndarray
 
 
-def _tracks(track):
+def _tracks(track, n=7):
     arr = validation._array("track", track)
-    if arr.ndim not in (2, 3) or arr.shape[-1] != 7:
+    if arr.ndim not in (2, 3) or arr.shape[-1] != n:
         raise ValueError(
-            "track must be true states of shape (steps, 7), or (M, steps, 7) for M sampled "
-            f"tracks; got shape {arr.shape}"
+            f"track must be true states of shape (steps, {n}), or (M, steps, {n}) for M sampled "
+            f"tracks (the sensor's state size); got shape {arr.shape}"
         )
     validation._finite("track", arr)
     return arr if arr.ndim == 3 else arr[None]
@@ -88,8 +88,8 @@ def _matrix(name, value, shape):
 
 def measurement_information(tracks, sensors):
     """E[Hᵀ R⁻¹ H] at every step: (M, steps, 7) true states → (steps, 7, 7)."""
-    H = sensors.jacobian(tracks)  # (M, steps, m, 7)
-    return np.einsum("nkri,nkrj->kij", H, H) / (sensors.noise**2 * tracks.shape[0])
+    H = sensors.jacobian(tracks) / sensors.noise_vector[:, None]  # R^-½ H: (M, steps, m, n)
+    return np.einsum("nkri,nkrj->kij", H, H) / tracks.shape[0]
 
 
 @nb.njit(cache=True)
@@ -97,7 +97,7 @@ def _recursion(Finv, FinvT, Q, J0, info):
     """J_k for k = 0 … K−1 (K, 7, 7): the Tichavský recursion, compiled (a Python loop of
     numpy 7 × 7 calls costs ~0.2 ms a step in call overhead alone)."""
     steps = info.shape[0]
-    eye = np.eye(7)
+    eye = np.eye(info.shape[1])
     out = np.empty_like(info)
     J = J0.copy()
     for k in range(steps):
@@ -118,7 +118,7 @@ def _invert(J):
     Js = J * s[:, :, None] * s[:, None, :]
     ok = (d > 0.0).all(axis=1) & (np.linalg.eigvalsh(Js)[:, 0] > SINGULAR_TOL)
     cov = np.full(J.shape, np.nan)
-    idx = np.arange(7)
+    idx = np.arange(J.shape[1])
     cov[:, idx, idx] = np.inf
     if ok.any():
         cov[ok] = np.linalg.inv(Js[ok]) * s[ok][:, :, None] * s[ok][:, None, :]
@@ -130,19 +130,21 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, pr
 
     Parameters
     ----------
-    track : array_like, shape (steps, 7) or (M, steps, 7)
-        True states ``[x, y, z, vx, vy, Ph, Pv]`` (m, m/s, A·m) at every step: one nominal
+    track : array_like, shape (steps, n) or (M, steps, n)
+        True states ``[x, y, z, vx, vy, Ph, Pv]`` (m, m/s, A·m; n = 7) at every step, or
+        ``[x, y, z, vx, vy, mx, my, mz]`` (n = 8) for a magnetic sensor kind: one nominal
         track (e.g. :func:`core.straight_track`) or M sampled ones (:func:`core.sample_tracks`),
         over which the measurement information is averaged.
     sensors : core.SensorModel
-        Stations, axes (3 or 2), noise per axis, medium (``sea``).
+        Stations, sensor kind (``kind``: E, B, G, BG), axes (3 or 2), noise per component,
+        medium (``sea``).
     T, sigma_a, alpha : float
         Sample interval (s), DWNA acceleration σ (m/s²), moment random walk ((A·m)² per step)
         of :func:`core.dwna_model`. ``sigma_a = alpha = 0``: a deterministic track.
-    prior_cov : array_like, shape (7, 7), or None
+    prior_cov : array_like, shape (n, n), or None
         Covariance of the prior at step 0 (state units squared); ``None`` (and no
         ``prior_info``) is a flat prior (J_prior = 0: no information but the measurements).
-    prior_info : array_like, shape (7, 7), or None
+    prior_info : array_like, shape (n, n), or None
         The prior as an information matrix instead (1 / state units squared), symmetric
         positive *semi*-definite: zero rows are states with a flat prior (e.g. a filter bank that
         knows only the depth and Pv roughly). Not together with ``prior_cov``.
@@ -167,19 +169,20 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, pr
     """
     if not isinstance(sensors, SensorModel):
         raise ValueError(f"sensors must be a core.SensorModel; got {type(sensors).__name__}")
-    tracks = _tracks(track)
-    F, Q = dwna_model(T, sigma_a, alpha)
+    n = sensors.n_states
+    tracks = _tracks(track, n)
+    F, Q = dwna_model(T, sigma_a, alpha, n_states=n)
     if prior_cov is not None and prior_info is not None:
         raise ValueError("give the prior as prior_cov or as prior_info, not both")
     if prior_info is not None:
-        J = _matrix("prior_info", prior_info, (7, 7))
+        J = _matrix("prior_info", prior_info, (n, n))
         J = 0.5 * (J + J.T)
         if np.linalg.eigvalsh(J)[0] < -1e-12 * max(np.abs(J).max(), 1e-300):
             raise ValueError("prior_info must be symmetric positive semi-definite (1 / state units²)")
     elif prior_cov is None:
-        J = np.zeros((7, 7))
+        J = np.zeros((n, n))
     else:
-        P0 = _matrix("prior_cov", prior_cov, (7, 7))
+        P0 = _matrix("prior_cov", prior_cov, (n, n))
         P0 = 0.5 * (P0 + P0.T)
         try:
             np.linalg.cholesky(P0)

@@ -1,0 +1,90 @@
+"""Keep numba's on-disk kernel cache in step with the kernels' sources.
+
+numba reuses a cached kernel while *its own* source file is unchanged (numba 0.68 keys the
+index by that file's contents; older versions by its modification time and size). Our cached
+kernels inline functions and constants from other files (:mod:`core.kernels` inlines
+:mod:`core.fields` and :mod:`core.sea`), so an edit to the physics in one file left kernels
+cached from another file returning the old result until the cache files were deleted by hand.
+
+:func:`refresh` keys the whole cache by the sources instead: it hashes every file that holds
+compiled kernels (:data:`KERNEL_SOURCES`, plus numba's version) and, when the hash differs from
+the one recorded at the last refresh, removes the cache files (``*.nbi``, ``*.nbc``) of those
+modules, so that every kernel recompiles on its next call and caches itself again. Importing
+this module calls it, and ``core/__init__.py`` imports it first, before any kernel is even
+defined (numba reads a kernel's cache index when it is decorated).
+
+Where the cache cannot be written (a read-only install, e.g. the container image, whose sources
+never change after its build compiled the cache) it does nothing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numba
+
+#: Files of core/ that define or inline cached (``cache=True``) numba kernels. A module that
+#: gains a cached kernel must be listed here (tests/test_kernel_cache.py checks the list).
+KERNEL_SOURCES = ("fields.py", "sea.py", "kernels.py", "filters.py", "pcrlb.py",
+                  "magnetic_kernels.py")
+#: Name of the file that records the sources' hash at the last refresh.
+STAMP = "kernel-sources.sha256"
+
+_HERE = Path(__file__).resolve().parent
+
+
+def sources_hash(root=_HERE):
+    """SHA-256 (hex) of numba's version and the bytes of every :data:`KERNEL_SOURCES` file."""
+    h = hashlib.sha256(numba.__version__.encode())
+    for name in KERNEL_SOURCES:
+        h.update(name.encode())
+        h.update((Path(root) / name).read_bytes())
+    return h.hexdigest()
+
+
+def stamp_path(root=_HERE):
+    """Where the hash is recorded: numba's cache directory if one is set (NUMBA_CACHE_DIR),
+    else ``__pycache__`` beside the sources, as numba's own cache files."""
+    base = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else Path(root) / "__pycache__"
+    if numba.config.CACHE_DIR:  # one stamp per source tree under a shared cache directory
+        base = base / hashlib.sha256(str(Path(root)).encode()).hexdigest()[:16]
+    return base / STAMP
+
+
+def cache_files(root=_HERE):
+    """numba's cache files of the :data:`KERNEL_SOURCES` modules: in ``__pycache__`` beside the
+    sources, and (when NUMBA_CACHE_DIR is set) anywhere under that directory."""
+    stems = [Path(name).stem for name in KERNEL_SOURCES]
+    dirs = [Path(root) / "__pycache__"]
+    if numba.config.CACHE_DIR:
+        dirs.append(Path(numba.config.CACHE_DIR))
+    found = []
+    for d in dirs:
+        if d.is_dir():
+            for stem in stems:
+                found += [p for p in d.rglob(f"{stem}.*") if p.suffix in (".nbi", ".nbc")]
+    return found
+
+
+def refresh(root=_HERE):
+    """Remove numba's cache of every kernel if any kernel source changed since the last call
+    (see module notes). Returns True if it did."""
+    digest = sources_hash(root)
+    stamp = stamp_path(root)
+    try:
+        if stamp.read_text() == digest:
+            return False
+    except OSError:
+        pass  # no stamp yet (a fresh checkout): any cache there is of unknown sources
+    try:
+        for path in cache_files(root):
+            path.unlink(missing_ok=True)
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        stamp.write_text(digest)
+    except OSError:
+        return False  # a read-only cache: its sources cannot have changed since it was built
+    return True
+
+
+refresh()

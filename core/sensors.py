@@ -1,0 +1,197 @@
+"""The measurement model: which sensor kind measures, in which medium, with what noise.
+
+One object, :class:`Sensor`, describes what a station measures: the kind (``"E"`` electric,
+``"B"`` 3-axis magnetometer, ``"G"`` gradiometer, ``"BG"`` both), the noise per kind, the
+electric field formula (``exact`` / ``paper``), the medium (conductivity σ, or a
+:class:`core.Sea`) and a gradiometer's baseline. Γ, its rank, the unobservable direction,
+Fisher, CRLB, maps and CRLB maps take it as ``sensor=`` (a kind name builds one with the
+defaults); their old keywords ``sigma``, ``model``, ``sea`` still work and build the electric one.
+
+Electric kinds go through the compiled electric kernels (:mod:`core.kernels`); magnetic kinds
+through :mod:`core.magnetic_kernels` with the same Γ (time-major, then station, then
+component) and the same rank criterion (column-scaled SVD, :data:`core.RANK_RTOL`), on Γ
+whitened by the noise of each component (B in nT, G in nT/m, so that B + G rows are
+commensurate). The paper's square-Γ rule is the electric paper's and is refused for magnetic
+kinds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import magnetic, validation
+from .fields import MODELS
+from .sea import Sea
+
+__all__ = ["KINDS", "MAGNETIC_NOISE", "Sensor", "sensor_model"]
+
+#: Sensor kinds: name -> (what it measures, components per station, noise unit).
+KINDS = {
+    "E": ("electric field (Ex, Ey, Ez)", 3, "V/m"),
+    "B": ("magnetic field (Bx, By, Bz)", 3, "nT"),
+    "G": ("gradient tensor (Gxx, Gxy, Gxz, Gyy, Gyz)", 5, "nT/m"),
+    "BG": ("magnetic field and gradient tensor", 8, "nT and nT/m"),
+}
+#: Default noise of the magnetic kinds: (magnetometer nT, gradiometer nT/m). Seed 003's
+#: gradiometer noise is 0.01 (nT/m assumed); the magnetometer's is taken equal in nT.
+MAGNETIC_NOISE = (0.01, 0.01)
+#: Default electric noise (V/m) per component, as core.DEFAULT_NOISE.
+ELECTRIC_NOISE = 1e-7
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """What every station measures, and in which medium.
+
+    Parameters
+    ----------
+    kind : {"E", "B", "G", "BG"}
+        Electric field (V/m), magnetometer (nT), gradiometer (nT/m) or both magnetic kinds.
+    noise : float or (float, float) or None
+        Noise standard deviation per component: V/m for ``E``, nT for ``B``, nT/m for ``G``,
+        (nT, nT/m) for ``BG``. None: :data:`ELECTRIC_NOISE` or :data:`MAGNETIC_NOISE`.
+    sigma : float
+        Sea conductivity (S/m), > 0; the electric kinds' medium (a static magnetic field does
+        not see it).
+    sea : core.Sea or None
+        Layered sea (electric kinds); None is the whole space.
+    model : {"exact", "paper"}
+        Electric field formula.
+    baseline : float or None
+        A gradiometer's baseline L (m): None or 0 is the point tensor, L > 0 the differences of
+        its magnetometers (:func:`core.gradient_tensor`).
+
+    Examples
+    --------
+    >>> import core
+    >>> s = core.Sensor("BG", noise=(0.1, 0.01))
+    >>> s.n_components, s.n_states, s.noise_vector
+    (8, 8, (0.1, 0.1, 0.1, 0.01, 0.01, 0.01, 0.01, 0.01))
+    """
+
+    kind: str = "E"
+    noise: object = None
+    sigma: float = 4.0
+    sea: object = None
+    model: str = "exact"
+    baseline: object = None
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"sensor kind must be one of {list(KINDS)} (or a core.Sensor); got {self.kind!r}")
+        validation.positive("sigma", self.sigma, "S/m")
+        validation.model_code(self.model, MODELS)
+        if self.sea is not None and not isinstance(self.sea, Sea):
+            raise ValueError(f"sea must be None or a core.Sea; got {type(self.sea).__name__}")
+        magnetic.baseline_value(self.baseline)
+        if self.magnetic and (self.sea is not None or self.model != "exact"):
+            raise ValueError(
+                f"sensor kind {self.kind!r} is magnetic: a static magnetic field does not see the "
+                "sea (μr ≈ 1), and the 'paper' model is the electric paper's; leave sea=None and "
+                "model='exact'"
+            )
+        self.noise_vector  # validates
+
+    @property
+    def magnetic(self):
+        """True for the magnetic kinds B, G, BG."""
+        return self.kind != "E"
+
+    @property
+    def n_components(self):
+        """Measured components per station: 3 (E, B), 5 (G), 8 (BG)."""
+        return KINDS[self.kind][1]
+
+    @property
+    def n_states(self):
+        """State size: 7 (electric ``[x, y, z, vx, vy, Ph, Pv]``) or 8 (``[…, mx, my, mz]``)."""
+        return 8 if self.magnetic else 7
+
+    @property
+    def state_names(self):
+        """Names of the state entries, in order."""
+        return magnetic.MAGNETIC_STATE_NAMES if self.magnetic else validation.STATE_NAMES
+
+    @property
+    def noise_vector(self):
+        """Noise standard deviation of each component of one station (tuple of floats)."""
+        unit = KINDS[self.kind][2]
+        if self.kind == "BG":
+            pair = MAGNETIC_NOISE if self.noise is None else self.noise
+            if np.ndim(pair) != 1 or len(pair) != 2:
+                raise ValueError(f"noise of kind 'BG' must be (nT, nT/m); got {self.noise!r}")
+            nb = validation.positive("noise (B)", pair[0], "nT")
+            ng = validation.positive("noise (G)", pair[1], "nT/m")
+            return (nb,) * 3 + (ng,) * 5
+        default = {"E": ELECTRIC_NOISE, "B": MAGNETIC_NOISE[0], "G": MAGNETIC_NOISE[1]}[self.kind]
+        value = validation.positive("noise", default if self.noise is None else self.noise, unit)
+        return (value,) * self.n_components
+
+    def free_columns(self, known):
+        """Indices of the unknown states, given the names of the known ones."""
+        if not self.magnetic:
+            return validation.free_columns(known)
+        names = self.state_names
+        known = () if known is None else ((known,) if isinstance(known, str) else tuple(known))
+        for name in known:
+            if name not in names:
+                raise ValueError(f"known states must be names from {names}; got {name!r}")
+        free = [j for j, name in enumerate(names) if name not in known]
+        if not free:
+            raise ValueError("at least one state must be unknown; got all of them as known")
+        return np.array(free, dtype=np.int64)
+
+
+def sensor_model(sensor=None, *, sigma=4.0, model="exact", sea=None, noise=None):
+    """The :class:`Sensor` of a call: ``sensor`` (a kind name or a Sensor) or, when None, the
+    electric one built from the old keywords. An object given together with non-default
+    medium keywords is a ValueError (two descriptions of one measurement)."""
+    if isinstance(sensor, Sensor):
+        if sigma != 4.0 or model != "exact" or sea is not None:
+            raise ValueError(
+                "pass the medium either in the core.Sensor or as sigma=/model=/sea=, not both; "
+                f"got sensor={sensor!r} and sigma={sigma!r}, model={model!r}, sea={sea!r}"
+            )
+        return sensor if noise is None else Sensor(sensor.kind, noise, sensor.sigma, sensor.sea,
+                                                   sensor.model, sensor.baseline)
+    if sensor is None:
+        sensor = "E"
+    if not isinstance(sensor, str):
+        raise ValueError(f"sensor must be one of {list(KINDS)} or a core.Sensor; got {sensor!r}")
+    if sensor == "E":
+        return Sensor("E", noise, sigma, sea, model)
+    if sigma != 4.0 or model != "exact" or sea is not None:
+        raise ValueError(f"sensor kind {sensor!r} is magnetic: sigma, model and sea are electric "
+                         f"options; got sigma={sigma!r}, model={model!r}, sea={sea!r}")
+    return Sensor(sensor, noise)
+
+
+def refuse_square(sensor, what):
+    """ValueError for the paper's square-Γ rule with a magnetic kind."""
+    if sensor.magnetic:
+        raise ValueError(
+            f"{what} uses the paper's square-Γ rule, which is the electric paper's (its row order "
+            f"and its 7 states); sensor kind {sensor.kind!r} needs the all-rows Γ: pass steps=N "
+            "(or a Fisher / CRLB measure)"
+        )
+
+
+def magnetic_gamma(states, stations, sensor, *, T, steps, known, whiten=False):
+    """All-rows Γ of a magnetic kind: (..., N·S·C, n_free), rows time-major, then station, then
+    component. ``whiten``: each row divided by its component's noise (R^-½ Γ)."""
+    if steps is None:
+        refuse_square(sensor, "steps=None")
+    n = validation.steps(steps, 1)
+    step = validation.positive("T", T, "s")
+    free = sensor.free_columns(known)
+    stations = validation.stations(stations)
+    blocks = []
+    for i in range(n):
+        _, jac = magnetic.measurement_rows(states, stations, sensor.kind, sensor.baseline, i * step)
+        if whiten:
+            jac = jac / np.asarray(sensor.noise_vector)[:, None]
+        blocks.append(jac.reshape(jac.shape[:-3] + (-1, jac.shape[-1])))
+    g = np.concatenate(blocks, axis=-2)  # (..., N·S·C, 8)
+    return g[..., free]
