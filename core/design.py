@@ -291,6 +291,22 @@ def magnetic_plane_states(plane, velocity, moments, rows=slice(None)):
     return out.reshape(-1, 8)
 
 
+def magnetic_clear(states, stations, sensor, steps, T):
+    """(P,) True where a magnetic target (P, 8) stays clear of every station at every instant
+    of Γ: farther than ON_STATION, and than a gradiometer's baseline (its magnetometers sit
+    ±L/2 about the station)."""
+    near = validation.ON_STATION
+    if sensor.kind in ("G", "BG"):
+        near = max(near, magnetic.baseline_value(sensor.baseline))
+    T = validation.positive("T", T, "s")
+    clear = np.ones(states.shape[0], dtype=bool)
+    for i in range(validation.steps(steps, 1)):
+        moved = states[:, :3].copy()
+        moved[:, :2] += i * T * states[:, 3:5]
+        clear &= np.min(validation.station_distances(moved, stations), axis=1) >= near
+    return clear
+
+
 def _pair(name, value):
     arr = np.asarray(value, dtype=np.float64) if np.ndim(value) == 1 else None
     if arr is None or arr.shape != (2,) or not np.all(np.isfinite(arr)):
@@ -336,10 +352,10 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=None, steps=DEFAULT_S
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     states = _plane_states(plane, velocity, moments, sensor)
     stations = validation.stations(stations)
-    near = validation.ON_STATION
-    if sensor.kind in ("G", "BG"):  # a gradiometer array's magnetometers sit ±L/2 about it
-        near = max(near, magnetic.baseline_value(sensor.baseline))
-    ok = np.flatnonzero(np.min(validation.station_distances(states, stations), axis=1) >= near)
+    if sensor.magnetic:
+        ok = np.flatnonzero(magnetic_clear(states, stations, sensor, steps, T))
+    else:
+        ok = np.flatnonzero(_off_station(states, stations))
     out = {k: np.full(states.shape[0], np.nan) for k in
            ("semi_major", "semi_minor", "orientation", "sigma_z", "sigma_speed", "position")}
     out["observable"] = np.zeros(states.shape[0], dtype=bool)
@@ -472,10 +488,7 @@ def _region_states(region, velocity, moments, sensor=None):
 
 def _magnetic_criterion(states, stations, criterion, threshold, steps, T, known, sensor):
     """:func:`_criterion` of a magnetic kind: the Fisher measures of the whitened Γ."""
-    near = validation.ON_STATION
-    if sensor.kind in ("G", "BG"):
-        near = max(near, magnetic.baseline_value(sensor.baseline))
-    states = states[np.min(validation.station_distances(states, stations), axis=1) >= near]
+    states = states[magnetic_clear(states, stations, sensor, steps, T)]
     if states.shape[0] == 0:
         raise ValueError("every point of the region lies on a station; nothing to evaluate")
     m, _, _ = magnetic_fisher(states, stations, sensor, T, steps, known)

@@ -16,7 +16,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels, magnetic, sensors, validation
-from .observability import _full_rank, _prepare, _svd_rank, gamma
+from .observability import (
+    _BRACKET_MARGIN,
+    RANK_RTOL,
+    _full_rank,
+    _prepare,
+    _svd_rank,
+    gamma,
+)
 
 __all__ = ["DEFAULT_NOISE", "DEFAULT_STEPS", "FisherMeasures", "fisher_information", "fisher_measures"]
 
@@ -154,19 +161,34 @@ def magnetic_fisher(states, stations, sensor, T, steps, known):
     g = sensors.magnetic_gamma(flat, stations, sensor, T=T, steps=steps, known=known, whiten=True)
     free = sensor.free_columns(known)
     npts, n = flat.shape[0], free.size
-    observable = _svd_rank(g) == n
+    if g.shape[-2] < n:  # fewer rows than unknowns: rank < n everywhere; pad Γ with zero rows
+        g = np.concatenate([g, np.zeros(g.shape[:-2] + (n - g.shape[-2], n))], axis=-2)
     norms = np.linalg.norm(g, axis=-2)  # (P, n)
     with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (P, n, n)
+        r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (P, n, n): Γ_s = Q R
         diag = np.abs(np.diagonal(r, axis1=-2, axis2=-1))
         log_eta = np.sum(np.log10(diag), axis=-1)
         log_norms = np.sum(np.log10(norms), axis=-1)
+    # The one rank criterion without an SVD per point: rcond = 1 / (‖Γ_s‖_F ‖R⁻¹‖_F), with
+    # ‖Γ_s‖_F² = n, brackets σmin/σmax in [rcond, n·rcond] (core.kernels); the thin band where
+    # the bracket straddles RANK_RTOL is decided by the SVD, as core.observability._full_rank.
+    invertible = np.all(diag > 0.0, axis=-1) & np.all(np.isfinite(r), axis=(-2, -1))
+    idx = np.flatnonzero(invertible)
+    rinv = np.full((npts, n, n), np.nan)
+    if idx.size:
+        rinv[idx] = np.linalg.solve(r[idx], np.broadcast_to(np.eye(n), (idx.size, n, n)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frob2 = np.sum(rinv * rinv, axis=(-2, -1))
+        log_rcond = np.where(invertible & np.isfinite(frob2), -0.5 * np.log10(n * frob2), -np.inf)
+    observable = log_rcond >= np.log10(RANK_RTOL * _BRACKET_MARGIN)
+    unsure = ~observable & (log_rcond + np.log10(n) > np.log10(RANK_RTOL / _BRACKET_MARGIN))
+    if np.any(unsure):
+        observable[unsure] = _svd_rank(g[unsure]) == n
     cov = np.full((npts, n, n), np.nan)
     cov[:, np.arange(n), np.arange(n)] = np.inf
     idx = np.flatnonzero(observable)
     if idx.size:
-        rinv = np.linalg.solve(r[idx], np.broadcast_to(np.eye(n), (idx.size, n, n)))
-        inv_s = rinv @ np.swapaxes(rinv, -1, -2)
+        inv_s = rinv[idx] @ np.swapaxes(rinv[idx], -1, -2)  # (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ
         cov[idx] = inv_s / (norms[idx, :, None] * norms[idx, None, :])
     var = np.diagonal(cov, axis1=-2, axis2=-1)
     pos = [q for q, j in enumerate(free) if j < 3]

@@ -77,13 +77,16 @@ def refresh(root=_HERE):
             return False
     except OSError:
         pass  # no stamp yet (a fresh checkout): any cache there is of unknown sources
-    try:
-        for path in cache_files(root):
-            path.unlink(missing_ok=True)
+    try:  # the stamp first: where it cannot be written, nothing is removed
         stamp.parent.mkdir(parents=True, exist_ok=True)
         stamp.write_text(digest)
     except OSError:
         return False  # a read-only cache: its sources cannot have changed since it was built
+    for path in cache_files(root):
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:
+            pass  # another user's file in a shared NUMBA_CACHE_DIR: left as it is
     return True
 
 

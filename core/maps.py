@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels, magnetic, sensors, validation
+from . import kernels, sensors, validation
 from . import sea as sea_module
-from .design import magnetic_plane_states
+from .design import magnetic_clear, magnetic_plane_states
 from .fisher import DEFAULT_STEPS, _fisher_from_kernel, magnetic_fisher
 from .observability import _full_rank, _options
 
@@ -117,10 +117,6 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
 def _magnetic_map(plane, stations, velocity, moments, measure, T, known, steps, sensor):
     """:func:`evaluate_map` for a magnetic kind (all-rows measures only)."""
     stations = validation.stations(stations)
-    T = validation.positive("T", T, "s")
-    near = validation.ON_STATION
-    if sensor.kind in ("G", "BG"):  # the gradiometer's magnetometers sit ±L/2 about it
-        near = max(near, magnetic.baseline_value(sensor.baseline))
     n = plane.n
     value = np.full(n * n, np.nan)
     observable = np.zeros(n * n, dtype=bool)
@@ -128,12 +124,7 @@ def _magnetic_map(plane, stations, velocity, moments, measure, T, known, steps, 
     for r0 in range(0, n, rows_per_chunk):
         rows = slice(r0, min(n, r0 + rows_per_chunk))
         states = magnetic_plane_states(plane, velocity, moments, rows)
-        # a moving target must stay off the stations at every instant of Γ
-        moved = [states[:, :3] + i * T * np.column_stack([states[:, 3:5], np.zeros(len(states))])
-                 for i in range(validation.steps(steps, 1))]
-        dist = np.min([np.min(np.linalg.norm(p[:, None, :] - stations[None], axis=-1), axis=1)
-                       for p in moved], axis=0)
-        ok = np.flatnonzero(dist >= near)
+        ok = np.flatnonzero(magnetic_clear(states, stations, sensor, steps, T))
         base = rows.start * n
         if ok.size:
             m, _, _ = magnetic_fisher(states[ok], stations, sensor, T, steps, known)

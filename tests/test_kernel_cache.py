@@ -35,6 +35,27 @@ def test_every_cached_kernel_source_is_listed():
     assert cached == set(kernel_cache.KERNEL_SOURCES)
 
 
+def test_refresh_removes_the_kernels_cache_only_when_a_source_changes(tmp_path, monkeypatch):
+    monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", "")
+    for name in kernel_cache.KERNEL_SOURCES:
+        (tmp_path / name).write_text(f"# {name}\n")
+    cache = tmp_path / "__pycache__"
+    cache.mkdir()
+    stale = [cache / "kernels.fill_gamma-122.py311.nbi", cache / "sea.pair_rows-346.py311.1.nbc"]
+    other = cache / "grids.cpython-311.pyc"
+    for p in (*stale, other):
+        p.write_bytes(b"x")
+    assert kernel_cache.refresh(tmp_path)  # no stamp yet: caches of unknown sources go
+    assert not any(p.exists() for p in stale) and other.exists()
+    for p in stale:
+        p.write_bytes(b"x")
+    assert not kernel_cache.refresh(tmp_path)  # same sources: the cache stays
+    assert all(p.exists() for p in stale)
+    (tmp_path / "fields.py").write_text("# fields.py, edited\n")
+    assert kernel_cache.refresh(tmp_path)  # one source edited: every kernel's cache goes
+    assert not any(p.exists() for p in stale) and other.exists()
+
+
 def _run(root):
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["PYTHONPATH"] = str(root)

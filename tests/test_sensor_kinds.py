@@ -177,3 +177,17 @@ def test_layout_criterion_takes_the_sensor():
     bg = core.layout_criterion([[0.0, 0.0, 0.0]], region, sensor="BG", criterion="area_crlb",
                                threshold=1.0, **kw)
     assert bg.observable_fraction == 1.0
+
+
+def test_magnetic_maps_mask_targets_that_reach_a_station():
+    """A plane through the station: grid points whose track reaches it within Γ's instants are
+    NaN in the maps (as the electric maps mask stations), not a ValueError."""
+    plane = core.Plane("xy", (-4, 4), (-4, 4), 0.0, 5)  # spacing 2 m, velocity (2, 2) m/s
+    kw = dict(velocity=(2.0, 2.0), moments=(1e3, -2e3, 5e2), steps=2)
+    m = core.evaluate_map(plane, STATION, measure="crlb_position", sensor="BG", **kw)
+    e = core.crlb_maps(plane, STATION, sensor="BG", **kw)
+    # (0, 0) is on the station; (−2, −2) reaches it at the second instant
+    for i, j in ((2, 2), (1, 1)):
+        assert np.isnan(m.value[i, j]) and not m.observable[i, j] and np.isnan(e.position[i, j])
+    assert np.isfinite(m.value[0, 4])
+    np.testing.assert_allclose(e.position, m.value, rtol=1e-10)
