@@ -97,6 +97,7 @@ from .observability import (
 from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
 from .sea import Sea
 from .sensors import KINDS, MAGNETIC_NOISE, Sensor
+from .unscented import UkfRun, huber_weights, run_ukf, sigma_points, ukf_predict, ukf_update
 from .validation import STATE_NAMES
 
 __all__ = [
@@ -122,6 +123,8 @@ __all__ = [
     "PcrlbResult", "SensorModel", "bank_hypotheses", "dwna_model", "ekf_predict", "ekf_update",
     "linearisation_breaks", "pcrlb", "run_bank", "run_filters", "sample_tracks", "start_range",
     "straight_track",
+    # unscented filters, generic over f and h (core.unscented; seed 003's NHUKF)
+    "UkfRun", "huber_weights", "run_ukf", "sigma_points", "ukf_predict", "ukf_update",
 ]
 
 # Ship magnetometer calibration, seed 004 (core.calibration, a package whose CLI module is

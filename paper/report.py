@@ -251,12 +251,18 @@ def section_seed004(ctx):
     return [section()]
 
 
+def section_seed003(ctx):
+    """Seed 003's extended magnetic target: UKF, NHUKF, PCA shape and the bound (paper/shape.py)."""
+    from .shape import section
+    return [section()]
+
+
 #: The paper's own sections, in order.
 PAPER_SECTIONS = (section_intro, section_method, section_verdicts, section_roundoff,
                   section_figures, section_beyond)
 #: The report, section by section: each is a function Context -> list of markdown lines (it may
 #: compute what else it needs, e.g. from ``ctx.n``). A new section is one line here, appended.
-SECTIONS = [*PAPER_SECTIONS, section_sea, section_seed004]
+SECTIONS = [*PAPER_SECTIONS, section_sea, section_seed004, section_seed003]
 
 
 def render(ctx, sections=None):

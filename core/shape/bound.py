@@ -1,0 +1,134 @@
+"""The Cramér–Rao bound of seed 003's shape read, against the pass's closest approach.
+
+The 15-state model (:mod:`core.shape.model`) at the target's own 4-dipole representation —
+N dipoles at the centres of N equal segments of the axis (a cylinder of height H) or at the
+corners of the square of diagonal D / :data:`core.shape.pca.DISC_FACTOR` (a disc of diameter
+D), each with the moment M / N — seen by the one-sample gradiometer (σ per component, point
+tensor) along a pass: Fisher information J = Σ_k H_kᵀ R⁻¹ H_k, covariance J⁻¹, and by the
+delta method (central differences of the PCA read, step 1e-6 m) the standard deviations of
+
+- the centroid (3-D RMS, m),
+- the main scale (m: N/(N−1) · span along u1 for a line, the disc diameter for a plane),
+- the axis angle (degrees: RMS angle of the perturbed u1, or of u3 for a plane).
+
+This is the best any unbiased estimator of that model can do from noise alone: errors far above
+it come from the model (4 dipoles for a continuum), not the noise.
+
+Beside it, the *rigid-line* bound (a line target only): the same dipoles constrained to a
+rigid evenly spaced line, 9 parameters (centroid, axis azimuth and elevation, length L, moment),
+which is what an estimator that knew the target is a rod would face. The free 15-state model
+also has to find the dipoles' spacing along and across the axis, and far from the target those
+directions are nearly unobservable: its bound grows much faster with the closest approach.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import model as md
+from .pca import DISC_FACTOR, pca_shape
+from .targets import Pass, Target
+
+__all__ = ["ShapeBound", "representation", "shape_bound", "shape_bound_curve"]
+
+
+def representation(target, n=md.N_DIPOLES):
+    """The target's n-dipole state (3n + 3,): positions on its axis (line) or in its plane
+    (disc, n = 4: a square), moment M / n each."""
+    c, a = target.centroid, target.axis
+    if target.kind == "line":
+        pos = c + np.outer((np.arange(n) + 0.5) / n * target.height - target.height / 2, a)
+    else:
+        if n != 4:
+            raise ValueError("a disc's representation is the 4-dipole square (n = 4)")
+        half = target.main_scale / DISC_FACTOR / 2  # half-diagonal
+        R = target.rotation
+        pos = c + half * np.array([R[:, 0], R[:, 1], -R[:, 0], -R[:, 1]])
+    return np.r_[pos.ravel(), target.total_moment / n]
+
+
+@dataclass(frozen=True)
+class ShapeBound:
+    """Standard deviations of the bound (see the module notes)."""
+
+    closest_approach_m: float
+    centroid_m: float
+    main_scale_m: float
+    axis_deg: float
+    dipole_position_m: float  # RMS over the dipoles' coordinates
+    rigid_centroid_m: float = float("nan")
+    rigid_main_scale_m: float = float("nan")
+    rigid_axis_deg: float = float("nan")
+
+    def to_dict(self):
+        return {k: float(v) for k, v in self.__dict__.items()}
+
+
+def _read(x, n):
+    s = pca_shape(x[: 3 * n].reshape(n, 3))
+    return s.centroid, float(s.main_scale), s.axis
+
+
+def shape_bound(target=None, track=None, noise=0.01, n=md.N_DIPOLES):
+    """The bound for one pass; see the module notes. ``noise`` in nT/m."""
+    target = Target() if target is None else target
+    track = Pass() if track is None else track
+    x = representation(target, n)
+    mdl = md.DipoleModel(track.positions, n_dipoles=n)
+    J = np.zeros((x.size, x.size))
+    for k in range(track.samples):
+        H = mdl.jacobian(x, k)
+        J += H.T @ H / noise**2
+    C = np.linalg.inv(J)
+    c0, L0, a0 = _read(x, n)
+    h = 1e-6
+    dc, dL, da = np.zeros((3, x.size)), np.zeros(x.size), np.zeros((3, x.size))
+    for i in range(3 * n):  # the read depends on the positions only
+        e = np.zeros(x.size)
+        e[i] = h
+        cp, Lp, ap = _read(x + e, n)
+        cm, Lm, am = _read(x - e, n)
+        ap, am = ap * np.sign(ap @ a0), am * np.sign(am @ a0)
+        dc[:, i], dL[i], da[:, i] = (cp - cm) / (2 * h), (Lp - Lm) / (2 * h), (ap - am) / (2 * h)
+    rigid = _rigid_line(target, mdl, track.samples, noise, n) if target.kind == "line" else {}
+    return ShapeBound(
+        **rigid,
+        closest_approach_m=track.closest_approach(target.centroid),
+        centroid_m=float(np.sqrt(np.trace(dc @ C @ dc.T))),
+        main_scale_m=float(np.sqrt(dL @ C @ dL)),
+        axis_deg=float(np.degrees(np.sqrt(np.trace(da @ C @ da.T)))),
+        dipole_position_m=float(np.sqrt(np.trace(C[: 3 * n, : 3 * n]) / (3 * n))),
+    )
+
+
+def shape_bound_curve(cpas, target=None, track=None, noise=0.01):
+    """:func:`shape_bound` for the pass moved to each closest approach in ``cpas`` (m)."""
+    track = Pass() if track is None else track
+    return [shape_bound(target, track.with_closest_approach(c), noise) for c in cpas]
+
+
+def _rigid_line(target, mdl, samples, noise, n):
+    """The rigid-line bound (module notes): parameters θ = [c (3), azimuth, elevation, L, m (3)]."""
+    a = target.axis
+    th0 = np.r_[target.centroid, np.arctan2(a[1], a[0]), np.arcsin(np.clip(a[2], -1, 1)),
+                target.height, target.total_moment / n]
+
+    def xfun(th):
+        az, el = th[3], th[4]
+        u = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+        pos = th[:3] + np.outer((np.arange(n) + 0.5) / n * th[5] - th[5] / 2, u)
+        return np.r_[pos.ravel(), th[6:]]
+
+    h = 1e-6
+    D = np.stack([(xfun(th0 + h * e) - xfun(th0 - h * e)) / (2 * h) for e in np.eye(th0.size)], -1)
+    x = xfun(th0)
+    J = np.zeros((th0.size, th0.size))
+    for k in range(samples):
+        H = mdl.jacobian(x, k) @ D
+        J += H.T @ H / noise**2
+    C = np.linalg.inv(J)
+    ang = np.sqrt(C[3, 3] * np.cos(th0[4]) ** 2 + C[4, 4])  # RMS angle of the axis (rad)
+    return {"rigid_centroid_m": float(np.sqrt(np.trace(C[:3, :3]))),
+            "rigid_main_scale_m": float(np.sqrt(C[5, 5])), "rigid_axis_deg": float(np.degrees(ang))}

@@ -1,0 +1,216 @@
+"""Seed 003's estimation model: N dipoles with one common moment, seen by a moving gradiometer.
+
+State (3N + 3; seed 003's N = 4 gives its 15 states, eq. (14))::
+
+    X = [r1 (3), r2 (3), …, rN (3), m (3)]      positions (m, world frame), moment (A·m²)
+
+Each of the N dipoles has moment m; the predicted tensor is the sum of theirs (the filter's
+model is the point tensor, baseline 0). The target is static and the platform's positions are
+known (inertial navigation), so the process model is the identity with a small random walk
+(:data:`Q_POSITION`, :data:`Q_MOMENT`) and the measurement function depends on the step
+through the gradiometer's position s_k.
+
+Measurement: the 5 independent tensor components (Gxx, Gxy, Gxz, Gyy, Gyz), nT/m, of
+:func:`core.gradient_tensor` (the one magnetic measurement model), either of the current sample
+(``lag=0``, the honest one-sample update) or seed 003's window of three lagged readings
+``[G_{k−2n}, G_{k−n}, G_k]`` (eq. (15), ``lag=n``; n is not printed, 5 is our choice), which
+uses every sample three times and so makes the filter's covariance optimistic. At k < 2n the
+window holds the readings that exist.
+
+Start: not at one point. With all N dipoles at one point, every dipole's position columns of
+∂h/∂X are equal (each adds the same T(r)·m), so the Jacobian stacked over any number of
+samples has rank 6 (3 positions + 3 moment) whatever the data — and a UKF whose prior treats
+the dipoles alike keeps them together for ever. :func:`start_state` puts them at the vertices
+of a regular tetrahedron (radius :data:`START_SPREAD`) about a point fix (Euler) with moment
+m₀ / N each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..magnetic import gradient_tensor, magnetic_field, magnetic_jacobian
+
+__all__ = ["G_COMPONENTS", "LAG", "N_DIPOLES", "P0_MOMENT_REL", "P0_POSITION", "Q_MOMENT",
+           "Q_POSITION", "START_SPREAD", "DipoleModel", "collapsed", "start_state",
+           "tetrahedron"]
+
+#: Dipoles of the model (seed 003: 4, the fewest that span a volume).
+N_DIPOLES = 4
+#: (i, j) of the five measured tensor components (Gxx, Gxy, Gxz, Gyy, Gyz).
+G_COMPONENTS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2))
+#: Seed 003's window lag n (samples) of its eq. (15); not printed there.
+LAG = 5
+#: Radius of the starting tetrahedron (m).
+START_SPREAD = 0.5
+#: Prior σ of every dipole coordinate (m).
+P0_POSITION = 2.0
+#: Prior σ of each moment component, relative to |m₀| (the start's moment per dipole).
+P0_MOMENT_REL = 0.5
+#: Process noise per step: position variance (m²) and moment variance (A·m²)².
+Q_POSITION = 1e-6
+Q_MOMENT = 1e-2
+
+
+def _states8(sources, moments):
+    """Magnetic states (P, 8) of :mod:`core.magnetic` for dipoles at rest (velocity unused)."""
+    sources = np.asarray(sources, float)
+    st = np.zeros(sources.shape[:-1] + (8,))
+    st[..., :3] = sources
+    st[..., 5:] = moments
+    return st
+
+
+def dipole_field(sources, moments, stations):
+    """B (P, S, 3) nT of P dipoles (positions, moments (P, 3)) at S stations:
+    :func:`core.magnetic_field`, the one magnetic kernel."""
+    return magnetic_field(_states8(sources, moments), stations)
+
+
+def dipole_tensor(sources, moments, stations, baseline=None):
+    """G (P, S, 3, 3) nT/m of P dipoles at S stations: :func:`core.gradient_tensor` (point
+    tensor, or the finite-baseline array)."""
+    return gradient_tensor(_states8(sources, moments), stations, baseline=baseline)
+
+
+def tetrahedron(n=N_DIPOLES, radius=START_SPREAD):
+    """Offsets of n start points on a sphere of ``radius`` (m), (n, 3): a regular tetrahedron
+    for n = 4, a Fibonacci sphere otherwise."""
+    if n == 4:
+        v = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) / np.sqrt(3.0)
+    else:
+        i = np.arange(n) + 0.5
+        phi = np.arccos(1 - 2 * i / n)
+        th = np.pi * (1 + 5**0.5) * i
+        v = np.stack([np.cos(th) * np.sin(phi), np.sin(th) * np.sin(phi), np.cos(phi)], -1)
+    return radius * v
+
+
+def start_state(point, moment, *, n=N_DIPOLES, spread=START_SPREAD):
+    """Start mean and covariance: n dipoles about ``point`` with moment ``moment / n`` each.
+
+    Parameters
+    ----------
+    point : array_like, shape (..., 3)
+        A point fix of the target (m), e.g. Euler's.
+    moment : array_like, shape (..., 3)
+        The point fix's total moment (A·m²).
+    n : int
+        Dipoles.
+    spread : float
+        Radius of the start figure (m); 0 collapses them (rank 6: do not).
+
+    Returns
+    -------
+    x0 : ndarray, shape (..., 3n + 3)
+    P0 : ndarray, shape (..., 3n + 3, 3n + 3)
+        Diagonal: :data:`P0_POSITION`² on positions, (:data:`P0_MOMENT_REL` · |m₀|)² on the
+        moment.
+    """
+    point = np.asarray(point, float)
+    m = np.asarray(moment, float) / n
+    pos = point[..., None, :] + tetrahedron(n, spread)  # (..., n, 3)
+    x0 = np.concatenate([pos.reshape(point.shape[:-1] + (3 * n,)), m], axis=-1)
+    d = np.empty(point.shape[:-1] + (3 * n + 3,))
+    d[..., : 3 * n] = P0_POSITION**2
+    d[..., 3 * n:] = (P0_MOMENT_REL * np.linalg.norm(m, axis=-1, keepdims=True)) ** 2
+    return x0, d[..., :, None] * np.eye(3 * n + 3)
+
+
+def collapsed(x, n=N_DIPOLES):
+    """``x`` (..., 3n + 3) with every dipole moved to their centroid."""
+    x = np.array(x, float)
+    pos = x[..., : 3 * n].reshape(x.shape[:-1] + (n, 3))
+    x[..., : 3 * n] = np.repeat(pos.mean(axis=-2, keepdims=True), n, axis=-2).reshape(x.shape[:-1] + (3 * n,))
+    return x
+
+
+@dataclass(frozen=True)
+class DipoleModel:
+    """The measurement model of the filters (module notes).
+
+    Parameters
+    ----------
+    stations : array_like, shape (K, 3)
+        Gradiometer centre at each sample (m).
+    n_dipoles : int
+        N.
+    lag : int
+        0: one-sample update (5 rows); n > 0: seed 003's window [k − 2n, k − n, k] (15 rows).
+    """
+
+    stations: np.ndarray
+    n_dipoles: int = N_DIPOLES
+    lag: int = 0
+
+    def __post_init__(self):
+        st = np.asarray(self.stations, float)
+        if st.ndim != 2 or st.shape[1] != 3 or not np.all(np.isfinite(st)):
+            raise ValueError(f"stations must be finite positions (K, 3) in m; got shape {st.shape}")
+        object.__setattr__(self, "stations", st)
+        if isinstance(self.lag, bool) or not isinstance(self.lag, (int, np.integer)) or self.lag < 0:
+            raise ValueError(f"lag must be an integer ≥ 0 (0 = one-sample update); got {self.lag!r}")
+        if isinstance(self.n_dipoles, bool) or not isinstance(self.n_dipoles, (int, np.integer)) or self.n_dipoles < 1:
+            raise ValueError(f"n_dipoles must be an integer ≥ 1; got {self.n_dipoles!r}")
+
+    @property
+    def n_state(self):
+        return 3 * self.n_dipoles + 3
+
+    @property
+    def window(self):
+        """Sample offsets of one update: (0,) or (−2n, −n, 0)."""
+        return (0,) if self.lag == 0 else (-2 * self.lag, -self.lag, 0)
+
+    @property
+    def n_meas(self):
+        return 5 * len(self.window)
+
+    def tensor5(self, x, stations):
+        """The 5 tensor components (..., S, 5) of states x (..., 3N + 3) at stations (S, 3)."""
+        x = np.asarray(x, float)
+        n = self.n_dipoles
+        lead = x.shape[:-1]
+        pos = x[..., : 3 * n].reshape(-1, 3)  # (P·N, 3)
+        mom = np.repeat(x[..., 3 * n:].reshape(-1, 3), n, axis=0)
+        G = dipole_tensor(pos, mom, stations)  # (P·N, S, 3, 3)
+        G = G.reshape((-1, n) + G.shape[1:]).sum(axis=1)  # sum over the dipoles
+        i, j = zip(*G_COMPONENTS)
+        return G[..., i, j].reshape(lead + (stations.shape[0], 5))
+
+    def hx(self, x, k):
+        """Predicted measurement at step k, (..., n_meas): the window's samples (clamped at 0;
+        :meth:`window_measurements` marks those rows missing)."""
+        idx = np.clip(np.asarray(self.window) + k, 0, None)
+        h = self.tensor5(x, self.stations[idx])  # (..., w, 5)
+        return h.reshape(h.shape[:-2] + (-1,))
+
+    def window_measurements(self, z5):
+        """Stack readings (..., K, 5) into the update's vectors (..., K, n_meas), NaN where the
+        window reaches before the first sample."""
+        z5 = np.asarray(z5, float)
+        K = z5.shape[-2]
+        out = np.full(z5.shape[:-2] + (K, self.n_meas), np.nan)
+        for w, off in enumerate(self.window):
+            k0 = max(0, -off)
+            out[..., k0:, 5 * w: 5 * w + 5] = z5[..., k0 + off: K + off, :]
+        return out
+
+    def jacobian(self, x, k):
+        """∂h/∂X at step k for one state x (3N + 3,): (n_meas, 3N + 3), exact, from
+        :func:`core.magnetic_jacobian` (each dipole's position columns; the moment columns
+        summed over the dipoles, which share m)."""
+        x = np.asarray(x, float)
+        n = self.n_dipoles
+        idx = np.clip(np.asarray(self.window) + k, 0, None)
+        pos = x[: 3 * n].reshape(n, 3)
+        _, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))),
+                                 self.stations[idx], sensor="G")  # (N, w, 5, 8)
+        J = J.reshape(n, -1, 8)  # (N, n_meas, 8), window-major then component
+        out = np.empty((J.shape[1], 3 * n + 3))
+        for j in range(n):
+            out[:, 3 * j: 3 * j + 3] = J[j, :, :3]
+        out[:, 3 * n:] = J[:, :, 5:].sum(axis=0)
+        return out

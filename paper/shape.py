@@ -1,0 +1,213 @@
+"""Seed 003 (locating and sizing an extended magnetic target with a moving gradiometer): the
+report section.
+
+:func:`numbers` recomputes everything from :mod:`core.shape`; :func:`section` turns it into
+markdown for ``python -m paper``. ``python -m paper.shape`` prints the section.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from core import unscented as uk
+from core.shape import bound as bd
+from core.shape import experiment as ex
+from core.shape import model as md
+from core.shape.cases import CASES, FIG5_OUTLIERS
+from core.shape.pca import DISC_FACTOR, PLANE_RATIO
+
+#: Monte-Carlo passes per figure case, and per table row.
+FIG_RUNS = 40
+TABLE_RUNS = 10
+SEED = 3
+#: The spec's quoted main-scale bounds (§11): closest approach (m) -> σ (m).
+SPEC_FIGURES = ((float(np.sqrt(50.0)), 0.004), (15.0, 0.3), (30.0, 17.0))
+#: Closest approaches of the bound's table (m); √50 is seed 003's pass.
+BOUND_CPA = (5.0, float(np.sqrt(50.0)), 10.0, 15.0, 20.0, 30.0)
+FILTERS = ("euler", "ukf", "nhukf")
+
+
+def _row(res):
+    s = res.summary["filters"]
+    out = {}
+    for name in FILTERS:
+        f = dict(s[name])
+        err = res.errors[name]
+        f["centroid_error_p90_m"] = float(np.nanpercentile(err[:, -1], 90))
+        if name in res.final:
+            f["main_scale_p10_p90_m"] = [float(v) for v in np.percentile(res.final[name]["main_scale_m"], [10, 90])]
+            f["axis_error_p90_deg"] = float(np.percentile(res.final[name]["axis_error_deg"], 90))
+            f["axis_over_45_share"] = float(np.mean(res.final[name]["axis_error_deg"] > 45.0))
+        out[name] = f
+    return out
+
+
+def numbers(fig_runs=FIG_RUNS, table_runs=TABLE_RUNS):
+    """Every number of the section, as a dict (recomputed; ~1 min with the defaults)."""
+    out = {"fig": {}, "tables": {}}
+    for key in ("seed003-fig4", "seed003-fig5"):
+        (case,) = CASES[key][1]
+        res = ex.run_case(case, runs=fig_runs, seed=SEED)
+        d = _row(res)
+        hit = res.outlier_samples
+        d["outlier_samples"] = hit
+        if hit:  # error at the outlier samples and just after, median over runs
+            d["at_outliers_m"] = {n: [float(np.nanmedian(res.errors[n][:, k])) for k in hit] for n in FILTERS}
+        out["fig"][key] = d
+    lagged = ex.run_case(ex.Case("fig4-lag", lag=md.LAG), runs=fig_runs, seed=SEED)
+    out["lagged"] = _row(lagged)
+    for key in ("seed003-table1", "seed003-table2", "seed003-table3", "seed003-table4", "seed003-table5"):
+        desc, rows = CASES[key]
+        out["tables"][key] = {"description": desc, "rows": []}
+        for case in rows:
+            res = ex.run_case(replace(case, lag=md.LAG), runs=table_runs, seed=SEED)
+            out["tables"][key]["rows"].append({"label": case.name, "truth_scale_m": case.target.main_scale,
+                                               "truth_kind": case.target.kind, "filters": _row(res)})
+    out["bound"] = [b.to_dict() for b in bd.shape_bound_curve(BOUND_CPA)]
+    return out
+
+
+def _spec_sentence(bound, rslope):
+    """Where the spec's quoted figures fall against the two bounds (computed, not typed)."""
+    between = all(
+        next(r["rigid_main_scale_m"] for r in bound if abs(r["closest_approach_m"] - c) < 1e-6)
+        <= v <= next(r["main_scale_m"] for r in bound if abs(r["closest_approach_m"] - c) < 1e-6)
+        for c, v in SPEC_FIGURES)
+    figs = ", ".join(f"{v:g} m at {c:.3g} m" for c, v in SPEC_FIGURES)
+    return (f"The spec's figures ({figs}) {'lie between' if between else 'do not lie between'} the "
+            f"two models'; the rigid line's exponent is {rslope:.1f}.\n")
+
+
+def _m(v, nd=3):
+    return f"{v:.{nd}f}"
+
+
+def section(nums=None):
+    """The markdown section of seed 003 (a string; computes :func:`numbers` if not given)."""
+    n = numbers() if nums is None else nums
+    L = []
+    w = L.append
+    f4, f5 = n["fig"]["seed003-fig4"], n["fig"]["seed003-fig5"]
+    one, lag = f4["nhukf"], n["lagged"]["nhukf"]
+    w("## Seed 003: locating and sizing an extended magnetic target (UKF, NHUKF, PCA shape)\n")
+    w("Seed 003 (spec §11) passes an AUV carrying a gradient-tensor array (0.5 m baseline, 5 Hz, "
+      "5 m/s, from (−40, 5, −5) m; closest approach √50 = 7.07 m) by a cylinder (H 3 m, R 0.5 m, "
+      "roll/pitch/yaw π/6, π/4, π/3) built from 0.1 m cells of (−3, 1, 5) A·m² (2400 cells, "
+      "|M| = 1.42e4 A·m²), tracks it with 4 dipoles of one common moment (15 states) in a UKF "
+      "and a Huber-robust UKF (NHUKF), and reads size, axis and type from the PCA of the 4 "
+      "dipoles. Reproduced with `python -m core.shape` (`core/shape/`, `core/unscented.py`; "
+      "notes in `docs/shape.md`).\n")
+    w("**Assumed where the text is lost.** Noise 0.01 nT/m per tensor component and 0.01 nT per "
+      "field component; the truth is the array's magnetometer differences, the filters' model "
+      "the point tensor; attitude R = Rz(yaw)·Ry(pitch)·Rx(roll) with the body axis z; UKF "
+      f"sigma points α = {uk.ALPHA:g}, β = {uk.BETA:g}, κ = {uk.KAPPA:g}; Huber u = {uk.HUBER_U}, "
+      "residuals whitened by R (eq. (12): prior residual zero); start: Euler's point fix "
+      "r = −3 G⁻¹ B of the first reading, its moment from the field, the 4 dipoles on a "
+      f"tetrahedron of radius {md.START_SPREAD:g} m about it (never one point: rank 6), prior σ "
+      f"{md.P0_POSITION:g} m and {100 * md.P0_MOMENT_REL:g} % of the moment; random walk "
+      f"{md.Q_POSITION:g} m², {md.Q_MOMENT:g} (A·m²)² per step; one-sample updates unless said; "
+      f"the lagged window (eq. (15)) with n = {md.LAG}. Disc diameter (eq. (22) lost): "
+      f"{DISC_FACTOR:.3f} × the square's diagonal (the mean of the two coverings of eqs. (19)–(20)); "
+      f"verdict plane if λ2/λ1 ≥ {PLANE_RATIO:g}. Outliers (Fig. 5): +{FIG5_OUTLIERS.size:g} σ on "
+      "all five components at platform x = −20, −10, 0 m. Table rows: the paper's are lost; ours "
+      "vary one property each (listed below).\n")
+
+    w(f"### Figs. 4 and 5 ({n['fig_runs'] if 'fig_runs' in n else FIG_RUNS} Monte-Carlo passes "
+      "each; medians, 90th percentile in brackets)\n")
+    w("| case | filter | final centroid error (m) | peak error after 10 samples (m) | main scale (m; truth 3) "
+      "| axis error (°) | verdict | centroid NEES (3 dof) |")
+    w("|---|---|---|---|---|---|---|---|")
+    for key, d in (("Fig. 4", f4), ("Fig. 5", f5), ("Fig. 4, lagged window", n["lagged"])):
+        for name in FILTERS:
+            if name not in d:
+                continue
+            v = d[name]
+            shape = (f"{_m(v['main_scale_m'], 2)} ({_m(v['main_scale_p10_p90_m'][0], 2)}–"
+                     f"{_m(v['main_scale_p10_p90_m'][1], 2)}) | {v['axis_error_deg']:.1f} "
+                     f"({v['axis_error_p90_deg']:.1f}) | {v['kind']} ({100 * max(v['kind_share'].values()):.0f} %) "
+                     f"| {v['nees']:.3g}") if "kind" in v else "— | — | — | —"
+            w(f"| {key} | {name.upper()} | {_m(v['centroid_error_m'])} ({_m(v['centroid_error_p90_m'])}) "
+              f"| {_m(v['peak_error_m'])} | {shape} |")
+    w("")
+    at = f5["at_outliers_m"]
+    w("At Fig. 5's outlier samples the median position error is "
+      + "; ".join(f"{nm.upper()} " + ", ".join(_m(e) for e in at[nm]) + " m" for nm in FILTERS)
+      + " (x = −20, −10, 0 m).\n")
+
+    w(f"Locating holds up: both filters end a few centimetres from the centroid (median "
+      f"{_m(f4['ukf']['centroid_error_m'])} / {_m(one['centroid_error_m'])} m, the paper's < 0.1 m) "
+      f"and far better than Euler's point fix ({_m(f4['euler']['centroid_error_m'])} m, a point "
+      "for an extended body). Under outliers the NHUKF's peak error is "
+      f"{_m(f5['nhukf']['peak_error_m'], 2)} m against the UKF's {_m(f5['ukf']['peak_error_m'], 2)} m "
+      f"and Euler's {_m(f5['euler']['peak_error_m'], 2)} m"
+      + (" (the paper's claim holds in direction)" if f5['nhukf']['peak_error_m'] < f5['ukf']['peak_error_m']
+         else " (the paper's claim fails)")
+      + f", but 500 σ outliers still disturb it (its verdict after Fig. 5's pass: {f5['nhukf']['kind']}). "
+      "**Sizing with the honest one-sample update is fragile**: the 15 states are read from 5 "
+      f"components a sample, and the NHUKF's final axis is off by more than 45° in "
+      f"{100 * one['axis_over_45_share']:.0f} % of the passes (median "
+      f"{one['axis_error_deg']:.0f}°, verdict right in {100 * one['kind_share'].get('line', 0):.0f} %). "
+      f"Seed 003's lagged window (15 rows an update) sizes it well — main scale "
+      f"{_m(lag['main_scale_m'], 2)} m, axis {lag['axis_error_deg']:.1f}°, "
+      f"line in {100 * lag['kind_share'].get('line', 0):.0f} % — but counts every sample three times, "
+      f"so its covariance is optimistic (centroid NEES {lag['nees']:.3g} against 3; the one-sample "
+      "filter is inconsistent here too, from the model mismatch, and consistent on a truth "
+      "that is itself 4 dipoles: `tests/test_shape.py`). The tables therefore use the paper's "
+      "window.\n")
+    w(f"### Tables 1–5 (our rows; {TABLE_RUNS} passes per row, lagged window n = {md.LAG}, medians)\n")
+    w("| table | row | truth | UKF scale (m) / axis (°) / verdict | NHUKF scale (m) / axis (°) / verdict "
+      "| NHUKF centroid error (m) |")
+    w("|---|---|---|---|---|---|")
+    for key, t in n["tables"].items():
+        for r in t["rows"]:
+            cell = lambda v: f"{_m(v['main_scale_m'], 2)} / {v['axis_error_deg']:.1f} / {v['kind']}"
+            f = r["filters"]
+            w(f"| {key[-1]} | {r['label']} | {r['truth_scale_m']:g} m, {r['truth_kind']} | {cell(f['ukf'])} "
+              f"| {cell(f['nhukf'])} | {_m(f['nhukf']['centroid_error_m'])} |")
+    w("")
+
+    wrong = [f"{k[-1]}: {r['label']}" for k, t in n["tables"].items() for r in t["rows"]
+             if r["filters"]["nhukf"]["kind"] != r["truth_kind"]]
+    disc = [r["filters"]["nhukf"]["main_scale_m"] - r["truth_scale_m"] for t in n["tables"].values()
+            for r in t["rows"] if r["truth_kind"] == "plane"]
+    w("Where the reading fails (NHUKF): the verdict is wrong for "
+      + ("; ".join(wrong) if wrong else "no row")
+      + (f"; the discs' diameters are off by {min(disc):+.2f} to {max(disc):+.2f} m under our reading "
+         "of the lost eq. (22)." if disc else ".") + "\n")
+    b = n["bound"]
+    w("### What the bound says\n")
+    w("Cramér–Rao bound of the one-sample 15-state model at the target's own 4-dipole "
+      "representation (dipoles at the centres of 4 equal segments of the axis, M/4 each), σ = "
+      "0.01 nT/m, the same pass moved to each closest approach (`core.shape.bound`); beside it "
+      "the bound if the 4 dipoles were a rigid evenly spaced line (9 parameters):\n")
+    w("| closest approach (m) | centroid (m) | main scale (m) | axis (°) | rigid line: centroid (m) "
+      "| main scale (m) | axis (°) |")
+    w("|---|---|---|---|---|---|---|")
+    for r in b:
+        w(f"| {r['closest_approach_m']:.2f} | {r['centroid_m']:.2g} | {r['main_scale_m']:.2g} | "
+          f"{r['axis_deg']:.2g} | {r['rigid_centroid_m']:.2g} | {r['rigid_main_scale_m']:.2g} | "
+          f"{r['rigid_axis_deg']:.2g} |")
+    b7 = next(r for r in b if abs(r["closest_approach_m"] - np.sqrt(50)) < 1e-6)
+    b15 = next(r for r in b if abs(r["closest_approach_m"] - 15) < 1e-6)
+    b30 = next(r for r in b if abs(r["closest_approach_m"] - 30) < 1e-6)
+    slope = np.log(b30["main_scale_m"] / b15["main_scale_m"]) / np.log(2.0)
+    rslope = np.log(b30["rigid_main_scale_m"] / b15["rigid_main_scale_m"]) / np.log(2.0)
+    w("")
+    w(f"On seed 003's pass noise allows the main scale to {b7['main_scale_m'] * 1e3:.1f} mm and the "
+      f"centroid to {b7['centroid_m'] * 1e3:.2f} mm, while the NHUKF's median errors are "
+      f"{_m(lag['main_scale_error_m'], 2)} m (main scale, lagged window; "
+      f"{_m(one['main_scale_error_m'], 2)} m one-sample) and {_m(lag['centroid_error_m'])} m "
+      "(centroid): the paper's 0.1–0.3 m are model "
+      "mismatch (4 dipoles for 2400 cells, and a filter that linearises a nearly unobservable "
+      "spread), not noise. Shape is a near-field capability: between 15 and 30 m the main "
+      f"scale's bound grows as CPA^{slope:.1f} (rigid line: CPA^{rslope:.1f}), to "
+      f"{b15['main_scale_m']:.2g} m at 15 m and {b30['main_scale_m']:.2g} m at 30 m for the free "
+      f"model ({b15['rigid_main_scale_m']:.2g} m and {b30['rigid_main_scale_m']:.2g} m for the "
+      "rigid line). " + _spec_sentence(b, rslope))
+    return "\n".join(L)
+
+
+if __name__ == "__main__":
+    print(section())
