@@ -31,11 +31,26 @@ OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error
 
 
 def drawn_stations(data, old, h):
-    """The custom layout after a PointDraw edit: ``data`` (columns x, y, z) against the ``old``
-    layout; a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
-    rows = list(zip(data["x"], data["y"], data["z"]))
-    return [[float(x), float(y), float(z) if i < len(old) else float(h)]
-            for i, (x, y, z) in enumerate(rows)]
+    """The custom layout after a PointDraw edit: ``data`` (columns x, y; any z is ignored) against
+    the ``old`` layout (S, 3), m.
+
+    The browser's z column is not trusted: the point-draw tool fills a new point's z with a
+    placeholder, and kept the placeholder (0, the surface) for earlier clicked stations when the
+    next one was added. So a depth comes from the layout itself: a row at an old station's (x, y)
+    keeps that station's depth; a moved station keeps the depth of the old station it replaces;
+    a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
+    rows = [(float(x), float(y)) for x, y in zip(data["x"], data["y"])]
+    unused = list(range(len(old)))
+    depth = [None] * len(rows)
+    for i, (x, y) in enumerate(rows):  # unchanged stations, matched by position
+        j = next((j for j in unused if abs(old[j][0] - x) <= 1e-6 and abs(old[j][1] - y) <= 1e-6), None)
+        if j is not None:
+            depth[i] = float(old[j][2])
+            unused.remove(j)
+    for i in range(len(rows)):
+        if depth[i] is None:  # dragged (an old station is left over for it) or added (at the end)
+            depth[i] = float(old[unused.pop(0)][2]) if i < len(old) and unused else float(h)
+    return [[x, y, z] for (x, y), z in zip(rows, depth)]
 
 
 #: What a bound of core.LayoutResult.at_bound means, for the result line.
@@ -138,7 +153,9 @@ def design_tab(scenario, cache, widgets):
         pn.FlexBox(pn.pane.HoloViews(errors * points * ell),
                    pn.Column(pn.Param(scenario, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
-                             pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
+                             pn.pane.Markdown(pn.bind(ellipse_text, tap.param.x, tap.param.y,
+                                                      *[scenario.param[f] for f in DESIGN_FIELDS]),
+                                              css_classes=["w-ellipse-text"], sizing_mode="stretch_width"),
                              width=380),
                    sizing_mode="stretch_width"),
         pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),

@@ -337,7 +337,7 @@ def set_maps(figs: MapFigures, prepared):
         if fmt.args["log"] != log or fmt.args["texts"] != texts:  # rare: a new measure or layout
             fmt.args = dict(fmt.args, log=log, texts=texts)
         figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{custom}")]
-        figs.captions[which].text = _wrapped(p.caption)
+        figs.captions[which].text = _wrapped(p.captions[which])
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
     view = (p.plane, view_box(p))
     if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom

@@ -378,3 +378,68 @@ def test_the_sea_trial_preset_is_recognised_as_active():
     s.apply_preset("Seed 001 sea trial")
     assert s.active_preset() == "Seed 001 sea trial"
     assert compute(Snapshot.of(s)).preset == "Seed 001 sea trial"
+
+
+def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends():
+    # issue 25, defect 1: each clicked station was rewritten to z = 0 when the next was added
+    # (the point-draw tool's z column holds a placeholder for clicked points)
+    from app.design import drawn_stations
+
+    layout = [[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]]
+    for x, y in [(-229.0, 168.0), (-134.0, -165.0), (55.0, 205.0)]:
+        data = {"x": [st[0] for st in layout] + [x], "y": [st[1] for st in layout] + [y],
+                "z": [st[2] for st in layout[:2]] + [0.0] * (len(layout) - 1)}  # as the browser sent
+        layout = drawn_stations(data, layout, 100.0)
+    assert [st[2] for st in layout] == [100.0] * 5
+    # a drag keeps the dragged station's depth, a deletion the others'
+    moved = drawn_stations({"x": [0.0, 15.0, -200.0, -134.0, 55.0], "y": [0.0, 0.0, 100.0, -165.0, 205.0],
+                            "z": [0.0] * 5}, [[*st[:2], 50.0 + i] for i, st in enumerate(layout)], 100.0)
+    assert [st[2] for st in moved] == [50.0, 51.0, 52.0, 53.0, 54.0]
+    gone = drawn_stations({"x": [0.0, -134.0], "y": [0.0, -165.0], "z": [0.0, 0.0]},
+                          [[*st[:2], 50.0 + i] for i, st in enumerate(layout)], 100.0)
+    assert gone == [[0.0, 0.0, 50.0], [-134.0, -165.0, 53.0]]
+
+
+def test_each_map_is_captioned_with_its_own_moments():
+    # issue 25, defect 3: map B's caption (and saved PNG) said A's P = (100, 20) in Fig. 2
+    s = Scenario(resolution=21)
+    s.apply_preset("Fig. 2")
+    p = compute(Snapshot.of(s))
+    assert "P = (100, 20) A·m" in p.captions[0] and "P = (100, 100) A·m" in p.captions[1]
+    assert "P_A = (100, 20) A·m, P_B = (100, 100) A·m" in p.captions[2]
+    figs = map_figures.build()
+    map_figures.fill(figs, p)
+    assert "P = (100, 100)" in figs.captions[1].text.replace("\n", " ")  # the PNG's caption
+    s.apply_preset("Fig. 3")
+    assert "P = (1000, 200) A·m" in compute(Snapshot.of(s)).captions[1]
+
+
+@pytest.mark.parametrize("name, moments_b", [("Fig. 3", (1000.0, 200.0)), ("Fig. 4", (70.7, 70.7))])
+def test_map_bs_unobservable_direction_is_bs_own(name, moments_b):
+    # issue 25, defect 3: B's note gave A's vector. Recomputed here from the probe point the
+    # note names, with B's moments, by core directly.
+    import re
+
+    import core
+
+    s = Scenario(resolution=21)
+    s.apply_preset(name)
+    note = compute(Snapshot.of(s)).note
+    lines = {line[0]: line for line in note.splitlines()}
+    vectors = {}
+    for which, moments in (("A", (s.Ph, s.Pv)), ("B", moments_b)):
+        m = re.search(r"at \((-?\d+), (-?\d+), (-?\d+)\) m: .*= \(([^)]*)\)\. Use", lines[which])
+        probe = [float(v) for v in m.groups()[:3]]
+        shown = np.array([float(v) for v in m.group(4).split(", ")])
+        n = core.unobservable_direction([*probe, *s.velocity(), *moments], [[0.0, 0.0, s.h]],
+                                        T=s.T, sigma=s.sigma)
+        assert np.allclose(np.abs(shown), np.abs(n), atol=5e-4)  # printed to 3 decimals; sign free
+        vectors[which] = shown
+    assert not np.allclose(np.abs(vectors["A"]), np.abs(vectors["B"]), atol=5e-3)
+
+
+def test_the_note_probes_a_point_of_the_x_z_plane():
+    # issue 25 (Maps): Fig. 2's note probed (100, 100, 250), off the plane y = 50 m
+    s = Scenario(resolution=21)
+    s.apply_preset("Fig. 2")
+    assert "at (100, 50, 250) m" in compute(Snapshot.of(s)).note

@@ -1,0 +1,197 @@
+"""Issue 25 in headless Chromium: every number on the page right (the worst three defects)."""
+
+import os
+import re
+import time
+
+import pytest
+
+from tests.server import CHROMIUM, chromium_browser, served_app
+from tests.test_browser import MAPS_JS, VIEWPORT, wait_count, wait_maps, wait_value
+
+playwright = pytest.importorskip("playwright.sync_api")
+
+pytestmark = pytest.mark.skipif(
+    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
+    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
+)
+
+#: Per plot: [title, caption (the Title below the map: also in its saved PNG)].
+CAPTIONS_JS = """() => {
+  const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(p => [p.title.text, p.below.filter(m => m.text !== undefined).map(m => m.text).join(' ')]);
+}"""
+
+
+@pytest.fixture(scope="module")
+def server():
+    with served_app() as (url, _):
+        yield url
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    with chromium_browser() as browser:
+        yield browser
+
+
+@pytest.fixture
+def page(chromium, server):
+    pg = chromium.new_page(viewport=VIEWPORT)
+    errors = []
+    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
+    pg.goto(server + "/app")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    wait_maps(pg, lambda maps: len(maps) == 3)
+    yield pg
+    pg.close()
+    assert [e for e in errors if not offline_defect(e)] == [], f"browser console errors: {errors}"
+
+
+def offline_defect(error):
+    """A failed load of Panel's loading.css or markdown.css from cdn.holoviz.org (and Chromium's
+    line about it): issue 25's open *Offline* defect, tested by
+    :func:`test_no_request_leaves_the_server` (xfail until fixed); every other error fails."""
+    return (error.startswith("request failed: https://cdn.holoviz.org/panel/")
+            or error == "Failed to load resource: net::ERR_NAME_NOT_RESOLVED")
+
+
+def depths(rows):
+    return [rows.nth(i).locator('.tabulator-cell[tabulator-field="z (m)"]').inner_text().strip()
+            for i in range(rows.count())]
+
+
+def test_stations_added_by_clicks_keep_the_station_depth(page):
+    # defect 1: each clicked station was rewritten to z = 0 when the next one was added
+    page.get_by_text("Layout design", exact=True).click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)
+    canvas = page.locator("canvas").filter(visible=True).first
+    box = canvas.bounding_box()
+    for n, (fx, fy) in enumerate([(0.2, 0.25), (0.3, 0.75), (0.6, 0.2)], start=3):
+        page.mouse.click(box["x"] + box["width"] * fx, box["y"] + box["height"] * fy)
+        wait_count(rows, n)
+        time.sleep(1.5)  # the server's answer to this edit (a re-drawn layer), before the next click
+    deadline = time.time() + 10
+    while depths(rows) != ["100.0"] * 5:
+        assert time.time() < deadline, f"station depths {depths(rows)}, expected h = 100 m for all"
+        time.sleep(0.2)
+    time.sleep(1.0)  # and they stay there
+    assert depths(rows) == ["100.0"] * 5
+
+
+def expected_readout(presets, x, y, z=None):
+    """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
+    from app import compute, views
+    from app.compute import DESIGN_FIELDS, Snapshot
+    from app.scenario import Scenario
+
+    s = Scenario(resolution=21)
+    for preset in presets:
+        s.apply_preset(preset)
+    if z is not None:
+        s.z = z
+    snap = Snapshot.of(s, DESIGN_FIELDS)
+    rng = float(compute.nearest_range([x, y, s.z], s.stations))
+    return views.error_ellipse(compute.error_at(snap, x, y), x, y, s.extent, rng)[1]
+
+
+def readout(pg):
+    return pg.get_by_text("1-σ horizontal error ellipse").first.inner_text().strip()
+
+
+def wait_readout(pg, want, timeout=20.0):
+    deadline = time.time() + timeout
+    while True:
+        got = readout(pg)
+        # Markdown renders the same plain text (no markup in it)
+        if re.sub(r"\s+", " ", got) == re.sub(r"\s+", " ", want):
+            return
+        if time.time() > deadline:
+            raise AssertionError(f"readout {got!r}, expected {want!r}")
+        time.sleep(0.2)
+
+
+def test_the_error_ellipse_readout_follows_presets_and_the_target_depth(page):
+    # defect 2: after Seed 001 sea trial → Fig. 5 the text still read the trial's numbers, and a
+    # new z on the tab redrew the ellipse, not its text
+    page.get_by_text("Layout design", exact=True).click()
+    page.get_by_text("1-σ horizontal error ellipse").first.wait_for(timeout=30_000)
+    page.get_by_role("button", name="Seed 001 sea trial").click()
+    trial = ["Seed 001 sea trial"]
+    wait_readout(page, expected_readout(trial, 100.0, 100.0))
+    page.get_by_role("button", name="Fig. 5").click()
+    want = expected_readout(trial + ["Fig. 5"], 100.0, 100.0)
+    assert want != expected_readout(trial, 100.0, 100.0)
+    wait_readout(page, want)
+    box = page.locator(".w-z input").first
+    box.fill("150")
+    box.press("Enter")
+    wait_readout(page, expected_readout(trial + ["Fig. 5"], 100.0, 100.0, z=150.0))
+
+
+def captions(pg):
+    return pg.evaluate(CAPTIONS_JS)
+
+
+def test_map_b_is_titled_and_captioned_with_its_own_moments(page):
+    # defect 3: in Fig. 2, B's title said P = (100, 100), its caption and PNG P = (100, 20)
+    page.get_by_role("button", name="Fig. 2").click()
+    wait_value(page, "Pv_b", 100.0)
+    wait_maps(page, lambda drawn: "P = (100, 100)" in drawn[1][0])
+    (title_a, cap_a), (title_b, cap_b), (_, cap_d) = captions(page)[:3]
+    flat = [re.sub(r"\s+", " ", c) for c in (cap_a, cap_b, cap_d)]
+    assert "P = (100, 20) A·m" in title_a and "P = (100, 20) A·m" in flat[0]
+    assert "P = (100, 100) A·m" in title_b and "P = (100, 100) A·m" in flat[1], flat[1]
+    assert "P_A = (100, 20) A·m" in flat[2] and "P_B = (100, 100) A·m" in flat[2]
+
+
+def test_map_bs_note_gives_bs_own_unobservable_direction(page):
+    # defect 3: Figs. 3 and 4: B's "unobservable direction" was A's vector
+    from app.compute import Snapshot, compute
+    from app.scenario import Scenario
+
+    for name in ("Fig. 3", "Fig. 4"):
+        page.get_by_role("button", name=name).click()
+        s = Scenario(resolution=21)
+        s.apply_preset(name)
+        want = compute(Snapshot.of(s)).note  # the direction itself: tests/test_scenario.py
+        b_line = next(line for line in want.splitlines() if line.startswith("B:"))
+        vector = b_line[b_line.index("Unobservable direction"):]
+        note = page.locator(".w-note .alert").first
+        deadline = time.time() + 30
+        while vector not in re.sub(r"\s+", " ", note.inner_text()):
+            assert time.time() < deadline, f"{name}: B's direction {vector!r} not in {note.inner_text()!r}"
+            time.sleep(0.2)
+        assert page.evaluate(MAPS_JS)  # the maps are still there
+
+
+@pytest.mark.xfail(strict=True, reason="issue 25 Offline: Panel components re-rendered after a "
+                   "preset load loading.css and markdown.css from cdn.holoviz.org (not fixed yet)")
+def test_no_request_leaves_the_server(chromium, server):
+    pg = chromium.new_page(viewport=VIEWPORT)
+    outside = []
+    pg.on("request", lambda r: outside.append(r.url)
+          if not r.url.startswith((server, "blob:" + server, "data:")) else None)
+    try:
+        pg.goto(server + "/app")
+        pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+        wait_maps(pg, lambda maps: len(maps) == 3)
+        for tab in ("Layout design", "Track", "Calibration", "Maps"):
+            pg.get_by_text(tab, exact=True).click()
+            time.sleep(4)
+        pg.get_by_role("button", name="Seed 001 sea trial").click()
+        time.sleep(3)
+        pg.get_by_text("Layout design", exact=True).click()
+        time.sleep(3)
+        pg.get_by_role("button", name="Fig. 5").click()
+        time.sleep(3)
+        assert outside == []
+    finally:
+        pg.close()
