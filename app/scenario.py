@@ -100,7 +100,9 @@ PRESETS = {
                                T=1.0, plane="x–y", extent=300.0, layout="dual",
                                comparison="Dual − single (Fig. 5)", z_min=0.0, z_max=8.4,
                                measure="log10|det Γ| (paper)",
-                               stations=[[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]]),
+                               # along x, as core.dual_station(h, d) puts the Maps tab's pair: one
+                               # geometry on every tab (it was along y here, along x on Maps)
+                               stations=[[0.0, 0.0, 8.4], [10.0, 0.0, 8.4]]),
 }
 
 #: Which map shows each paper figure: preset -> (map index 0 A, 1 B, 2 difference, caption).
@@ -386,8 +388,12 @@ class Scenario(param.Parameterized):
         return None
 
     def apply_preset(self, name):
-        """Set the parameters of one of the paper's figures (:data:`PRESETS`)."""
-        self.param.update(PRESETS[name])
+        """Load one of :data:`PRESETS` as a complete scenario: every parameter of the maps, the
+        design and the track is the preset's or its default, whatever was set before (a preset
+        used to be a diff of the previous one: custom stations, the x–z range and the sea of the
+        previous preset stayed). The calibration inputs (seed 004's own problem, with presets of
+        its own) are left alone."""
+        self.param.update(preset_values(name))
 
     def active_preset(self):
         """The paper figure (a :data:`PRESETS` name) whose parameters the scenario holds, or None."""
@@ -408,6 +414,19 @@ class Scenario(param.Parameterized):
         return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
                     noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure],
                     sea=sea)
+
+
+#: Parameters a paper-figure preset does not set: feedback, and the calibration tab's own problem.
+NOT_IN_PRESETS = ("name", "message", "refused")
+
+
+def preset_values(name):
+    """Every parameter :meth:`Scenario.apply_preset` sets for preset ``name``: its values over
+    the defaults of every parameter but the calibration tab's and the feedback."""
+    defaults = {n: p.default for n, p in Scenario.param.objects().items()
+                if n not in NOT_IN_PRESETS and not n.startswith("cal_")}
+    return {**defaults, **{k: [list(v) for v in val] if k == "stations" else val
+                           for k, val in PRESETS[name].items()}}
 
 
 def preset_of(values, names=None):

@@ -195,3 +195,28 @@ def test_no_request_leaves_the_server(chromium, server):
         assert outside == []
     finally:
         pg.close()
+
+
+def cells(rows, field):
+    return [rows.nth(i).locator(f'.tabulator-cell[tabulator-field="{field}"]').inner_text().strip()
+            for i in range(rows.count())]
+
+
+def test_a_preset_after_another_shows_its_own_complete_scenario(page):
+    # issue 25: Fig. 5 after the sea trial kept the trial's stations on the seabed at 8.4 m
+    page.get_by_text("Layout design", exact=True).click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)
+    page.get_by_role("button", name="Seed 001 sea trial").click()
+    deadline = time.time() + 15
+    while cells(rows, "z (m)") != ["8.4", "8.4"]:
+        assert time.time() < deadline, cells(rows, "z (m)")
+        time.sleep(0.2)
+    page.get_by_role("button", name="Fig. 5").click()
+    deadline = time.time() + 15
+    while (cells(rows, "x (m)"), cells(rows, "z (m)")) != (["0.0", "15.0"], ["100.0", "100.0"]):
+        assert time.time() < deadline, (cells(rows, "x (m)"), cells(rows, "z (m)"))
+        time.sleep(0.2)
+    page.get_by_text("Maps", exact=True).click()
+    wait_maps(page, lambda drawn: any(title == "B: dual, d = 15 m" for title, _ in drawn))
+    assert page.locator(".w-sea_model select").first.input_value() == "whole space"

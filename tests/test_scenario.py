@@ -443,3 +443,30 @@ def test_the_note_probes_a_point_of_the_x_z_plane():
     s = Scenario(resolution=21)
     s.apply_preset("Fig. 2")
     assert "at (100, 50, 250) m" in compute(Snapshot.of(s)).note
+
+
+def _state(s):
+    return {n: getattr(s, n) for n in Scenario.param if n != "name"}
+
+
+@pytest.mark.parametrize("first", sorted(PRESETS))
+def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
+    # issue 25: presets left the custom stations, the x–z range and the sea of the previous one
+    for second in PRESETS:
+        alone = Scenario(resolution=21)
+        alone.apply_preset(second)
+        s = Scenario(resolution=21)
+        s.param.update(stations=[[1.0, 2.0, 3.0]], track_heading=33.0, error_quantity="Depth error σz (m)")
+        s.apply_preset(first)
+        s.apply_preset(second)
+        assert _state(s) == _state(alone), (first, second)
+        assert s.message == "" and s.active_preset() == second
+
+
+def test_the_sea_trial_has_one_geometry_on_every_tab():
+    # issue 25: its stations were along y on Layout design and Track, along x on Maps
+    import core
+
+    s = Scenario()
+    s.apply_preset("Seed 001 sea trial")
+    assert np.array_equal(np.array(s.stations), core.dual_station(s.h, s.d))
