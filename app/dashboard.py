@@ -88,6 +88,11 @@ def applies(name, s, tab):
     return rules.get(name, True)
 
 
+#: Selectors whose change moves other values by a rule (a layered sea puts the stations on the
+#: seabed): the note on what moved shows under them.
+MOVES = ("sea_model", "model")
+
+
 def _message_pane(scenario, names, css):
     """The refusal message, shown here when it is about one of ``names`` (``None``: a message
     about no input, e.g. the page's link)."""
@@ -95,7 +100,8 @@ def _message_pane(scenario, names, css):
         return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
 
     return pn.pane.HTML(
-        pn.bind(lambda m, r: _alert(m, "danger") if shows(m, r) else "", scenario.param.message,
+        pn.bind(lambda m, r: _alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
+                if shows(m, r) else "", scenario.param.message,
                 scenario.param.refused),
         visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
         sizing_mode="stretch_width", css_classes=[css])
@@ -118,7 +124,7 @@ def _section(scenario, tabs, title, names, collapsed):
         return cls.from_param(scenario.param[name], visible=visible(name), **spec)
 
     def row(name):
-        if name not in ACCEPTED:  # a selector: nothing it offers is refused
+        if name not in ACCEPTED and name not in MOVES:  # a selector: nothing it offers is refused
             return widget(name)
         # A refused value is said right under its input, where the user typed it (at the top of
         # the sidebar it was out of sight when typing in Stations or Advanced).
@@ -152,10 +158,11 @@ def create_app():
 
     pn.state.on_session_destroyed(session_closed)
 
-    flush_url = None  # no page URL outside a served page
-    if pn.state.location is not None:
-        flush_url = url.sync_url(scenario, pn.state.location, pn.state.session_args or {},
-                                onload=pn.state.onload)
+    served = pn.state.location is not None  # no page URL outside a served page
+    args = (pn.state.session_args or {}) if served else {}
+    if served:  # the link's values first: the first maps are the link's
+        url.read_link(scenario, args)
+    flush_url = []  # set below, once the tabs exist
 
     #: Spins while a change slower than BUSY_AFTER computes, hidden otherwise (an idle ring
     #: looked stalled). In the header, a Bokeh root of its own: its changes re-lay out only
@@ -163,11 +170,17 @@ def create_app():
     busy = pn.indicators.LoadingSpinner(value=False, visible=False, width=24, height=24,
                                         css_classes=["w-busy"], margin=(0, 10), align="center",
                                         color="light", bgcolor="dark", throttle=0)
-    tabs = pn.Tabs(("Maps", maps.maps_tab(scenario, cache, busy=busy, after_draw=flush_url)),
-                   ("Layout design", design_tab(scenario, cache, _widgets())),
-                   ("Track", track_tab(scenario)),
-                   ("Calibration", calibration_tab(scenario)),
+    after_draw = lambda: flush_url[0]() if flush_url else None  # noqa: E731
+    titles = ("Maps", "Layout design", "Track", "Calibration")
+    tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
+                   (titles[1], design_tab(scenario, cache, _widgets())),
+                   (titles[2], track_tab(scenario)),
+                   (titles[3], calibration_tab(scenario)),
                    dynamic=True, sizing_mode="stretch_width")
+    if served:
+        flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
+                                      tabs=tabs, titles=titles,
+                                      waits=lambda names: bool(set(names) & set(maps.FIELDS))))
 
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",

@@ -317,10 +317,17 @@ class Scenario(param.Parameterized):
         if self.sea_model != "layered" or self._restoring:
             return
         D = self.sea_depth
-        note = ("Layered sea: the paper's printed equations have no images; using the exact dipole."
-                if self.model != "exact dipole" else "")
-        self._quietly(h=D, z=min(max(self.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
-                      stations=[[st[0], st[1], D] for st in self.stations])
+        moved = dict(h=D, z=min(max(self.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
+                     stations=[[st[0], st[1], D] for st in self.stations])
+        said = [f"{Scenario.param[n].label.split(' (')[0]} {getattr(self, n):g} → {moved[n]:g} m"
+                for n in ("h", "z", "z_min", "z_max") if getattr(self, n) != moved[n]]
+        if moved["stations"] != self.stations:
+            said.append(f"custom stations to the seabed ({D:g} m)")
+        if self.model != "exact dipole":
+            said.append("field model → exact dipole (the paper's printed equations have no images)")
+        self._quietly(**moved)
+        note = ("Layered sea: moved " + "; ".join(said) + ". These stay when you switch back to the "
+                "whole space." if said else "")
         self.param.update(message=note, refused=["sea_model"] if note else [])
 
     @param.depends("model", watch=True)

@@ -220,3 +220,61 @@ def test_a_preset_after_another_shows_its_own_complete_scenario(page):
     page.get_by_text("Maps", exact=True).click()
     wait_maps(page, lambda drawn: any(title == "B: dual, d = 15 m" for title, _ in drawn))
     assert page.locator(".w-sea_model select").first.input_value() == "whole space"
+
+
+def active_tab(pg):
+    return pg.locator(".bk-tab.bk-active").first.inner_text().strip()
+
+
+def test_a_link_of_every_tab_reopens_the_same_view(chromium, server):
+    # issue 25: a link carried neither the Track nor the Calibration state (?track_heading=33 was
+    # ignored), nor the tab shown; here a link is copied on each tab and opened in a new page
+    first = chromium.new_page(viewport=VIEWPORT)
+    try:
+        # a layered sea by the link (its rule moves h to the seabed, D = 50 m), the Track's
+        # heading by the link, the Calibration's inputs by hand
+        first.goto(server + "/app?sea_model=layered&sea_depth=50&track_heading=33")
+        first.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+        wait_maps(first, lambda maps: len(maps) == 3)
+        wait_value(first, "h", 50.0)
+        first.get_by_text("Calibration", exact=True).click()
+        first.locator(".w-cal_source select").first.select_option("Designed manoeuvre")
+        first.wait_for_function("() => window.location.search.includes('cal_source=Designed')",
+                                timeout=15_000)
+        headings = first.locator(".w-cal_headings input").first
+        headings.fill("0, 45, 90")
+        headings.press("Tab")
+        first.wait_for_function("() => window.location.search.includes('cal_headings=')", timeout=15_000)
+        links = {}
+        for tab in ("Calibration", "Track", "Layout design", "Maps"):
+            first.get_by_text(tab, exact=True).click()
+            deadline = time.time() + 15
+            want = "" if tab == "Maps" else "tab=" + tab.replace(" ", "+")
+            while ((want or "tab=") in first.evaluate("() => window.location.search")) != bool(want):
+                assert time.time() < deadline, first.evaluate("() => window.location.search")
+                time.sleep(0.2)
+            links[tab] = first.evaluate("() => window.location.search")
+    finally:
+        first.close()
+    for tab, link in links.items():
+        assert "track_heading=33" in link and "cal_headings=0%2C+45%2C+90" in link, link
+        assert "h=50" in link, link
+        pg = chromium.new_page(viewport=VIEWPORT)
+        try:
+            pg.goto(server + "/app" + link)
+            pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+            pg.locator(".bk-tab.bk-active").first.wait_for(timeout=30_000)
+            assert active_tab(pg) == tab
+            pg.get_by_text("Maps", exact=True).click()
+            wait_value(pg, "sea_depth", 50.0)
+            wait_value(pg, "h", 50.0)  # moved by the layered sea's rule, and kept in the link
+            pg.get_by_text("Track", exact=True).click()
+            slider = pg.get_by_text(re.compile(r"Track heading \(°\)")).first
+            slider.wait_for(timeout=30_000)
+            assert re.search(r"Track heading \(°\):\s*33\b", slider.inner_text()), slider.inner_text()
+            pg.get_by_text("Calibration", exact=True).click()
+            box = pg.locator(".w-cal_headings input").first
+            box.wait_for(timeout=15_000)
+            assert box.input_value() == "0, 45, 90"
+        finally:
+            pg.close()
