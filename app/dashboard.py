@@ -54,8 +54,10 @@ def _widgets():
     """pn.Param widget specs of the inputs that are not :data:`NUMBERS`: a text box for the
     noise, a select for the rest; each with its stable css class."""
     # Scientific notation (numbro's "0.0e+0" showed 1e-7 as "+0.000"): a printf formatter.
+    # No start/end (from_param took the slider's soft bounds, 1e-9 … 1e-5, and the browser dropped
+    # 1e-3 without a word): any number reaches the Scenario, which refuses it with a message.
     spec = {"noise": {"type": pn.widgets.FloatInput, "format": PrintfTickFormatter(format="%.2e"),
-                      "sizing_mode": "stretch_width"}}
+                      "start": None, "end": None, "step": 1e-8, "sizing_mode": "stretch_width"}}
     for name in Scenario.param:
         if name not in ("name", "message"):  # stable hooks for the browser tests
             spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
@@ -72,6 +74,8 @@ def applies(name, s, tab):
     layered = s.sea_model == "layered"
     rules = {
         "sea_depth": layered, "seabed_sigma": layered,
+        # the Track tab has a speed and heading of its own (track_speed, track_heading)
+        "speed": tab != TRACK_TAB, "heading": tab != TRACK_TAB,
         "y": on_maps and s.plane == "x–z",
         "z": s.plane == "x–y" or not on_maps,
         "z_min": on_maps and s.plane == "x–z",

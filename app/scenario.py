@@ -177,6 +177,12 @@ class Scenario(param.Parameterized):
                                  doc="Shape of the N-station layout to optimise ('free': any positions, slow).")
     n_stations = param.Integer(4, bounds=(1, 8), label="Optimise: stations N",
                                doc="Number of stations of the layout to optimise, 1 to 8.")
+    ellipse_x = param.Number(100.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+                             label="Error ellipse at x (m)",
+                             doc="x of the target whose horizontal error ellipse is drawn, m.")
+    ellipse_y = param.Number(100.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+                             label="Error ellipse at y (m)",
+                             doc="y of the target whose horizontal error ellipse is drawn, m.")
     threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
                      "For 'area within threshold': position error (1σ, m) that counts as good.")
     # -- the sea (spec §7)
@@ -365,6 +371,8 @@ class Scenario(param.Parameterized):
         0 … 5000 m), else why."""
         lo, hi, _ = ACCEPTED["y"]
         if not 1 <= len(value) <= MAX_STATIONS:
+            if len(value) > MAX_STATIONS:
+                return f"At most {MAX_STATIONS} stations: a {len(value)}th was refused"
             return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
         for i, st in enumerate(value):
             ok = len(st) == 3 and all(isinstance(c, (int, float)) and not isinstance(c, bool)

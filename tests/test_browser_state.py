@@ -278,3 +278,53 @@ def test_a_link_of_every_tab_reopens_the_same_view(chromium, server):
             assert box.input_value() == "0, 45, 90"
         finally:
             pg.close()
+
+
+def test_a_ninth_station_is_refused_not_swapped_for_the_oldest(page):
+    # issue 25: with 8 stations a click silently deleted the oldest
+    page.get_by_text("Layout design", exact=True).click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)
+    canvas = page.locator("canvas").filter(visible=True).first
+    box = canvas.bounding_box()
+    spots = [(0.15, 0.15), (0.85, 0.15), (0.15, 0.85), (0.85, 0.85), (0.5, 0.15), (0.15, 0.5),
+             (0.5, 0.85)]
+    for n, (fx, fy) in enumerate(spots[:6], start=3):
+        page.mouse.click(box["x"] + box["width"] * fx, box["y"] + box["height"] * fy)
+        wait_count(rows, n)
+        time.sleep(1.0)
+    before = cells(rows, "x (m)")
+    page.mouse.click(box["x"] + box["width"] * spots[6][0], box["y"] + box["height"] * spots[6][1])
+    page.locator(".w-design-message").get_by_text("At most 8 stations").wait_for(timeout=15_000)
+    time.sleep(1.0)
+    assert rows.count() == 8 and cells(rows, "x (m)") == before  # the oldest is still there
+
+
+def test_the_ellipse_point_is_its_own_input(page):
+    # issue 25: a click both added a station and (said the text) moved the ellipse point
+    page.get_by_text("Layout design", exact=True).click()
+    page.get_by_text("1-σ horizontal error ellipse").first.wait_for(timeout=30_000)
+    box = page.locator(".w-ellipse_x input").first
+    box.fill("-40")
+    box.press("Enter")
+    deadline = time.time() + 15
+    while "Target at (-40, 100) m" not in readout(page):
+        assert time.time() < deadline, readout(page)
+        time.sleep(0.2)
+
+
+def test_the_noise_box_takes_any_accepted_value_and_says_why_it_refuses_one(page):
+    # issue 25: 1e-3 (inside the accepted 1e-12 … 1e-2) was refused without a word, and so was -1
+    page.get_by_text("Advanced", exact=True).click()
+    box = page.locator(".w-noise input").first
+    box.fill("1e-3")
+    box.press("Enter")
+    deadline = time.time() + 15
+    while float(box.input_value()) != 1e-3:
+        assert time.time() < deadline, box.input_value()
+        time.sleep(0.2)
+    page.wait_for_function("() => window.location.search.includes('noise=0.001')", timeout=15_000)
+    box.fill("-1")
+    box.press("Enter")
+    page.locator(".w-message-noise").get_by_text("outside the accepted range").wait_for(timeout=15_000)
+    assert float(box.input_value()) == 1e-3

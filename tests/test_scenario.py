@@ -137,7 +137,7 @@ def test_maps_for_every_measure_and_plane():
 
 @pytest.mark.parametrize("bad,why", [
     ([], "1 to 8 stations"),
-    ([[0.0, 0.0, 100.0]] * 9, "1 to 8 stations"),
+    ([[0.0, 0.0, 100.0]] * 9, "At most 8 stations"),
     ([[0.0, float("nan"), 100.0]], "three numbers"),
     ([[0.0, 0.0]], "three numbers"),
     ([[0.0, 0.0, 1e9]], "three numbers"),
@@ -470,3 +470,20 @@ def test_the_sea_trial_has_one_geometry_on_every_tab():
     s = Scenario()
     s.apply_preset("Seed 001 sea trial")
     assert np.array_equal(np.array(s.stations), core.dual_station(s.h, s.d))
+
+
+def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():
+    # issue 25 (Track): the sidebar's Speed/Heading stayed visible though the track uses its own
+    from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+
+    s = Scenario()
+    for name in ("speed", "heading"):
+        assert applies(name, s, MAPS_TAB) and applies(name, s, DESIGN_TAB)
+        assert not applies(name, s, TRACK_TAB)
+    assert "track_speed" in Scenario.param and "track_heading" in Scenario.param
+
+
+def test_nine_stations_are_refused_with_at_most_eight():
+    s = Scenario()
+    s.stations = [[10.0 * i, 0.0, 100.0] for i in range(9)]
+    assert "At most 8 stations" in s.message and len(s.stations) == 2
