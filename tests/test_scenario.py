@@ -487,3 +487,19 @@ def test_nine_stations_are_refused_with_at_most_eight():
     s = Scenario()
     s.stations = [[10.0 * i, 0.0, 100.0] for i in range(9)]
     assert "At most 8 stations" in s.message and len(s.stations) == 2
+
+
+def test_a_map_veiled_everywhere_says_what_it_is_inside_its_frame():
+    # issue 25 (first screen): two of three maps fully hatched, with no word inside them
+    s = Scenario(resolution=21)
+    s.apply_preset("Fig. 1")
+    figs = map_figures.build()
+    map_figures.fill(figs, compute(Snapshot.of(s)))
+    assert figs.labels[0].visible and "rank 6 of 7" in figs.labels[0].text
+    assert "range" in figs.labels[0].text and "source strength" in figs.labels[0].text
+    assert not figs.labels[1].visible  # dual: observable
+    assert figs.labels[2].visible and "A is" in figs.labels[2].text
+    assert all(lab in figs.figures[i].center for i, lab in enumerate(figs.labels))  # in the frame
+    s.apply_preset("Fig. 6")
+    map_figures.fill(figs, compute(Snapshot.of(s)))
+    assert not any(lab.visible for lab in figs.labels)
