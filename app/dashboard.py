@@ -195,12 +195,17 @@ def create_app():
 
     presets = pn.FlexBox(*[preset_button(name) for name in PRESETS], sizing_mode="stretch_width")
     sections = [_section(scenario, tabs, *section) for section in SECTIONS]
-    downloads = pn.Row(
-        pn.widgets.FileDownload(callback=lambda: maps.to_csv(scenario, cache),
-                                filename="observability_maps.csv", label="CSV", button_type="light"),
-        pn.widgets.FileDownload(callback=lambda: maps.to_netcdf(scenario, cache),
-                                filename="observability_maps.nc", label="NetCDF", button_type="light"),
-    )
+    def download(ext, fn):
+        # named after the scenario (was always observability_maps.*), set as the file is made
+        def make():
+            button.filename = maps.download_name(scenario, cache, ext)
+            return fn(scenario, cache)
+
+        button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
+                                         label={"csv": "CSV", "nc": "NetCDF"}[ext], button_type="light")
+        return button
+
+    downloads = pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf))
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "

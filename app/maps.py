@@ -175,6 +175,11 @@ def _current(scenario, cache):
     return cache.get(Snapshot.of(scenario)), {f: getattr(scenario, f) for f in FIELDS}
 
 
+def download_name(scenario, cache, ext):
+    """The file name of a download of ``scenario``'s maps (:func:`app.views.download_name`)."""
+    return views.download_name(cache.get(Snapshot.of(scenario)), ext)
+
+
 def to_csv(scenario, cache):
     """The maps of ``scenario`` as CSV (the download button's file)."""
     return views.to_csv(*_current(scenario, cache))

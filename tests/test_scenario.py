@@ -115,7 +115,10 @@ def test_downloads_carry_data_and_parameters():
     text = views.to_csv(p, params).read()
     assert "# Ph = 100.0" in text
     rows = [line for line in text.splitlines() if not line.startswith("#")]
-    assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y,x,")
+    assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y (m),x (m),")
+    # issue 25: the columns name the measure and unit (they were A, B, difference)
+    assert f"A: {p.value_label}" in rows[0] and f"B vs A: {p.diff_label}" in rows[0]
+    assert views.download_name(p, "csv") == "fig_5_x_y_log10_det.csv"
 
 
 def test_maps_for_every_measure_and_plane():
