@@ -287,8 +287,9 @@ def test_a_ninth_station_is_refused_not_swapped_for_the_oldest(page):
     wait_count(rows, 2)
     canvas = page.locator("canvas").filter(visible=True).first
     box = canvas.bounding_box()
-    spots = [(0.15, 0.15), (0.85, 0.15), (0.15, 0.85), (0.85, 0.85), (0.5, 0.15), (0.15, 0.5),
-             (0.5, 0.85)]
+    # inside the frame: away from the title, the toolbar and the colour bar on the right
+    spots = [(0.2, 0.3), (0.55, 0.3), (0.2, 0.75), (0.55, 0.75), (0.38, 0.3), (0.2, 0.52),
+             (0.38, 0.75)]
     for n, (fx, fy) in enumerate(spots[:6], start=3):
         page.mouse.click(box["x"] + box["width"] * fx, box["y"] + box["height"] * fy)
         wait_count(rows, n)
@@ -328,3 +329,16 @@ def test_the_noise_box_takes_any_accepted_value_and_says_why_it_refuses_one(page
     box.press("Enter")
     page.locator(".w-message-noise").get_by_text("outside the accepted range").wait_for(timeout=15_000)
     assert float(box.input_value()) == 1e-3
+
+
+def test_the_maps_do_not_jump_when_the_paper_banner_comes_and_goes(page):
+    # issue 25 (Maps): the maps moved ~45 px down and up as the banner was shown and hidden
+    canvas = page.locator("canvas").filter(visible=True).first
+    with_banner = canvas.bounding_box()["y"]
+    box = page.locator(".w-Ph input").first
+    box.fill("123")
+    box.press("Enter")
+    page.wait_for_function("() => window.location.search.includes('Ph=123')", timeout=15_000)
+    time.sleep(1.0)
+    assert page.locator(".w-paper .alert").count() == 0  # no paper figure any more
+    assert abs(canvas.bounding_box()["y"] - with_banner) <= 1
