@@ -146,9 +146,9 @@ def build():
         caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
         fig.add_layout(caption, "below")
         # Inside the frame: what a map veiled everywhere is (a newcomer took it for broken)
-        label = Label(x=8, y=8, x_units="screen", y_units="screen", text="", visible=False,
-                      text_font_size="9.5pt", text_color="#222222", background_fill_color="white",
-                      background_fill_alpha=0.9, border_line_color="#888888", padding=6)
+        label = Label(x=4, y=4, x_units="screen", y_units="screen", text="", visible=False,
+                      text_font_size="7.5pt", text_color="#222222", background_fill_color="white",
+                      background_fill_alpha=0.9, border_line_color="#888888", padding=4)
         fig.add_layout(label)
         for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label)):
             out[key].append(model)
@@ -239,17 +239,18 @@ def veiled_text(p: Panels, which):
     """What map ``which`` (0 A, 1 B, 2 difference) is when it is unobservable at every point
     (said inside its frame), else ''."""
     a_none, b_none = (not res.observable.any() for res in (p.a, p.b))
+    # short lines: a Label does not wrap, and a map is ~130 px wide at a 1280 px screen
     if which == 2:
         if not (a_none or b_none):
             return ""
-        return ("no difference anywhere: " + ("A and B are" if a_none and b_none else
-                                              "A is" if a_none else "B is") + "\nunobservable at every point")
+        who = "A and B are" if a_none and b_none else "A is" if a_none else "B is"
+        return f"no difference:\n{who} unobservable\nat every point"
     if not (a_none, b_none)[which]:
         return ""
     if "rank 6" in p.unobservable[which]:
-        return ("unobservable everywhere: rank 6 of 7 —\none station cannot tell range\n"
-                "from source strength (colours: round-off)")
-    return "unobservable everywhere (rank-deficient Γ):\nthe colours are round-off"
+        return ("unobservable at every\npoint (rank 6 of 7):\none station cannot\n"
+                "tell range from\nsource strength")
+    return "unobservable at every\npoint (rank < 7):\ncolours are round-off"
 
 
 def _changed(model, values):

@@ -500,6 +500,7 @@ def test_a_map_veiled_everywhere_says_what_it_is_inside_its_frame():
     map_figures.fill(figs, compute(Snapshot.of(s)))
     assert figs.labels[0].visible and "rank 6 of 7" in figs.labels[0].text
     assert "range" in figs.labels[0].text and "source strength" in figs.labels[0].text
+    assert max(len(line) for lab in figs.labels for line in lab.text.splitlines()) <= 21  # fits 130 px
     assert not figs.labels[1].visible  # dual: observable
     assert figs.labels[2].visible and "A is" in figs.labels[2].text
     assert all(lab in figs.figures[i].center for i, lab in enumerate(figs.labels))  # in the frame
