@@ -174,7 +174,8 @@ def create_app():
     busy = pn.indicators.LoadingSpinner(value=False, visible=False, width=24, height=24,
                                         css_classes=["w-busy"], margin=(0, 10), align="center",
                                         color="light", bgcolor="dark", throttle=0)
-    after_draw = lambda: flush_url[0]() if flush_url else None  # noqa: E731
+    # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
+    after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
     titles = ("Maps", "Layout design", "Track", "Calibration")
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    (titles[1], design_tab(scenario, cache, _widgets())),

@@ -159,10 +159,13 @@ def design_tab(scenario, cache, widgets):
                              message, table,
                              number_input(scenario, "ellipse_x", css_classes=["w-ellipse_x"]),
                              number_input(scenario, "ellipse_y", css_classes=["w-ellipse_y"]),
-                             pn.pane.Markdown(pn.bind(ellipse_text, scenario.param.ellipse_x,
-                                                      scenario.param.ellipse_y,
-                                                      *[scenario.param[f] for f in DESIGN_FIELDS]),
-                                              css_classes=["w-ellipse-text"], sizing_mode="stretch_width"),
+                             # lazy: computed when shown, not on every change of a map input
+                             # while another tab is open (~0.1 s of Python per slider release)
+                             pn.panel(pn.bind(ellipse_text, scenario.param.ellipse_x,
+                                              scenario.param.ellipse_y,
+                                              *[scenario.param[f] for f in DESIGN_FIELDS]),
+                                      lazy=True, css_classes=["w-ellipse-text"],
+                                      sizing_mode="stretch_width"),
                              width=380),
                    sizing_mode="stretch_width"),
         pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),
