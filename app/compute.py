@@ -251,9 +251,20 @@ def sea_text(s):
     return f"sea depth D = {s.sea_depth:g} m over a {s.seabed_sigma:g} S/m seabed, "
 
 
-def caption(s, moments=None):
+def layout_text(stations):
+    """The stations of a map, for its caption: one station, or how many and their spacing (m)."""
+    st = np.asarray(stations, dtype=float).reshape(-1, 3)
+    if len(st) == 1:
+        return "1 station"
+    if len(st) == 2:
+        return f"2 stations d = {float(np.linalg.norm(st[1] - st[0])):g} m apart"
+    return f"{len(st)} stations"
+
+
+def caption(s, moments=None, stations=None):
     """The parameters of a scenario's map as one line of plain text. ``moments``: (P_h, P_v) of
-    the map (A·m; default the scenario's), or ((P_h, P_v) of A, of B) for the difference map."""
+    the map (A·m; default the scenario's), or ((P_h, P_v) of A, of B) for the difference map;
+    ``stations``: the map's (S, 3) stations (m), or a text naming A's and B's."""
     moments = (s.Ph, s.Pv) if moments is None else moments
     if np.ndim(moments) == 2 and tuple(moments[0]) != tuple(moments[1]):
         (pha, pva), (phb, pvb) = moments
@@ -264,8 +275,11 @@ def caption(s, moments=None):
     vx, vy = (0.0 if abs(c) < 1e-9 * s.speed else c for c in s.velocity())  # cos 90° is 6e-17
     where = (f"target depth z = {s.z:g} m" if s.plane == "x–y"
              else f"x–z plane at y = {s.y:g} m, z {s.z_min:g}–{s.z_max:g} m")
-    return (f"{power}, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, "
-            f"stations at depth h = {s.h:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, {sea_text(s)}"
+    layout = f"{stations}, " if isinstance(stations, str) else (
+        "" if stations is None else f"{layout_text(stations)}, ")
+    n = int(s.resolution)
+    return (f"{power}, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, {layout}"
+            f"stations at depth h = {s.h:g} m, grid {n} × {n} over x ±{s.extent:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, {sea_text(s)}"
             f"noise {s.noise:.3g} V/m, N = {s.steps}, {s.model}, {s.state_set}")
 
 
@@ -299,7 +313,9 @@ def compute(snapshot: Snapshot) -> Panels:
         unobservable=(unobservable_text(s, st_a), unobservable_text(s, st_b)),
         paper=PAPER_MAPS.get(preset, ((), "")), preset=preset,
         blank=blank_reason(measure, s.difference),
-        captions=(caption(s, mom_a), caption(s, mom_b), caption(s, (mom_a, mom_b))), filename=filename(s, preset),
+        captions=(caption(s, mom_a, st_a), caption(s, mom_b, st_b),
+                  caption(s, (mom_a, mom_b), f"A: {layout_text(st_a)}, B: {layout_text(st_b)}")),
+        filename=filename(s, preset),
     )
     p = dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
     if not log_scale:

@@ -415,6 +415,13 @@ def test_each_map_is_captioned_with_its_own_moments():
     assert "P = (100, 100)" in figs.captions[1].text.replace("\n", " ")  # the PNG's caption
     s.apply_preset("Fig. 3")
     assert "P = (1000, 200) A·m" in compute(Snapshot.of(s)).captions[1]
+    # and the spacing and the grid (issue 25: captions omitted d and the grid)
+    s.apply_preset("Fig. 6")
+    s.resolution = 21
+    caps = compute(Snapshot.of(s)).captions
+    assert "2 stations d = 10 m apart" in caps[0] and "2 stations d = 50 m apart" in caps[1]
+    assert "A: 2 stations d = 10 m apart, B: 2 stations d = 50 m apart" in caps[2]
+    assert all("grid 21 × 21 over x ±300 m" in c for c in caps)
 
 
 @pytest.mark.parametrize("name, moments_b", [("Fig. 3", (1000.0, 200.0)), ("Fig. 4", (70.7, 70.7))])
