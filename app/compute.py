@@ -86,7 +86,7 @@ class Panels:
     paper: tuple = ((), "")  # (which maps are a paper figure: 0 A, 1 B, 2 difference; caption)
     preset: str = ""  # the paper figure whose parameters these are, or ""
     blank: str = ""  # hover text of a difference-map point with no value that is not veiled
-    caption: str = ""  # the scenario's parameters, one line (under each map, and in its PNG)
+    captions: tuple = ("", "", "")  # each map's parameters, one line (under it, and in its PNG)
     filename: str = "observability_map"  # of a saved PNG, after the scenario
     runaway: tuple = ()  # CRLB maps: bool (n, n) of A, B, difference where the bound runs away
     far_note: str = ""  # plain text on the runaway points; empty if none
@@ -164,17 +164,21 @@ def colour_range(*arrays):
     return (float(lo), float(hi if hi > lo else lo + 1.0))
 
 
-def unobservable_note(s: Scenario, results, stations):
-    """Plain-text explanation where a map is mostly structurally unobservable, else ''."""
+def unobservable_note(s: Scenario, results, stations, moments):
+    """Plain-text explanation where a map is mostly structurally unobservable, else ''.
+    ``results``: ((title, core.MapResult), ...) of A and B; ``stations`` and ``moments`` (A·m):
+    each map's own (B's unobservable direction is B's, not A's)."""
     lines = []
-    for (name, res), st in zip(results, stations):
+    for (name, res), st, (ph, pv) in zip(results, stations, moments):
         frac = 1.0 - res.observable.mean()
         if frac < 0.5:
             continue
         if len(st) == 1 and not s.core_options()["known"]:
             sx, sy, sz = st[0]
-            probe = np.array([sx + s.extent / 3, sy + s.extent / 3, s.z if s.plane == "x–y" else
-                              0.5 * (s.z_min + s.z_max), *s.velocity(), s.Ph, s.Pv])
+            # a point of the map's own plane (in x–z: at its fixed y, not y = sy + extent/3)
+            on_xy = s.plane == "x–y"
+            probe = np.array([sx + s.extent / 3, sy + s.extent / 3 if on_xy else s.y,
+                              s.z if on_xy else 0.5 * (s.z_min + s.z_max), *s.velocity(), ph, pv])
             n = core.unobservable_direction(probe, st, T=s.T, sigma=s.sigma,
                                             model=s.core_options()["model"], sea=s.core_options()["sea"])
             nice = ", ".join(f"{v:+.3f}" for v in n)
@@ -247,13 +251,35 @@ def sea_text(s):
     return f"sea depth D = {s.sea_depth:g} m over a {s.seabed_sigma:g} S/m seabed, "
 
 
-def caption(s):
-    """The parameters of a scenario's maps as one line of plain text."""
+def layout_text(stations):
+    """The stations of a map, for its caption: one station, or how many and their spacing (m)."""
+    st = np.asarray(stations, dtype=float).reshape(-1, 3)
+    if len(st) == 1:
+        return "1 station"
+    if len(st) == 2:
+        return f"2 stations d = {float(np.linalg.norm(st[1] - st[0])):g} m apart"
+    return f"{len(st)} stations"
+
+
+def caption(s, moments=None, stations=None):
+    """The parameters of a scenario's map as one line of plain text. ``moments``: (P_h, P_v) of
+    the map (A·m; default the scenario's), or ((P_h, P_v) of A, of B) for the difference map;
+    ``stations``: the map's (S, 3) stations (m), or a text naming A's and B's."""
+    moments = (s.Ph, s.Pv) if moments is None else moments
+    if np.ndim(moments) == 2 and tuple(moments[0]) != tuple(moments[1]):
+        (pha, pva), (phb, pvb) = moments
+        power = f"P_A = ({pha:g}, {pva:g}) A·m, P_B = ({phb:g}, {pvb:g}) A·m"
+    else:
+        ph, pv = moments[0] if np.ndim(moments) == 2 else moments
+        power = f"P = ({ph:g}, {pv:g}) A·m"
     vx, vy = (0.0 if abs(c) < 1e-9 * s.speed else c for c in s.velocity())  # cos 90° is 6e-17
     where = (f"target depth z = {s.z:g} m" if s.plane == "x–y"
              else f"x–z plane at y = {s.y:g} m, z {s.z_min:g}–{s.z_max:g} m")
-    return (f"P = ({s.Ph:g}, {s.Pv:g}) A·m, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, "
-            f"stations at depth h = {s.h:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, {sea_text(s)}"
+    layout = f"{stations}, " if isinstance(stations, str) else (
+        "" if stations is None else f"{layout_text(stations)}, ")
+    n = int(s.resolution)
+    return (f"{power}, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, {layout}"
+            f"stations at depth h = {s.h:g} m, grid {n} × {n} over x ±{s.extent:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, {sea_text(s)}"
             f"noise {s.noise:.3g} V/m, N = {s.steps}, {s.model}, {s.state_set}")
 
 
@@ -277,7 +303,7 @@ def compute(snapshot: Snapshot) -> Panels:
         b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure, **opts)
     diff, diff_label, diff_short = difference(a, b, measure, s.difference)
     label, unit, _ = core.MEASURES[measure]
-    note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b))
+    note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b), (mom_a, mom_b))
     log_scale = measure == "crlb_position"  # metres over decades: coloured by log10 (as the design tab)
     preset = preset_of(s, FIELDS) or ""
     p = Panels(
@@ -286,7 +312,10 @@ def compute(snapshot: Snapshot) -> Panels:
         diff_label=diff_label, clim=(0.0, 1.0), note=note, log_scale=log_scale,
         unobservable=(unobservable_text(s, st_a), unobservable_text(s, st_b)),
         paper=PAPER_MAPS.get(preset, ((), "")), preset=preset,
-        blank=blank_reason(measure, s.difference), caption=caption(s), filename=filename(s, preset),
+        blank=blank_reason(measure, s.difference),
+        captions=(caption(s, mom_a, st_a), caption(s, mom_b, st_b),
+                  caption(s, (mom_a, mom_b), f"A: {layout_text(st_a)}, B: {layout_text(st_b)}")),
+        filename=filename(s, preset),
     )
     p = dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
     if not log_scale:

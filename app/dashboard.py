@@ -54,8 +54,10 @@ def _widgets():
     """pn.Param widget specs of the inputs that are not :data:`NUMBERS`: a text box for the
     noise, a select for the rest; each with its stable css class."""
     # Scientific notation (numbro's "0.0e+0" showed 1e-7 as "+0.000"): a printf formatter.
+    # No start/end (from_param took the slider's soft bounds, 1e-9 … 1e-5, and the browser dropped
+    # 1e-3 without a word): any number reaches the Scenario, which refuses it with a message.
     spec = {"noise": {"type": pn.widgets.FloatInput, "format": PrintfTickFormatter(format="%.2e"),
-                      "sizing_mode": "stretch_width"}}
+                      "start": None, "end": None, "step": 1e-8, "sizing_mode": "stretch_width"}}
     for name in Scenario.param:
         if name not in ("name", "message"):  # stable hooks for the browser tests
             spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
@@ -72,6 +74,8 @@ def applies(name, s, tab):
     layered = s.sea_model == "layered"
     rules = {
         "sea_depth": layered, "seabed_sigma": layered,
+        # the Track tab has a speed and heading of its own (track_speed, track_heading)
+        "speed": tab != TRACK_TAB, "heading": tab != TRACK_TAB,
         "y": on_maps and s.plane == "x–z",
         "z": s.plane == "x–y" or not on_maps,
         "z_min": on_maps and s.plane == "x–z",
@@ -88,6 +92,11 @@ def applies(name, s, tab):
     return rules.get(name, True)
 
 
+#: Selectors whose change moves other values by a rule (a layered sea puts the stations on the
+#: seabed): the note on what moved shows under them.
+MOVES = ("sea_model", "model")
+
+
 def _message_pane(scenario, names, css):
     """The refusal message, shown here when it is about one of ``names`` (``None``: a message
     about no input, e.g. the page's link)."""
@@ -95,7 +104,8 @@ def _message_pane(scenario, names, css):
         return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
 
     return pn.pane.HTML(
-        pn.bind(lambda m, r: _alert(m, "danger") if shows(m, r) else "", scenario.param.message,
+        pn.bind(lambda m, r: _alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
+                if shows(m, r) else "", scenario.param.message,
                 scenario.param.refused),
         visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
         sizing_mode="stretch_width", css_classes=[css])
@@ -118,7 +128,7 @@ def _section(scenario, tabs, title, names, collapsed):
         return cls.from_param(scenario.param[name], visible=visible(name), **spec)
 
     def row(name):
-        if name not in ACCEPTED:  # a selector: nothing it offers is refused
+        if name not in ACCEPTED and name not in MOVES:  # a selector: nothing it offers is refused
             return widget(name)
         # A refused value is said right under its input, where the user typed it (at the top of
         # the sidebar it was out of sight when typing in Stations or Advanced).
@@ -152,10 +162,11 @@ def create_app():
 
     pn.state.on_session_destroyed(session_closed)
 
-    flush_url = None  # no page URL outside a served page
-    if pn.state.location is not None:
-        flush_url = url.sync_url(scenario, pn.state.location, pn.state.session_args or {},
-                                onload=pn.state.onload)
+    served = pn.state.location is not None  # no page URL outside a served page
+    args = (pn.state.session_args or {}) if served else {}
+    if served:  # the link's values first: the first maps are the link's
+        url.read_link(scenario, args)
+    flush_url = []  # set below, once the tabs exist
 
     #: Spins while a change slower than BUSY_AFTER computes, hidden otherwise (an idle ring
     #: looked stalled). In the header, a Bokeh root of its own: its changes re-lay out only
@@ -163,11 +174,18 @@ def create_app():
     busy = pn.indicators.LoadingSpinner(value=False, visible=False, width=24, height=24,
                                         css_classes=["w-busy"], margin=(0, 10), align="center",
                                         color="light", bgcolor="dark", throttle=0)
-    tabs = pn.Tabs(("Maps", maps.maps_tab(scenario, cache, busy=busy, after_draw=flush_url)),
-                   ("Layout design", design_tab(scenario, cache, _widgets())),
-                   ("Track", track_tab(scenario)),
-                   ("Calibration", calibration_tab(scenario)),
+    # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
+    after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
+    titles = ("Maps", "Layout design", "Track", "Calibration")
+    tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
+                   (titles[1], design_tab(scenario, cache, _widgets())),
+                   (titles[2], track_tab(scenario)),
+                   (titles[3], calibration_tab(scenario)),
                    dynamic=True, sizing_mode="stretch_width")
+    if served:
+        flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
+                                      tabs=tabs, titles=titles,
+                                      waits=lambda names: bool(set(names) & set(maps.FIELDS))))
 
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
@@ -178,12 +196,17 @@ def create_app():
 
     presets = pn.FlexBox(*[preset_button(name) for name in PRESETS], sizing_mode="stretch_width")
     sections = [_section(scenario, tabs, *section) for section in SECTIONS]
-    downloads = pn.Row(
-        pn.widgets.FileDownload(callback=lambda: maps.to_csv(scenario, cache),
-                                filename="observability_maps.csv", label="CSV", button_type="light"),
-        pn.widgets.FileDownload(callback=lambda: maps.to_netcdf(scenario, cache),
-                                filename="observability_maps.nc", label="NetCDF", button_type="light"),
-    )
+    def download(ext, fn):
+        # named after the scenario (was always observability_maps.*), set as the file is made
+        def make():
+            button.filename = maps.download_name(scenario, cache, ext)
+            return fn(scenario, cache)
+
+        button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
+                                         label={"csv": "CSV", "nc": "NetCDF"}[ext], button_type="light")
+        return button
+
+    downloads = pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf))
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "

@@ -20,8 +20,8 @@ positive down). The map is the Cramér–Rao bound (1σ) on the 3-D position, ho
 speed error of a target at depth z, with the sensor noise and N instants of the Advanced section —
 the numbers an analyst reports — on a log colour scale. White hatching: the 3-D bound exceeds {limit:.0%}
 of the range to the nearest station, where a linearised bound no longer predicts a tracker's error
-(far-field runaway; read it as "not trackable from here"). Click a point for its horizontal error
-ellipse. *Find best spacing* scans the dual layout's spacing d over this region and refines the
+(far-field runaway; read it as "not trackable from here"). The red ellipse is the horizontal error
+ellipse of a target at the point set under the table (*Error ellipse at x, y*). *Find best spacing* scans the dual layout's spacing d over this region and refines the
 optimum with scipy; *Optimise N-station layout* does the same for a line, triangle or square of
 N stations (or free positions, ~10 s) and makes it the custom layout.
 """.format(limit=RUNAWAY_LIMIT)
@@ -31,11 +31,26 @@ OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error
 
 
 def drawn_stations(data, old, h):
-    """The custom layout after a PointDraw edit: ``data`` (columns x, y, z) against the ``old``
-    layout; a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
-    rows = list(zip(data["x"], data["y"], data["z"]))
-    return [[float(x), float(y), float(z) if i < len(old) else float(h)]
-            for i, (x, y, z) in enumerate(rows)]
+    """The custom layout after a PointDraw edit: ``data`` (columns x, y; any z is ignored) against
+    the ``old`` layout (S, 3), m.
+
+    The browser's z column is not trusted: the point-draw tool fills a new point's z with a
+    placeholder, and kept the placeholder (0, the surface) for earlier clicked stations when the
+    next one was added. So a depth comes from the layout itself: a row at an old station's (x, y)
+    keeps that station's depth; a moved station keeps the depth of the old station it replaces;
+    a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
+    rows = [(float(x), float(y)) for x, y in zip(data["x"], data["y"])]
+    unused = list(range(len(old)))
+    depth = [None] * len(rows)
+    for i, (x, y) in enumerate(rows):  # unchanged stations, matched by position
+        j = next((j for j in unused if abs(old[j][0] - x) <= 1e-6 and abs(old[j][1] - y) <= 1e-6), None)
+        if j is not None:
+            depth[i] = float(old[j][2])
+            unused.remove(j)
+    for i in range(len(rows)):
+        if depth[i] is None:  # dragged (an old station is left over for it) or added (at the end)
+            depth[i] = float(old[unused.pop(0)][2]) if i < len(old) and unused else float(h)
+    return [[x, y, z] for (x, y), z in zip(rows, depth)]
 
 
 #: What a bound of core.LayoutResult.at_bound means, for the result line.
@@ -62,7 +77,9 @@ def design_tab(scenario, cache, widgets):
     watch = [f for f in DESIGN_FIELDS if f != "stations"]
     points = hv.DynamicMap(lambda **_: views.station_layer(scenario.stations, editable=True),
                            streams=[hv.streams.Params(scenario, ["stations"])])
-    draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS, empty_value=scenario.h)
+    # One more than allowed: a 9th click reaches the Scenario, which refuses it ("at most 8
+    # stations") and restores the layout (with num_objects=8 the tool deleted the oldest silently)
+    draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS + 1, empty_value=scenario.h)
 
     def drawn(data):
         if data is None or not len(data.get("x", [])):
@@ -73,7 +90,9 @@ def design_tab(scenario, cache, widgets):
     errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), compute.design),
                                                        "Custom layout: Cramér–Rao error", scenario.error_quantity),
                            streams=[hv.streams.Params(scenario, watch + ["stations", "error_quantity"])])
-    tap = hv.streams.Tap(source=errors, x=scenario.extent / 3, y=scenario.extent / 3)
+    # The ellipse's point is an input of its own (a click on the map adds a station: it cannot
+    # also move the ellipse)
+    tap = hv.streams.Params(scenario, ["ellipse_x", "ellipse_y"], rename={"ellipse_x": "x", "ellipse_y": "y"})
 
     def ellipse(x, y, **_):
         return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[0]
@@ -138,7 +157,15 @@ def design_tab(scenario, cache, widgets):
         pn.FlexBox(pn.pane.HoloViews(errors * points * ell),
                    pn.Column(pn.Param(scenario, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
-                             pn.bind(ellipse_text, tap.param.x, tap.param.y, scenario.param.stations),
+                             number_input(scenario, "ellipse_x", css_classes=["w-ellipse_x"]),
+                             number_input(scenario, "ellipse_y", css_classes=["w-ellipse_y"]),
+                             # lazy: computed when shown, not on every change of a map input
+                             # while another tab is open (~0.1 s of Python per slider release)
+                             pn.panel(pn.bind(ellipse_text, scenario.param.ellipse_x,
+                                              scenario.param.ellipse_y,
+                                              *[scenario.param[f] for f in DESIGN_FIELDS]),
+                                      lazy=True, css_classes=["w-ellipse-text"],
+                                      sizing_mode="stretch_width"),
                              width=380),
                    sizing_mode="stretch_width"),
         pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),

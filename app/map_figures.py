@@ -27,6 +27,7 @@ from bokeh.models import (
     CustomJSHover,
     CustomJSTickFormatter,
     HoverTool,
+    Label,
     LinearColorMapper,
     Range1d,
     SaveTool,
@@ -91,6 +92,7 @@ class MapFigures:
     formatters: tuple  # CustomJSHover of each map's value
     captions: tuple
     saves: tuple
+    labels: tuple = ()  # per map: a Label inside its frame, shown when it is veiled everywhere
     view: object = None  # the (plane, view box) last drawn: a new one resets zoom and pan
 
 
@@ -114,7 +116,7 @@ def build():
                            for _ in range(2))
     veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=len(VEIL_PALETTE) - 1)
     out = {k: [] for k in ("figs", "images", "veils", "stations", "bars", "hovers", "formatters",
-                           "captions", "saves")}
+                           "captions", "saves", "labels")}
     for which in range(3):
         fig = _figure(x_range, y_range)
         # The images' mapper spans 0 … 1 for good (images come normalised: module docstring).
@@ -143,13 +145,19 @@ def build():
         fig.add_layout(bar, "right")
         caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
         fig.add_layout(caption, "below")
-        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save)):
+        # Inside the frame: what a map veiled everywhere is (a newcomer took it for broken)
+        label = Label(x=4, y=4, x_units="screen", y_units="screen", text="", visible=False,
+                      text_font_size="7.5pt", text_color="#222222", background_fill_color="white",
+                      background_fill_alpha=0.9, border_line_color="#888888", padding=4)
+        fig.add_layout(label)
+        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label)):
             out[key].append(model)
     return MapFigures(layout=tuple(out["figs"]), figures=tuple(out["figs"]), images=tuple(out["images"]),
                       veils=tuple(out["veils"]), stations=tuple(out["stations"]),
                       bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
                       hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
-                      captions=tuple(out["captions"]), saves=tuple(out["saves"]))
+                      captions=tuple(out["captions"]), saves=tuple(out["saves"]),
+                      labels=tuple(out["labels"]))
 
 
 def _symmetric(values):
@@ -225,6 +233,24 @@ def _wrapped(text, width=50):
         else:
             line = f"{line}, {part}" if line else part
     return "\n".join(lines + [line])
+
+
+def veiled_text(p: Panels, which):
+    """What map ``which`` (0 A, 1 B, 2 difference) is when it is unobservable at every point
+    (said inside its frame), else ''."""
+    a_none, b_none = (not res.observable.any() for res in (p.a, p.b))
+    # short lines: a Label does not wrap, and a map is ~130 px wide at a 1280 px screen
+    if which == 2:
+        if not (a_none or b_none):
+            return ""
+        who = "A and B are" if a_none and b_none else "A is" if a_none else "B is"
+        return f"no difference:\n{who} unobservable\nat every point"
+    if not (a_none, b_none)[which]:
+        return ""
+    if "rank 6" in p.unobservable[which]:
+        return ("unobservable at every\npoint (rank 6 of 7):\none station cannot\n"
+                "tell range from\nsource strength")
+    return "unobservable at every\npoint (rank < 7):\ncolours are round-off"
 
 
 def _changed(model, values):
@@ -337,7 +363,10 @@ def set_maps(figs: MapFigures, prepared):
         if fmt.args["log"] != log or fmt.args["texts"] != texts:  # rare: a new measure or layout
             fmt.args = dict(fmt.args, log=log, texts=texts)
         figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{custom}")]
-        figs.captions[which].text = _wrapped(p.caption)
+        figs.captions[which].text = _wrapped(p.captions[which])
+        said = veiled_text(p, which)
+        if figs.labels and (figs.labels[which].text, figs.labels[which].visible) != (said, bool(said)):
+            figs.labels[which].update(text=said, visible=bool(said))
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
     view = (p.plane, view_box(p))
     if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom

@@ -17,6 +17,9 @@ from .compute import FIELDS, RUNAWAY_LIMIT, Snapshot
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
 
+#: Pixels kept for the paper-figure banner above the maps, shown or not.
+PAPER_HEIGHT = 52
+
 #: Seconds after the maps are sent that ``after_draw`` runs (the URL update: see app.url).
 URL_AFTER = 0.1
 
@@ -91,7 +94,9 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     # the maps once more, synchronously, before redraw could start).
     note = pn.pane.HTML(alert(_notes(first), "warning"), visible=bool(_notes(first)),
                         sizing_mode="stretch_width", css_classes=["w-note"])
-    paper = pn.pane.HTML(_paper_line(first), visible=bool(first.preset), sizing_mode="stretch_width",
+    # Always laid out, at the height of its one-line banner: the maps no longer jump ~45 px when
+    # a paper figure's banner comes and goes
+    paper = pn.pane.HTML(_paper_line(first), sizing_mode="stretch_width", min_height=PAPER_HEIGHT,
                          css_classes=["w-paper"])
     known = pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
                               css_classes=["w-remedy-known"],
@@ -158,7 +163,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                 map_figures.set_maps(figs, panels)
                 p = panels.panels
                 note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
-                paper.param.update(object=_paper_line(p), visible=bool(p.preset))
+                paper.object = _paper_line(p)
                 now = remedies(p)
                 known.visible, crlb.visible = now["known"], now["crlb"]
 
@@ -173,6 +178,11 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
 def _current(scenario, cache):
     return cache.get(Snapshot.of(scenario)), {f: getattr(scenario, f) for f in FIELDS}
+
+
+def download_name(scenario, cache, ext):
+    """The file name of a download of ``scenario``'s maps (:func:`app.views.download_name`)."""
+    return views.download_name(cache.get(Snapshot.of(scenario)), ext)
 
 
 def to_csv(scenario, cache):

@@ -100,7 +100,9 @@ PRESETS = {
                                T=1.0, plane="x–y", extent=300.0, layout="dual",
                                comparison="Dual − single (Fig. 5)", z_min=0.0, z_max=8.4,
                                measure="log10|det Γ| (paper)",
-                               stations=[[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]]),
+                               # along x, as core.dual_station(h, d) puts the Maps tab's pair: one
+                               # geometry on every tab (it was along y here, along x on Maps)
+                               stations=[[0.0, 0.0, 8.4], [10.0, 0.0, 8.4]]),
 }
 
 #: Which map shows each paper figure: preset -> (map index 0 A, 1 B, 2 difference, caption).
@@ -175,6 +177,12 @@ class Scenario(param.Parameterized):
                                  doc="Shape of the N-station layout to optimise ('free': any positions, slow).")
     n_stations = param.Integer(4, bounds=(1, 8), label="Optimise: stations N",
                                doc="Number of stations of the layout to optimise, 1 to 8.")
+    ellipse_x = param.Number(100.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+                             label="Error ellipse at x (m)",
+                             doc="x of the target whose horizontal error ellipse is drawn, m.")
+    ellipse_y = param.Number(100.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+                             label="Error ellipse at y (m)",
+                             doc="y of the target whose horizontal error ellipse is drawn, m.")
     threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
                      "For 'area within threshold': position error (1σ, m) that counts as good.")
     # -- the sea (spec §7)
@@ -315,10 +323,17 @@ class Scenario(param.Parameterized):
         if self.sea_model != "layered" or self._restoring:
             return
         D = self.sea_depth
-        note = ("Layered sea: the paper's printed equations have no images; using the exact dipole."
-                if self.model != "exact dipole" else "")
-        self._quietly(h=D, z=min(max(self.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
-                      stations=[[st[0], st[1], D] for st in self.stations])
+        moved = dict(h=D, z=min(max(self.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
+                     stations=[[st[0], st[1], D] for st in self.stations])
+        said = [f"{Scenario.param[n].label.split(' (')[0]} {getattr(self, n):g} → {moved[n]:g} m"
+                for n in ("h", "z", "z_min", "z_max") if getattr(self, n) != moved[n]]
+        if moved["stations"] != self.stations:
+            said.append(f"custom stations to the seabed ({D:g} m)")
+        if self.model != "exact dipole":
+            said.append("field model → exact dipole (the paper's printed equations have no images)")
+        self._quietly(**moved)
+        note = ("Layered sea: moved " + "; ".join(said) + ". These stay when you switch back to the "
+                "whole space." if said else "")
         self.param.update(message=note, refused=["sea_model"] if note else [])
 
     @param.depends("model", watch=True)
@@ -356,6 +371,8 @@ class Scenario(param.Parameterized):
         0 … 5000 m), else why."""
         lo, hi, _ = ACCEPTED["y"]
         if not 1 <= len(value) <= MAX_STATIONS:
+            if len(value) > MAX_STATIONS:
+                return f"At most {MAX_STATIONS} stations: a {len(value)}th was refused"
             return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
         for i, st in enumerate(value):
             ok = len(st) == 3 and all(isinstance(c, (int, float)) and not isinstance(c, bool)
@@ -386,8 +403,12 @@ class Scenario(param.Parameterized):
         return None
 
     def apply_preset(self, name):
-        """Set the parameters of one of the paper's figures (:data:`PRESETS`)."""
-        self.param.update(PRESETS[name])
+        """Load one of :data:`PRESETS` as a complete scenario: every parameter of the maps, the
+        design and the track is the preset's or its default, whatever was set before (a preset
+        used to be a diff of the previous one: custom stations, the x–z range and the sea of the
+        previous preset stayed). The calibration inputs (seed 004's own problem, with presets of
+        its own) are left alone."""
+        self.param.update(preset_values(name))
 
     def active_preset(self):
         """The paper figure (a :data:`PRESETS` name) whose parameters the scenario holds, or None."""
@@ -408,6 +429,19 @@ class Scenario(param.Parameterized):
         return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
                     noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure],
                     sea=sea)
+
+
+#: Parameters a paper-figure preset does not set: feedback, and the calibration tab's own problem.
+NOT_IN_PRESETS = ("name", "message", "refused")
+
+
+def preset_values(name):
+    """Every parameter :meth:`Scenario.apply_preset` sets for preset ``name``: its values over
+    the defaults of every parameter but the calibration tab's and the feedback."""
+    defaults = {n: p.default for n, p in Scenario.param.objects().items()
+                if n not in NOT_IN_PRESETS and not n.startswith("cal_")}
+    return {**defaults, **{k: [list(v) for v in val] if k == "stations" else val
+                           for k, val in PRESETS[name].items()}}
 
 
 def preset_of(values, names=None):

@@ -206,14 +206,34 @@ def error_view(out):
     ]).opts(logy=True, title="TRMSE vs PCRLB", legend_position="top_right", responsive=True)
 
 
+def nees_check(nees, runs, states=7, level=0.99):
+    """'' if a mean NEES is consistent with ``runs`` independent runs of a ``states``-state
+    filter, else a warning. The interval is the two-sided ``level`` χ² interval of the mean of
+    ``runs`` independent χ²(states) draws: the instants of one run are correlated, so only the
+    runs count as independent (a wider, conservative interval)."""
+    from scipy.stats import chi2
+
+    lo, hi = (chi2.ppf(q, states * runs) / runs for q in ((1 - level) / 2, (1 + level) / 2))
+    if nees > hi:
+        return (f"**Warning: the filter is overconfident** — mean NEES {nees:.3g} is above "
+                f"{hi:.3g}, the {level:.0%} bound for {states} consistent states over {runs} runs: its "
+                "covariance claims far less error than it makes; do not quote its σ.")
+    if nees < lo:
+        return (f"**Note: the filter is underconfident** — mean NEES {nees:.3g} is below {lo:.3g}, "
+                f"the {level:.0%} bound: its covariance is larger than its errors.")
+    return ""
+
+
 def summary_text(out):
     """One line of numbers for the tab (markdown)."""
     s = out["res"].summary
     parts = [f"**{s['filter']}**, {s['runs']} runs: diverged {100 * s['diverged']:.0f} % "
              f"(final error > max(5 × PCRLB, 10 m)); final TRMSE {s['trmse_final_m']:.3g} m vs PCRLB "
              f"{s['pcrlb_final_m']:.3g} m"]
+    warning = ""
     if s.get("nees") is not None:
         parts.append(f"mean NEES {s['nees']:.3g} (7 states: 7 if consistent)")
+        warning = nees_check(s["nees"], s["runs"])
     if s["filter"] == "bank":
         best = max(s["winners"], key=s["winners"].get)
         parts.append(f"final ML winner most often: {best} ({s['winners'][best]} of {s['runs']})")
@@ -221,7 +241,7 @@ def summary_text(out):
         share = 100 * out["breaks"].mean()
         parts.append(f"the linearised bound is not predictive on {share:.0f} % of the track "
                      f"(PCRLB > {RUNAWAY_LIMIT:g} × range: far-field runaway along range–strength)")
-    return "; ".join(parts) + "."
+    return "; ".join(parts) + "." + (f"\n\n{warning}" if warning else "")
 
 
 def _view(s, what):

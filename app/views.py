@@ -68,12 +68,22 @@ def to_csv(p: Panels, params: dict) -> io.StringIO:
     """Tidy CSV, one row per grid point; the scenario as leading '#' comment lines."""
     ds = to_dataset(p, params)
     df = ds.to_dataframe().reset_index()
+    # columns say what they hold (they were bare A, B, difference): measure and unit
+    unit = f" ({p.value_unit})" if p.value_unit else ""
+    df = df.rename(columns={"x": "x (m)", ds["A"].dims[0]: f"{ds['A'].dims[0]} (m)",
+                            "A": f"A: {p.value_label}{unit}", "B": f"B: {p.value_label}{unit}",
+                            "difference": f"B vs A: {p.diff_label}"})
     buf = io.StringIO()
     for k, v in ds.attrs.items():
         buf.write(f"# {k} = {v}\n")
     df.to_csv(buf, index=False)
     buf.seek(0)
     return buf
+
+
+def download_name(p: Panels, ext):
+    """A download's file name after the scenario (the saved PNGs' stem), e.g. ``fig_5_x_y_log10_det.csv``."""
+    return f"{p.filename}.{ext}"
 
 
 def to_netcdf(p: Panels, params: dict) -> io.BytesIO:

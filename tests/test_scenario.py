@@ -115,7 +115,10 @@ def test_downloads_carry_data_and_parameters():
     text = views.to_csv(p, params).read()
     assert "# Ph = 100.0" in text
     rows = [line for line in text.splitlines() if not line.startswith("#")]
-    assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y,x,")
+    assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y (m),x (m),")
+    # issue 25: the columns name the measure and unit (they were A, B, difference)
+    assert f"A: {p.value_label}" in rows[0] and f"B vs A: {p.diff_label}" in rows[0]
+    assert views.download_name(p, "csv") == "fig_5_x_y_log10_det.csv"
 
 
 def test_maps_for_every_measure_and_plane():
@@ -137,7 +140,7 @@ def test_maps_for_every_measure_and_plane():
 
 @pytest.mark.parametrize("bad,why", [
     ([], "1 to 8 stations"),
-    ([[0.0, 0.0, 100.0]] * 9, "1 to 8 stations"),
+    ([[0.0, 0.0, 100.0]] * 9, "At most 8 stations"),
     ([[0.0, float("nan"), 100.0]], "three numbers"),
     ([[0.0, 0.0]], "three numbers"),
     ([[0.0, 0.0, 1e9]], "three numbers"),
@@ -378,3 +381,136 @@ def test_the_sea_trial_preset_is_recognised_as_active():
     s.apply_preset("Seed 001 sea trial")
     assert s.active_preset() == "Seed 001 sea trial"
     assert compute(Snapshot.of(s)).preset == "Seed 001 sea trial"
+
+
+def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends():
+    # issue 25, defect 1: each clicked station was rewritten to z = 0 when the next was added
+    # (the point-draw tool's z column holds a placeholder for clicked points)
+    from app.design import drawn_stations
+
+    layout = [[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]]
+    for x, y in [(-229.0, 168.0), (-134.0, -165.0), (55.0, 205.0)]:
+        data = {"x": [st[0] for st in layout] + [x], "y": [st[1] for st in layout] + [y],
+                "z": [st[2] for st in layout[:2]] + [0.0] * (len(layout) - 1)}  # as the browser sent
+        layout = drawn_stations(data, layout, 100.0)
+    assert [st[2] for st in layout] == [100.0] * 5
+    # a drag keeps the dragged station's depth, a deletion the others'
+    moved = drawn_stations({"x": [0.0, 15.0, -200.0, -134.0, 55.0], "y": [0.0, 0.0, 100.0, -165.0, 205.0],
+                            "z": [0.0] * 5}, [[*st[:2], 50.0 + i] for i, st in enumerate(layout)], 100.0)
+    assert [st[2] for st in moved] == [50.0, 51.0, 52.0, 53.0, 54.0]
+    gone = drawn_stations({"x": [0.0, -134.0], "y": [0.0, -165.0], "z": [0.0, 0.0]},
+                          [[*st[:2], 50.0 + i] for i, st in enumerate(layout)], 100.0)
+    assert gone == [[0.0, 0.0, 50.0], [-134.0, -165.0, 53.0]]
+
+
+def test_each_map_is_captioned_with_its_own_moments():
+    # issue 25, defect 3: map B's caption (and saved PNG) said A's P = (100, 20) in Fig. 2
+    s = Scenario(resolution=21)
+    s.apply_preset("Fig. 2")
+    p = compute(Snapshot.of(s))
+    assert "P = (100, 20) A·m" in p.captions[0] and "P = (100, 100) A·m" in p.captions[1]
+    assert "P_A = (100, 20) A·m, P_B = (100, 100) A·m" in p.captions[2]
+    figs = map_figures.build()
+    map_figures.fill(figs, p)
+    assert "P = (100, 100)" in figs.captions[1].text.replace("\n", " ")  # the PNG's caption
+    s.apply_preset("Fig. 3")
+    assert "P = (1000, 200) A·m" in compute(Snapshot.of(s)).captions[1]
+    # and the spacing and the grid (issue 25: captions omitted d and the grid)
+    s.apply_preset("Fig. 6")
+    s.resolution = 21
+    caps = compute(Snapshot.of(s)).captions
+    assert "2 stations d = 10 m apart" in caps[0] and "2 stations d = 50 m apart" in caps[1]
+    assert "A: 2 stations d = 10 m apart, B: 2 stations d = 50 m apart" in caps[2]
+    assert all("grid 21 × 21 over x ±300 m" in c for c in caps)
+
+
+@pytest.mark.parametrize("name, moments_b", [("Fig. 3", (1000.0, 200.0)), ("Fig. 4", (70.7, 70.7))])
+def test_map_bs_unobservable_direction_is_bs_own(name, moments_b):
+    # issue 25, defect 3: B's note gave A's vector. Recomputed here from the probe point the
+    # note names, with B's moments, by core directly.
+    import re
+
+    import core
+
+    s = Scenario(resolution=21)
+    s.apply_preset(name)
+    note = compute(Snapshot.of(s)).note
+    lines = {line[0]: line for line in note.splitlines()}
+    vectors = {}
+    for which, moments in (("A", (s.Ph, s.Pv)), ("B", moments_b)):
+        m = re.search(r"at \((-?\d+), (-?\d+), (-?\d+)\) m: .*= \(([^)]*)\)\. Use", lines[which])
+        probe = [float(v) for v in m.groups()[:3]]
+        shown = np.array([float(v) for v in m.group(4).split(", ")])
+        n = core.unobservable_direction([*probe, *s.velocity(), *moments], [[0.0, 0.0, s.h]],
+                                        T=s.T, sigma=s.sigma)
+        assert np.allclose(np.abs(shown), np.abs(n), atol=5e-4)  # printed to 3 decimals; sign free
+        vectors[which] = shown
+    assert not np.allclose(np.abs(vectors["A"]), np.abs(vectors["B"]), atol=5e-3)
+
+
+def test_the_note_probes_a_point_of_the_x_z_plane():
+    # issue 25 (Maps): Fig. 2's note probed (100, 100, 250), off the plane y = 50 m
+    s = Scenario(resolution=21)
+    s.apply_preset("Fig. 2")
+    assert "at (100, 50, 250) m" in compute(Snapshot.of(s)).note
+
+
+def _state(s):
+    return {n: getattr(s, n) for n in Scenario.param if n != "name"}
+
+
+@pytest.mark.parametrize("first", sorted(PRESETS))
+def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
+    # issue 25: presets left the custom stations, the x–z range and the sea of the previous one
+    for second in PRESETS:
+        alone = Scenario(resolution=21)
+        alone.apply_preset(second)
+        s = Scenario(resolution=21)
+        s.param.update(stations=[[1.0, 2.0, 3.0]], track_heading=33.0, error_quantity="Depth error σz (m)")
+        s.apply_preset(first)
+        s.apply_preset(second)
+        assert _state(s) == _state(alone), (first, second)
+        assert s.message == "" and s.active_preset() == second
+
+
+def test_the_sea_trial_has_one_geometry_on_every_tab():
+    # issue 25: its stations were along y on Layout design and Track, along x on Maps
+    import core
+
+    s = Scenario()
+    s.apply_preset("Seed 001 sea trial")
+    assert np.array_equal(np.array(s.stations), core.dual_station(s.h, s.d))
+
+
+def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():
+    # issue 25 (Track): the sidebar's Speed/Heading stayed visible though the track uses its own
+    from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+
+    s = Scenario()
+    for name in ("speed", "heading"):
+        assert applies(name, s, MAPS_TAB) and applies(name, s, DESIGN_TAB)
+        assert not applies(name, s, TRACK_TAB)
+    assert "track_speed" in Scenario.param and "track_heading" in Scenario.param
+
+
+def test_nine_stations_are_refused_with_at_most_eight():
+    s = Scenario()
+    s.stations = [[10.0 * i, 0.0, 100.0] for i in range(9)]
+    assert "At most 8 stations" in s.message and len(s.stations) == 2
+
+
+def test_a_map_veiled_everywhere_says_what_it_is_inside_its_frame():
+    # issue 25 (first screen): two of three maps fully hatched, with no word inside them
+    s = Scenario(resolution=21)
+    s.apply_preset("Fig. 1")
+    figs = map_figures.build()
+    map_figures.fill(figs, compute(Snapshot.of(s)))
+    assert figs.labels[0].visible and "rank 6 of 7" in figs.labels[0].text
+    assert "range" in figs.labels[0].text and "source strength" in figs.labels[0].text
+    assert max(len(line) for lab in figs.labels for line in lab.text.splitlines()) <= 21  # fits 130 px
+    assert not figs.labels[1].visible  # dual: observable
+    assert figs.labels[2].visible and "A is" in figs.labels[2].text
+    assert all(lab in figs.figures[i].center for i, lab in enumerate(figs.labels))  # in the frame
+    s.apply_preset("Fig. 6")
+    map_figures.fill(figs, compute(Snapshot.of(s)))
+    assert not any(lab.visible for lab in figs.labels)

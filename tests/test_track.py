@@ -345,3 +345,22 @@ def test_cli_in_two_processes_writes_csv_summary_and_png(tmp_path):
 def test_bad_inputs_raise_value_error(call):
     with pytest.raises(ValueError):
         call()
+
+
+def test_an_overconfident_filter_is_flagged_beside_its_nees():
+    # issue 25 (Track): a mean NEES of 8 710 against 7 was reported beside "diverged 0 %" unflagged
+    from types import SimpleNamespace
+
+    from scipy.stats import chi2
+
+    from app.track import nees_check, summary_text
+
+    summary = dict(filter="ekf", runs=5, diverged=0.0, trmse_final_m=3.0, pcrlb_final_m=1.0, nees=8710.0)
+    out = {"res": SimpleNamespace(summary=summary), "breaks": np.zeros(3, dtype=bool)}
+    assert "overconfident" in summary_text(out)
+    out["res"].summary = dict(summary, nees=7.2)
+    assert "confident" not in summary_text(out)
+    # the bound: the 99.5 % point of the mean of 5 χ²(7) draws, computed independently here
+    hi = chi2.ppf(0.995, 35) / 5
+    assert nees_check(hi * 1.01, 5) and not nees_check(hi * 0.99, 5)
+    assert "underconfident" in nees_check(1.0, 5)

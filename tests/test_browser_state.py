@@ -1,0 +1,344 @@
+"""Issue 25 in headless Chromium: every number on the page right (the worst three defects)."""
+
+import os
+import re
+import time
+
+import pytest
+
+from tests.server import CHROMIUM, chromium_browser, served_app
+from tests.test_browser import MAPS_JS, VIEWPORT, wait_count, wait_maps, wait_value
+
+playwright = pytest.importorskip("playwright.sync_api")
+
+pytestmark = pytest.mark.skipif(
+    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
+    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
+)
+
+#: Per plot: [title, caption (the Title below the map: also in its saved PNG)].
+CAPTIONS_JS = """() => {
+  const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(p => [p.title.text, p.below.filter(m => m.text !== undefined).map(m => m.text).join(' ')]);
+}"""
+
+
+@pytest.fixture(scope="module")
+def server():
+    with served_app() as (url, _):
+        yield url
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    with chromium_browser() as browser:
+        yield browser
+
+
+@pytest.fixture
+def page(chromium, server):
+    pg = chromium.new_page(viewport=VIEWPORT)
+    errors = []
+    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
+    pg.goto(server + "/app")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    wait_maps(pg, lambda maps: len(maps) == 3)
+    yield pg
+    pg.close()
+    assert [e for e in errors if not offline_defect(e)] == [], f"browser console errors: {errors}"
+
+
+def offline_defect(error):
+    """A failed load of Panel's loading.css or markdown.css from cdn.holoviz.org (and Chromium's
+    line about it): issue 25's open *Offline* defect, tested by
+    :func:`test_no_request_leaves_the_server` (xfail until fixed); every other error fails."""
+    return (error.startswith("request failed: https://cdn.holoviz.org/panel/")
+            or error == "Failed to load resource: net::ERR_NAME_NOT_RESOLVED")
+
+
+def depths(rows):
+    return [rows.nth(i).locator('.tabulator-cell[tabulator-field="z (m)"]').inner_text().strip()
+            for i in range(rows.count())]
+
+
+def test_stations_added_by_clicks_keep_the_station_depth(page):
+    # defect 1: each clicked station was rewritten to z = 0 when the next one was added
+    page.get_by_text("Layout design", exact=True).click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)
+    canvas = page.locator("canvas").filter(visible=True).first
+    box = canvas.bounding_box()
+    for n, (fx, fy) in enumerate([(0.2, 0.25), (0.3, 0.75), (0.6, 0.2)], start=3):
+        page.mouse.click(box["x"] + box["width"] * fx, box["y"] + box["height"] * fy)
+        wait_count(rows, n)
+        time.sleep(1.5)  # the server's answer to this edit (a re-drawn layer), before the next click
+    deadline = time.time() + 10
+    while depths(rows) != ["100.0"] * 5:
+        assert time.time() < deadline, f"station depths {depths(rows)}, expected h = 100 m for all"
+        time.sleep(0.2)
+    time.sleep(1.0)  # and they stay there
+    assert depths(rows) == ["100.0"] * 5
+
+
+def expected_readout(presets, x, y, z=None):
+    """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
+    from app import compute, views
+    from app.compute import DESIGN_FIELDS, Snapshot
+    from app.scenario import Scenario
+
+    s = Scenario(resolution=21)
+    for preset in presets:
+        s.apply_preset(preset)
+    if z is not None:
+        s.z = z
+    snap = Snapshot.of(s, DESIGN_FIELDS)
+    rng = float(compute.nearest_range([x, y, s.z], s.stations))
+    return views.error_ellipse(compute.error_at(snap, x, y), x, y, s.extent, rng)[1]
+
+
+def readout(pg):
+    return pg.get_by_text("1-σ horizontal error ellipse").first.inner_text().strip()
+
+
+def wait_readout(pg, want, timeout=20.0):
+    deadline = time.time() + timeout
+    while True:
+        got = readout(pg)
+        # Markdown renders the same plain text (no markup in it)
+        if re.sub(r"\s+", " ", got) == re.sub(r"\s+", " ", want):
+            return
+        if time.time() > deadline:
+            raise AssertionError(f"readout {got!r}, expected {want!r}")
+        time.sleep(0.2)
+
+
+def test_the_error_ellipse_readout_follows_presets_and_the_target_depth(page):
+    # defect 2: after Seed 001 sea trial → Fig. 5 the text still read the trial's numbers, and a
+    # new z on the tab redrew the ellipse, not its text
+    page.get_by_text("Layout design", exact=True).click()
+    page.get_by_text("1-σ horizontal error ellipse").first.wait_for(timeout=30_000)
+    page.get_by_role("button", name="Seed 001 sea trial").click()
+    trial = ["Seed 001 sea trial"]
+    wait_readout(page, expected_readout(trial, 100.0, 100.0))
+    page.get_by_role("button", name="Fig. 5").click()
+    want = expected_readout(trial + ["Fig. 5"], 100.0, 100.0)
+    assert want != expected_readout(trial, 100.0, 100.0)
+    wait_readout(page, want)
+    box = page.locator(".w-z input").first
+    box.fill("150")
+    box.press("Enter")
+    wait_readout(page, expected_readout(trial + ["Fig. 5"], 100.0, 100.0, z=150.0))
+
+
+def captions(pg):
+    return pg.evaluate(CAPTIONS_JS)
+
+
+def test_map_b_is_titled_and_captioned_with_its_own_moments(page):
+    # defect 3: in Fig. 2, B's title said P = (100, 100), its caption and PNG P = (100, 20)
+    page.get_by_role("button", name="Fig. 2").click()
+    wait_value(page, "Pv_b", 100.0)
+    wait_maps(page, lambda drawn: "P = (100, 100)" in drawn[1][0])
+    (title_a, cap_a), (title_b, cap_b), (_, cap_d) = captions(page)[:3]
+    flat = [re.sub(r"\s+", " ", c) for c in (cap_a, cap_b, cap_d)]
+    assert "P = (100, 20) A·m" in title_a and "P = (100, 20) A·m" in flat[0]
+    assert "P = (100, 100) A·m" in title_b and "P = (100, 100) A·m" in flat[1], flat[1]
+    assert "P_A = (100, 20) A·m" in flat[2] and "P_B = (100, 100) A·m" in flat[2]
+
+
+def test_map_bs_note_gives_bs_own_unobservable_direction(page):
+    # defect 3: Figs. 3 and 4: B's "unobservable direction" was A's vector
+    from app.compute import Snapshot, compute
+    from app.scenario import Scenario
+
+    for name in ("Fig. 3", "Fig. 4"):
+        page.get_by_role("button", name=name).click()
+        s = Scenario(resolution=21)
+        s.apply_preset(name)
+        want = compute(Snapshot.of(s)).note  # the direction itself: tests/test_scenario.py
+        b_line = next(line for line in want.splitlines() if line.startswith("B:"))
+        vector = b_line[b_line.index("Unobservable direction"):]
+        note = page.locator(".w-note .alert").first
+        deadline = time.time() + 30
+        while vector not in re.sub(r"\s+", " ", note.inner_text()):
+            assert time.time() < deadline, f"{name}: B's direction {vector!r} not in {note.inner_text()!r}"
+            time.sleep(0.2)
+        assert page.evaluate(MAPS_JS)  # the maps are still there
+
+
+@pytest.mark.xfail(strict=True, reason="issue 25 Offline: Panel components re-rendered after a "
+                   "preset load loading.css and markdown.css from cdn.holoviz.org (not fixed yet)")
+def test_no_request_leaves_the_server(chromium, server):
+    pg = chromium.new_page(viewport=VIEWPORT)
+    outside = []
+    pg.on("request", lambda r: outside.append(r.url)
+          if not r.url.startswith((server, "blob:" + server, "data:")) else None)
+    try:
+        pg.goto(server + "/app")
+        pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+        wait_maps(pg, lambda maps: len(maps) == 3)
+        for tab in ("Layout design", "Track", "Calibration", "Maps"):
+            pg.get_by_text(tab, exact=True).click()
+            time.sleep(4)
+        pg.get_by_role("button", name="Seed 001 sea trial").click()
+        time.sleep(3)
+        pg.get_by_text("Layout design", exact=True).click()
+        time.sleep(3)
+        pg.get_by_role("button", name="Fig. 5").click()
+        time.sleep(3)
+        assert outside == []
+    finally:
+        pg.close()
+
+
+def cells(rows, field):
+    return [rows.nth(i).locator(f'.tabulator-cell[tabulator-field="{field}"]').inner_text().strip()
+            for i in range(rows.count())]
+
+
+def test_a_preset_after_another_shows_its_own_complete_scenario(page):
+    # issue 25: Fig. 5 after the sea trial kept the trial's stations on the seabed at 8.4 m
+    page.get_by_text("Layout design", exact=True).click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)
+    page.get_by_role("button", name="Seed 001 sea trial").click()
+    deadline = time.time() + 15
+    while cells(rows, "z (m)") != ["8.4", "8.4"]:
+        assert time.time() < deadline, cells(rows, "z (m)")
+        time.sleep(0.2)
+    page.get_by_role("button", name="Fig. 5").click()
+    deadline = time.time() + 15
+    while (cells(rows, "x (m)"), cells(rows, "z (m)")) != (["0.0", "15.0"], ["100.0", "100.0"]):
+        assert time.time() < deadline, (cells(rows, "x (m)"), cells(rows, "z (m)"))
+        time.sleep(0.2)
+    page.get_by_text("Maps", exact=True).click()
+    wait_maps(page, lambda drawn: any(title == "B: dual, d = 15 m" for title, _ in drawn))
+    assert page.locator(".w-sea_model select").first.input_value() == "whole space"
+
+
+def active_tab(pg):
+    return pg.locator(".bk-tab.bk-active").first.inner_text().strip()
+
+
+def test_a_link_of_every_tab_reopens_the_same_view(chromium, server):
+    # issue 25: a link carried neither the Track nor the Calibration state (?track_heading=33 was
+    # ignored), nor the tab shown; here a link is copied on each tab and opened in a new page
+    first = chromium.new_page(viewport=VIEWPORT)
+    try:
+        # a layered sea by the link (its rule moves h to the seabed, D = 50 m), the Track's
+        # heading by the link, the Calibration's inputs by hand
+        first.goto(server + "/app?sea_model=layered&sea_depth=50&track_heading=33")
+        first.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+        wait_maps(first, lambda maps: len(maps) == 3)
+        wait_value(first, "h", 50.0)
+        first.get_by_text("Calibration", exact=True).click()
+        first.locator(".w-cal_source select").first.select_option("Designed manoeuvre")
+        first.wait_for_function("() => window.location.search.includes('cal_source=Designed')",
+                                timeout=15_000)
+        headings = first.locator(".w-cal_headings input").first
+        headings.fill("0, 45, 90")
+        headings.press("Tab")
+        first.wait_for_function("() => window.location.search.includes('cal_headings=')", timeout=15_000)
+        links = {}
+        for tab in ("Calibration", "Track", "Layout design", "Maps"):
+            first.get_by_text(tab, exact=True).click()
+            deadline = time.time() + 15
+            want = "" if tab == "Maps" else "tab=" + tab.replace(" ", "+")
+            while ((want or "tab=") in first.evaluate("() => window.location.search")) != bool(want):
+                assert time.time() < deadline, first.evaluate("() => window.location.search")
+                time.sleep(0.2)
+            links[tab] = first.evaluate("() => window.location.search")
+    finally:
+        first.close()
+    for tab, link in links.items():
+        assert "track_heading=33" in link and "cal_headings=0%2C+45%2C+90" in link, link
+        assert "h=50" in link, link
+        pg = chromium.new_page(viewport=VIEWPORT)
+        try:
+            pg.goto(server + "/app" + link)
+            pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+            pg.locator(".bk-tab.bk-active").first.wait_for(timeout=30_000)
+            assert active_tab(pg) == tab
+            pg.get_by_text("Maps", exact=True).click()
+            wait_value(pg, "sea_depth", 50.0)
+            wait_value(pg, "h", 50.0)  # moved by the layered sea's rule, and kept in the link
+            pg.get_by_text("Track", exact=True).click()
+            slider = pg.get_by_text(re.compile(r"Track heading \(°\)")).first
+            slider.wait_for(timeout=30_000)
+            assert re.search(r"Track heading \(°\):\s*33\b", slider.inner_text()), slider.inner_text()
+            pg.get_by_text("Calibration", exact=True).click()
+            box = pg.locator(".w-cal_headings input").first
+            box.wait_for(timeout=15_000)
+            assert box.input_value() == "0, 45, 90"
+        finally:
+            pg.close()
+
+
+def test_a_ninth_station_is_refused_not_swapped_for_the_oldest(page):
+    # issue 25: with 8 stations a click silently deleted the oldest
+    page.get_by_text("Layout design", exact=True).click()
+    rows = page.locator(".w-station-table .tabulator-row")
+    wait_count(rows, 2)
+    canvas = page.locator("canvas").filter(visible=True).first
+    box = canvas.bounding_box()
+    # inside the frame: away from the title, the toolbar and the colour bar on the right
+    spots = [(0.2, 0.3), (0.55, 0.3), (0.2, 0.75), (0.55, 0.75), (0.38, 0.3), (0.2, 0.52),
+             (0.38, 0.75)]
+    for n, (fx, fy) in enumerate(spots[:6], start=3):
+        page.mouse.click(box["x"] + box["width"] * fx, box["y"] + box["height"] * fy)
+        wait_count(rows, n)
+        time.sleep(1.0)
+    before = cells(rows, "x (m)")
+    page.mouse.click(box["x"] + box["width"] * spots[6][0], box["y"] + box["height"] * spots[6][1])
+    page.locator(".w-design-message").get_by_text("At most 8 stations").wait_for(timeout=15_000)
+    time.sleep(1.0)
+    assert rows.count() == 8 and cells(rows, "x (m)") == before  # the oldest is still there
+
+
+def test_the_ellipse_point_is_its_own_input(page):
+    # issue 25: a click both added a station and (said the text) moved the ellipse point
+    page.get_by_text("Layout design", exact=True).click()
+    page.get_by_text("1-σ horizontal error ellipse").first.wait_for(timeout=30_000)
+    box = page.locator(".w-ellipse_x input").first
+    box.fill("-40")
+    box.press("Enter")
+    deadline = time.time() + 15
+    while "Target at (-40, 100) m" not in readout(page):
+        assert time.time() < deadline, readout(page)
+        time.sleep(0.2)
+
+
+def test_the_noise_box_takes_any_accepted_value_and_says_why_it_refuses_one(page):
+    # issue 25: 1e-3 (inside the accepted 1e-12 … 1e-2) was refused without a word, and so was -1
+    page.get_by_text("Advanced", exact=True).click()
+    box = page.locator(".w-noise input").first
+    box.fill("1e-3")
+    box.press("Enter")
+    deadline = time.time() + 15
+    while float(box.input_value()) != 1e-3:
+        assert time.time() < deadline, box.input_value()
+        time.sleep(0.2)
+    page.wait_for_function("() => window.location.search.includes('noise=0.001')", timeout=15_000)
+    box.fill("-1")
+    box.press("Enter")
+    page.locator(".w-message-noise").get_by_text("outside the accepted range").wait_for(timeout=15_000)
+    assert float(box.input_value()) == 1e-3
+
+
+def test_the_maps_do_not_jump_when_the_paper_banner_comes_and_goes(page):
+    # issue 25 (Maps): the maps moved ~45 px down and up as the banner was shown and hidden
+    canvas = page.locator("canvas").filter(visible=True).first
+    with_banner = canvas.bounding_box()["y"]
+    box = page.locator(".w-Ph input").first
+    box.fill("123")
+    box.press("Enter")
+    page.wait_for_function("() => window.location.search.includes('Ph=123')", timeout=15_000)
+    time.sleep(1.0)
+    assert page.locator(".w-paper .alert").count() == 0  # no paper figure any more
+    assert abs(canvas.bounding_box()["y"] - with_banner) <= 1
