@@ -34,6 +34,8 @@ import time
 import urllib.request
 from pathlib import Path
 
+from app.warmup import WARMING_MARK
+
 ROOT = Path(__file__).resolve().parents[1]
 NGINX_CONF = ROOT / "deploy" / "nginx.conf"
 NGINX = shutil.which("nginx") or "/usr/sbin/nginx"
@@ -62,7 +64,7 @@ def _get(url, timeout):
 
 
 def _wait_ready(url, proc, timeout):
-    """Wait until ``url``'s ``/liveness`` answers, then build one page (compiles the kernels)."""
+    """Wait until ``url``'s ``/liveness`` answers, then until its page is the dashboard."""
     deadline = time.monotonic() + timeout
     while True:
         if proc.poll() is not None:
@@ -74,7 +76,11 @@ def _wait_ready(url, proc, timeout):
             if time.monotonic() > deadline:
                 raise TimeoutError(f"{url} did not answer /liveness in {timeout:.0f} s") from None
             time.sleep(0.3)
-    _get(url + "/app", max(10.0, deadline - time.monotonic()) + 180)
+    # Then until it serves the dashboard, not the warming-up page of a first start (app/warming.py)
+    while WARMING_MARK.encode() in _get(url + "/app", max(10.0, deadline - time.monotonic()) + 180):
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"{url} still warming up after {timeout:.0f} s")
+        time.sleep(1.0)
 
 
 def _stop(proc, sig=signal.SIGTERM):

@@ -1,4 +1,5 @@
-"""Entry point for ``panel serve app``: build the page and serve it."""
+"""Entry point for ``panel serve app``: build the page and serve it (or, while the kernels of the
+default page are still compiling on a first start, a page that says so: app/warming.py)."""
 
 import contextlib
 
@@ -6,11 +7,23 @@ import panel as pn
 
 from app import server_threads
 from app.dashboard import create_app, panel_extension
+from app.warming import warming_page
+from app.warmup import WARMING_MARK, WARMUP
 
 server_threads.configure()
 panel_extension()
-doc = pn.state.curdoc
-# The template adds its ~15 roots one by one and Bokeh re-walks the whole model graph after each;
-# frozen, it walks it once (a session took ~4 s to build on the event loop, ~2 s frozen).
-with doc.models.freeze() if doc is not None else contextlib.nullcontext():
-    create_app().servable(title="Dipole observability explorer")
+#: Seconds the first session of a process waits for the default page's kernels when nothing
+#: started the warm-up before it (``panel serve app/main.py``, as the container does: its image
+#: holds the compiled kernels, so they load in about a second and nobody sees the warming page).
+FIRST_SESSION_WAIT = 5.0
+
+if WARMUP.start():  # False when app/server_lifecycle.py started it (``panel serve app``)
+    WARMUP.done[0].wait(FIRST_SESSION_WAIT)
+if not WARMUP.ready(0):
+    warming_page().servable(title=WARMING_MARK)
+else:
+    doc = pn.state.curdoc
+    # The template adds its ~15 roots one by one and Bokeh re-walks the whole model graph after
+    # each; frozen, it walks it once (a session took ~4 s to build on the event loop, ~2 s frozen).
+    with doc.models.freeze() if doc is not None else contextlib.nullcontext():
+        create_app().servable(title="Dipole observability explorer")

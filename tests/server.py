@@ -8,6 +8,7 @@ import os
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import urllib.request
@@ -27,47 +28,52 @@ def free_port():
         return s.getsockname()[1]
 
 
+#: What the server prints when every stage of its warm-up is done, or failed (app/warmup.py).
+WARM = "[warm-up] all kernels ready"
+WARM_FAILED = "[warm-up] FAILED"
+
+
 @contextlib.contextmanager
 def served_app(*extra, port=None, timeout=600, log=None):
     """Yield the base URL of a running dashboard; stop it afterwards. ``log``: a path that gets
-    the server's output (else it goes to the test's, or nowhere with QUIET_SERVER set).
-    ``timeout``: seconds until /liveness answers; the server compiles its numba kernels before it
-    listens (app/server_lifecycle.py), 3-6 min on 2 cores when the cache is cold."""
+    the server's output (else a temporary file, echoed unless QUIET_SERVER is set).
+    ``timeout``: seconds until the server's warm-up has compiled every numba kernel (it serves
+    from the start, app/server_lifecycle.py; 2-4 min on 2 cores when the cache is cold): tests
+    start on a warm server, as a user does after the first start."""
     port = port or free_port()
     cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address", "127.0.0.1",
            "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness", "--num-threads", "4", *extra]
-    out = subprocess.DEVNULL if os.environ.get("QUIET_SERVER") else None
-    if log is not None:
-        with open(log, "w") as fh:  # the child keeps its own descriptor
+    with contextlib.ExitStack() as stack:
+        path = Path(log) if log is not None else Path(stack.enter_context(
+            tempfile.TemporaryDirectory(prefix="served-app-"))) / "server.log"
+        with open(path, "w") as fh:  # the child keeps its own descriptor
             proc = subprocess.Popen(cmd, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT,
                                     env={**os.environ, **SERVER_ENV})
-    else:
-        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=out, stderr=out, env={**os.environ, **SERVER_ENV})
-    url = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.time() + timeout
-        while True:
-            if proc.poll() is not None:
-                raise RuntimeError(f"panel serve exited with {proc.returncode}")
-            try:
-                with urllib.request.urlopen(url + "/liveness", timeout=2):  # closed: no socket left
-                    break  # for a later test's garbage collection to warn about
-            except OSError:
-                if time.time() > deadline:
-                    raise TimeoutError("the dashboard did not answer /liveness") from None
-                time.sleep(0.3)
-        # The first page builds the app (and compiles any numba kernel the warm-up does not
-        # cover); do it here, once, rather than inside a test's timeout.
-        with urllib.request.urlopen(url + "/app", timeout=timeout) as page:
-            page.read()
-        yield url, proc
-    finally:
-        proc.terminate()
+        url = f"http://127.0.0.1:{port}"
         try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:  # a busy machine: Tornado's shutdown can take longer
-            proc.kill()
-            proc.wait()  # reaped: a Popen left running warns (ResourceWarning) in a later test
+            deadline = time.time() + timeout
+            while True:
+                text = path.read_text(errors="replace")
+                if proc.poll() is not None or WARM_FAILED in text:
+                    raise RuntimeError(f"panel serve failed ({proc.returncode}):\n{text[-3000:]}")
+                if WARM in text:
+                    break
+                if time.time() > deadline:
+                    raise TimeoutError(f"the dashboard did not warm up in {timeout} s:\n{text[-3000:]}")
+                time.sleep(0.3)
+            # The first page builds the app; do it here, once, rather than inside a test's timeout.
+            with urllib.request.urlopen(url + "/app", timeout=timeout) as page:
+                page.read()
+            yield url, proc
+        finally:
+            proc.terminate()
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:  # a busy machine: Tornado's shutdown can take longer
+                proc.kill()
+                proc.wait()  # reaped: a Popen left running warns (ResourceWarning) in a later test
+            if log is None and not os.environ.get("QUIET_SERVER"):
+                sys.stderr.write(path.read_text(errors="replace"))
 
 
 async def close_websocket(conn, timeout=10.0):
