@@ -30,7 +30,7 @@ import panel as pn
 import param
 
 import core
-from core import track as core_track
+from core.tracking import montecarlo as core_track
 
 # The maps' lock on numba's parallel kernels (its workqueue layer must not be entered from two
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,

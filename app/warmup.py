@@ -25,8 +25,8 @@ import time
 from pathlib import Path
 
 import core
-from core import track as core_track
-from core.pcrlb import pcrlb
+from core import pcrlb
+from core.tracking import montecarlo as core_track
 
 from .compute import KERNEL_LOCK
 

@@ -24,8 +24,8 @@ import numba
 import numpy as np
 
 import core
-from core.kernels import LANES
-from core.sea import image_counts
+from core.kernels.gamma import LANES
+from core.model.sea import image_counts
 
 STATIONS = core.dual_station(100, 15)
 VELOCITY, MOMENTS = (2.0, 2.0), (100.0, 20.0)

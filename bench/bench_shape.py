@@ -17,9 +17,9 @@ import time
 
 import numpy as np
 
-from core import unscented as uk
 from core.shape import model as md
 from core.shape.experiment import Case, run_case, simulate
+from core.tracking import unscented as uk
 
 
 def median_time(fn, repeat):

@@ -28,7 +28,7 @@ import numba
 import numpy as np
 
 import core
-from core import track as tr
+from core.tracking import montecarlo as tr
 
 
 def median_time(fn, repeat, warm=True):

@@ -5,15 +5,6 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 """
 
 from . import kernel_cache  # noqa: F401  (first: it refreshes the kernels' cache on import)
-from .bank import (
-    BANK_BEARINGS,
-    BANK_STRENGTHS,
-    SEED_BEARINGS,
-    BankResult,
-    bank_hypotheses,
-    run_bank,
-    start_range,
-)
 from .calibration import (
     CAL_RANK_RTOL,
     COEFFICIENTS,
@@ -46,7 +37,22 @@ from .calibration import (
     ship_field,
     simulate_ship_data,
 )
-from .design import (
+from .model.fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
+from .model.magnetic import (
+    MAGNETIC_STATE_NAMES,
+    MAGNETIC_STATE_UNITS,
+    TensorInvariants,
+    euler_locate,
+    gradient_tensor,
+    magnetic_field,
+    magnetic_jacobian,
+    tensor_invariants,
+)
+from .model.measurement import AXES, SensorModel
+from .model.sea import Sea
+from .model.sensors import KINDS, MAGNETIC_NOISE, Sensor
+from .model.validation import STATE_NAMES
+from .observability.design import (
     CRITERIA,
     LAYOUTS,
     MAX_STATIONS,
@@ -63,30 +69,14 @@ from .design import (
     spacing_curve,
     station_layout,
 )
-from .fields import MODELS, STATE_UNITS, dipole_field, field_jacobian
-from .filters import FilterRun, ekf_predict, ekf_update, run_filters
-from .fisher import (
+from .observability.fisher import (
     DEFAULT_NOISE,
     DEFAULT_STEPS,
     FisherMeasures,
     fisher_information,
     fisher_measures,
 )
-from .grids import MAX_RESOLUTION, Plane, dual_station, single_station, velocity_from_heading
-from .magnetic import (
-    MAGNETIC_STATE_NAMES,
-    MAGNETIC_STATE_UNITS,
-    TensorInvariants,
-    euler_locate,
-    gradient_tensor,
-    magnetic_field,
-    magnetic_jacobian,
-    tensor_invariants,
-)
-from .maps import MEASURES, MapResult, evaluate_map, log10_positive_difference, log10_ratio
-from .measurement import AXES, SensorModel
-from .motion import dwna_model, sample_tracks, straight_track
-from .observability import (
+from .observability.gamma import (
     RANK_RTOL,
     gamma,
     log10_abs_det_gamma,
@@ -94,11 +84,40 @@ from .observability import (
     observable_rank,
     unobservable_direction,
 )
-from .pcrlb import PcrlbResult, linearisation_breaks, pcrlb
-from .sea import Sea
-from .sensors import KINDS, MAGNETIC_NOISE, Sensor
-from .unscented import UkfRun, huber_weights, run_ukf, sigma_points, ukf_predict, ukf_update
-from .validation import STATE_NAMES
+from .observability.grids import (
+    MAX_RESOLUTION,
+    Plane,
+    dual_station,
+    single_station,
+    velocity_from_heading,
+)
+from .observability.maps import (
+    MEASURES,
+    MapResult,
+    evaluate_map,
+    log10_positive_difference,
+    log10_ratio,
+)
+from .tracking.bank import (
+    BANK_BEARINGS,
+    BANK_STRENGTHS,
+    SEED_BEARINGS,
+    BankResult,
+    bank_hypotheses,
+    run_bank,
+    start_range,
+)
+from .tracking.filters import FilterRun, ekf_predict, ekf_update, run_filters
+from .tracking.motion import dwna_model, sample_tracks, straight_track
+from .tracking.pcrlb import PcrlbResult, linearisation_breaks, pcrlb
+from .tracking.unscented import (
+    UkfRun,
+    huber_weights,
+    run_ukf,
+    sigma_points,
+    ukf_predict,
+    ukf_update,
+)
 
 __all__ = [
     "DEFAULT_NOISE", "DEFAULT_STEPS", "MAX_RESOLUTION", "MEASURES", "MODELS",
@@ -107,23 +126,23 @@ __all__ = [
     "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
     "log10_ratio", "observability_index", "observable_rank", "single_station",
     "unobservable_direction", "velocity_from_heading",
-    # magnetic sensing (core.magnetic, spec §11)
+    # magnetic sensing (core.model.magnetic, spec §11)
     "MAGNETIC_STATE_NAMES", "MAGNETIC_STATE_UNITS", "TensorInvariants", "euler_locate",
     "gradient_tensor", "magnetic_field", "magnetic_jacobian", "tensor_invariants",
-    # the layered sea (core.sea)
+    # the layered sea (core.model.sea)
     "Sea",
-    # the measurement model (core.sensors)
+    # the measurement model (core.model.sensors)
     "KINDS", "MAGNETIC_NOISE", "Sensor",
-    # sensor-layout design (core.design)
+    # sensor-layout design (core.observability.design)
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
     "layout_criterion", "optimise_layout", "spacing_curve", "station_layout",
-    # tracking (core.motion, core.measurement, core.pcrlb, core.filters, core.bank)
+    # tracking (core.tracking.motion, core.model.measurement, core.pcrlb, core.tracking.filters, core.tracking.bank)
     "AXES", "BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "FilterRun",
     "PcrlbResult", "SensorModel", "bank_hypotheses", "dwna_model", "ekf_predict", "ekf_update",
     "linearisation_breaks", "pcrlb", "run_bank", "run_filters", "sample_tracks", "start_range",
     "straight_track",
-    # unscented filters, generic over f and h (core.unscented; seed 003's NHUKF)
+    # unscented filters, generic over f and h (core.tracking.unscented; seed 003's NHUKF)
     "UkfRun", "huber_weights", "run_ukf", "sigma_points", "ukf_predict", "ukf_update",
 ]
 

@@ -2,8 +2,8 @@
 
 numba reuses a cached kernel while *its own* source file is unchanged (numba 0.68 keys the
 index by that file's contents; older versions by its modification time and size). Our cached
-kernels inline functions and constants from other files (:mod:`core.kernels` inlines
-:mod:`core.fields` and :mod:`core.sea`), so an edit to the physics in one file left kernels
+kernels inline functions and constants from other files (:mod:`core.kernels.gamma` inlines
+:mod:`core.kernels.electric` and :mod:`core.kernels.sea`), so an edit to the physics in one file left kernels
 cached from another file returning the old result until the cache files were deleted by hand.
 
 :func:`refresh` keys the whole cache by the sources instead: it hashes every file that holds
@@ -27,8 +27,8 @@ import numba
 #: Files of core/ (paths relative to it) that define or inline cached (``cache=True``) numba
 #: kernels. A module that gains a cached kernel must be listed here (tests/test_kernel_cache.py
 #: checks the list against every file under core/, subpackages included).
-KERNEL_SOURCES = ("fields.py", "sea.py", "kernels.py", "filters.py", "pcrlb.py",
-                  "magnetic_kernels.py")
+KERNEL_SOURCES = ("kernels/electric.py", "kernels/sea.py", "kernels/gamma.py",
+                  "kernels/filters.py", "kernels/pcrlb.py", "kernels/magnetic.py")
 #: Name of the file that records the sources' hash at the last refresh.
 STAMP = "kernel-sources.sha256"
 

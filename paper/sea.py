@@ -3,7 +3,7 @@
 The paper works in the homogeneous whole space, where one station with unknown moments is
 structurally unobservable (Γ n = 0 along the range ↔ source-strength direction). The sea's
 surface and seabed set a length scale (the depth D), which breaks that scale symmetry. This
-module measures how much, with the layered-sea model of :mod:`core.sea`:
+module measures how much, with the layered-sea model of :mod:`core.model.sea`:
 
 1. the paper's deep geometry (station at depth 100 m, target at 120 m) in a 200 m sea;
 2. seed 001's sea trial (8.4 m of water, σ = 4, σb = 0.4 S/m, sensors on the seabed at
@@ -92,7 +92,7 @@ def section(doc_dir=None, n=61):
             "horizontal semi-major (m, 1σ) |\n|---|---|---|---|---|---|")
     L = ["## A real sea: the surface and the seabed (spec §7)\n",
          "The figures above are in the whole space, as the paper's. With an insulating surface and "
-         "a seabed (`core.Sea`, the image series of `core.sea`, validated against empymod) the depth "
+         "a seabed (`core.Sea`, the image series of `core.model.sea`, validated against empymod) the depth "
          "D is a length scale, and the single-station scale symmetry of spec §4 is broken. How "
          f"weakly: all rows of {STEPS} instants, noise {NOISE:g} V/m per component, σ = {SIGMA:g} S/m; "
          "rank from the column-scaled SVD (`core.RANK_RTOL`), η the observability index.\n",

@@ -11,12 +11,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from core import unscented as uk
 from core.shape import bound as bd
 from core.shape import experiment as ex
 from core.shape import model as md
 from core.shape.cases import CASES, FIG5_OUTLIERS
 from core.shape.pca import DISC_FACTOR, PLANE_RATIO
+from core.tracking import unscented as uk
 
 #: Monte-Carlo passes per figure case, and per table row.
 FIG_RUNS = 40
@@ -97,7 +97,7 @@ def section(nums=None):
       "roll/pitch/yaw π/6, π/4, π/3) built from 0.1 m cells of (−3, 1, 5) A·m² (2400 cells, "
       "|M| = 1.42e4 A·m²), tracks it with 4 dipoles of one common moment (15 states) in a UKF "
       "and a Huber-robust UKF (NHUKF), and reads size, axis and type from the PCA of the 4 "
-      "dipoles. Reproduced with `python -m core.shape` (`core/shape/`, `core/unscented.py`; "
+      "dipoles. Reproduced with `python -m core.shape` (`core/shape/`, `core/tracking/unscented.py`; "
       "notes in `docs/shape.md`).\n")
     w("**Assumed where the text is lost.** Noise 0.01 nT/m per tensor component and 0.01 nT per "
       "field component; the truth is the array's magnetometer differences, the filters' model "

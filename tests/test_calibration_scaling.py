@@ -356,6 +356,6 @@ def test_cli_module_is_the_only_one_with_argparse_and_nothing_imports_it():
                    if imported(p) & {"argparse", "matplotlib", "tqdm"})
     assert users == ["cli.py"]
     p = subprocess.run([sys.executable, "-c", "import sys, core, app.calibration; "
-                        "print('core.calibration.cli' in sys.modules)"],
+                        "print('core.cli.calibration' in sys.modules)"],
                        cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert p.returncode == 0 and p.stdout.strip() == "False", p.stderr

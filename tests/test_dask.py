@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 
 import core
-from core import dask_backend, sweep
+from core import dask_backend
+from core.cli import sweep
 
 START_TIMEOUT = 60.0  # s: scheduler up and both workers registered (usually 3–6 s here)
 
@@ -74,7 +75,7 @@ def cluster(tmp_path_factory):
     try:
         client = distributed.Client(address, timeout=START_TIMEOUT, set_as_default=False)
         client.wait_for_workers(2, timeout=START_TIMEOUT)
-        client.run(importlib.import_module, "core.sweep")  # warm: numba, scipy, the JIT cache
+        client.run(importlib.import_module, "core.cli.sweep")  # warm: numba, scipy, the JIT cache
         yield address, client
     finally:
         if client is not None:
@@ -234,7 +235,7 @@ def test_connect_to_a_scheduler_without_workers():
 
 
 def test_import_core_does_not_import_dask():
-    code = ("import sys, core, core.sweep, core.dask_backend; "
+    code = ("import sys, core, core.cli.sweep, core.dask_backend; "
             "print(sorted(m for m in ('dask', 'distributed') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60, check=True)

@@ -6,9 +6,12 @@ tests/create_data/make_electric_baseline.py from the core before the change (com
 Today's core must reproduce them to 1e-12 relative, with the same non-finite entries and the
 same flags and ranks exactly.
 
-One exception, stated: the measures of an exactly singular Γ (one station, spec §4) are float64
-round-off, ~1e-20 · Π‖Γ_j‖, whose digits depend on the compiled code's rounding (in-process and
-cached compiles differ, docs/performance.md); for those only the flag is compared.
+One exception, stated: the measures of an exactly singular Γ (one station, spec §4; and three
+stations under the paper's square rule, whose 7 rows are one instant's, rank 6 in the data)
+are float64 round-off, ~1e-20 · Π‖Γ_j‖, whose digits depend on the compiled code's rounding
+(in-process and cached compiles differ, docs/performance.md: after a fresh compile
+``eta_free_triple`` moved by up to 0.7 in log10, then matched again from the cache); for those
+only the flag is compared.
 """
 
 from __future__ import annotations
@@ -23,8 +26,10 @@ from tests.create_data.make_electric_baseline import cases
 DATA = np.load(Path(__file__).parent / "data" / "electric_baseline.npz")
 RTOL = 1e-12
 CASES = dict(cases())
-# measures of the exactly singular one-station Γ: round-off (module notes)
-ROUND_OFF = {k for k in DATA.files if "single" in k and k.split("_")[0] in ("logdet", "eta")}
+# measures of an exactly singular square Γ: round-off (module notes). Singular: one station, or
+# a reference rank below 7 under the same medium and stations (rank_<medium>_<stations>).
+ROUND_OFF = {k for k in DATA.files if k.split("_")[0] in ("logdet", "eta") and (
+    "single" in k or np.all(DATA.get("rank_" + k.split("_", 1)[1], np.array([7])) < 7))}
 
 
 def test_every_case_is_in_the_data():

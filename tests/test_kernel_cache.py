@@ -1,7 +1,8 @@
 """numba's on-disk cache cannot go stale (core.kernel_cache).
 
-The bug it fixes: a cached kernel in core/kernels.py inlines the field of core/fields.py, and
-numba checks only the kernel's own file, so editing the physics in fields.py left
+The bug it fixes: a cached kernel in core/kernels/gamma.py inlines the field of
+core/kernels/electric.py, and numba checks only the kernel's own file, so editing the physics in
+electric.py left
 core.dipole_field returning the old field until the cache files were deleted by hand. Here a
 copy of core/ is edited the same way and run in fresh interpreters, nothing deleted by hand:
 core.kernel_cache sees the sources' hash change and drops the stale cache itself.
@@ -38,10 +39,11 @@ def test_every_cached_kernel_source_is_listed():
 def test_refresh_removes_the_kernels_cache_only_when_a_source_changes(tmp_path, monkeypatch):
     monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", "")
     for name in kernel_cache.KERNEL_SOURCES:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / name).write_text(f"# {name}\n")
-    cache = tmp_path / "__pycache__"
+    cache = tmp_path / "kernels" / "__pycache__"
     cache.mkdir()
-    stale = [cache / "kernels.fill_gamma-122.py311.nbi", cache / "sea.pair_rows-346.py311.1.nbc"]
+    stale = [cache / "gamma.fill_gamma-122.py311.nbi", cache / "sea.pair_rows-346.py311.1.nbc"]
     other = cache / "grids.cpython-311.pyc"
     for p in (*stale, other):
         p.write_bytes(b"x")
@@ -51,7 +53,7 @@ def test_refresh_removes_the_kernels_cache_only_when_a_source_changes(tmp_path, 
         p.write_bytes(b"x")
     assert not kernel_cache.refresh(tmp_path)  # same sources: the cache stays
     assert all(p.exists() for p in stale)
-    (tmp_path / "fields.py").write_text("# fields.py, edited\n")
+    (tmp_path / "kernels" / "electric.py").write_text("# electric.py, edited\n")
     assert kernel_cache.refresh(tmp_path)  # one source edited: every kernel's cache goes
     assert not any(p.exists() for p in stale) and other.exists()
 
@@ -75,8 +77,8 @@ def test_an_edit_to_inlined_physics_reaches_the_cached_kernel(tmp_path):
     assert before == pytest.approx(2 * 100 / (4 * 3.141592653589793 * 1000), rel=1e-12)
     caches = _cache_files(tmp_path)
     assert caches  # the first run cached its kernels
-    # the edit: E_x's 3 (p·r) r_x term doubled, in fields.py (inlined by kernels.py's kernel)
-    fields = tmp_path / "core" / "fields.py"
+    # the edit: E_x's 3 (p·r) r_x term doubled, in electric.py (inlined by gamma.py's kernel)
+    fields = tmp_path / "core" / "kernels" / "electric.py"
     text = fields.read_text()
     old = "return (3.0 * a * f - ph * cos * s[0],"
     assert text.count(old) == 1

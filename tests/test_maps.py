@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import core
-from core import maps
+from core.observability import maps
 
 DUAL15 = core.dual_station(100, 15)
 

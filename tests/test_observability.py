@@ -294,8 +294,8 @@ def test_map_flag_never_disagrees_with_observable_rank(stations, known, model, m
 def test_kernel_bracket_holds_and_undecided_points_go_to_the_svd(rng):
     """rcond ≤ σ_min/σ_max ≤ n·rcond (core.kernels); where the bracket cannot decide, the flag
     is the SVD's verdict (forced here by handing _full_rank an undecided rcond everywhere)."""
-    from core import kernels
-    from core.observability import _full_rank, _options
+    from core.kernels import gamma as kernels
+    from core.observability.gamma import _full_rank, _options
 
     stations = core.dual_station(100, 2)
     states = np.concatenate([random_states(rng, 300, stations),

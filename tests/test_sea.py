@@ -1,6 +1,6 @@
 """The layered sea (air / seawater / seabed, spec §7): core.Sea and the image-series field.
 
-References, independent of core.sea:
+References, independent of core.model.sea:
 - empymod (a Hankel-transform layered-earth code) at DC;
 - closed forms: η = 0 (only the surface image: a half-space) and D → ∞;
 - a brute-force image sum written here in numpy (thousands of groups, no tail), which also runs
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import core
-from core.sea import Sea, image_counts
+from core.model.sea import Sea, image_counts
 
 SIGMA = 4.0
 
@@ -362,7 +362,7 @@ def test_truncation_tolerance_near(sb, rho_over_d, z, sz):
 
 
 def test_sweep_takes_the_sea(tmp_path):
-    from core import sweep
+    from core.cli import sweep
 
     out = tmp_path / "sw"
     assert sweep.main(["--x", "d=5,20", "--y", "z=2,6", "--measure", "d_optimal", "--sea-depth",
@@ -386,8 +386,8 @@ def test_lockstep_lanes_meet_the_tolerance(depth, sb, z, sz, groups):
     # the slowest lane, and one tail rule. Along a map row the points' own counts differ; every
     # point of the lockstep sum must still be within 1e-6 of the brute-force series, each moment
     # separately, and agree with its own one-lane sum to within the two tolerances.
-    from core.kernels import LANES
-    from core.sea import _series
+    from core.kernels.gamma import LANES
+    from core.model.sea import _series
 
     sea = Sea(depth, sb)
     x = np.linspace(-25 * depth if depth < 20 else -300, 25 * depth if depth < 20 else 300, LANES)

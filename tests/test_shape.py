@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from core import unscented as uk
+from core.cli.shape import run as cli_run
 from core.shape import model as md
-from core.shape.cli import run as cli_run
 from core.shape.experiment import Case, run_case
 from core.shape.targets import Pass
+from core.tracking import unscented as uk
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
 TRACK = Pass()

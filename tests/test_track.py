@@ -1,6 +1,6 @@
 """Tracking: PCRLB, EKF / PUEKF, the filter bank and the Monte-Carlo driver (issue 18).
 
-References are independent of the code under test: the batch CRLB of core.design (QR of Γ),
+References are independent of the code under test: the batch CRLB of core.observability.design (QR of Γ),
 Stone Soup's EKF, a covariance-form recursion written out here, chi-square bounds from scipy.
 """
 
@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 import core
-from core import track as tr
+from core.tracking import montecarlo as tr
 
 STATIONS = np.array([[0.0, -10.0, 20.0], [0.0, 10.0, 20.0]])
 

@@ -1,4 +1,4 @@
-"""core.unscented: the UKF step against Stone Soup's, the Huber weights, NHUKF(u → ∞) = UKF,
+"""core.tracking.unscented: the UKF step against Stone Soup's, the Huber weights, NHUKF(u → ∞) = UKF,
 and seed 001's electric cases through the same UKF."""
 
 import numpy as np
@@ -13,8 +13,8 @@ from stonesoup.types.state import GaussianState, StateVectors
 from stonesoup.updater.kalman import UnscentedKalmanUpdater
 
 import core
-from core import unscented as uk
-from core.track import CASES
+from core.tracking import unscented as uk
+from core.tracking.montecarlo import CASES
 
 
 class ElectricMeasurement(NonLinearGaussianMeasurement):

@@ -31,7 +31,7 @@ The package, one concern per module: :mod:`.validation` (checks at the boundary)
 (A, B, C(n), Γ), :mod:`.observability` (rank, unobservable directions, CRLB), :mod:`.estimators`
 (least squares, Kalman filter), :mod:`.geomagnetic` (Be from the readings), :mod:`.manoeuvres`
 (attitudes, simulated readings), :mod:`.data` (seed 004's cases, CSV input and its limits),
-:mod:`.misfit` (a model that does not fit, said in words) and :mod:`.cli` (``python -m
+:mod:`.misfit` (a model that does not fit, said in words) and :mod:`core.cli.calibration` (``python -m
 core.calibration``, the only module that imports argparse, and not imported here). Every step
 is linear in the number of readings in time and memory. No web stack is imported here.
 """

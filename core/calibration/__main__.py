@@ -1,7 +1,7 @@
-"""``python -m core.calibration DATA.csv --be BX,BY,BZ``: see :mod:`core.calibration.cli`."""
+"""``python -m core.calibration DATA.csv --be BX,BY,BZ``: see :mod:`core.cli.calibration`."""
 
 import sys
 
-from .cli import main
+from ..cli.calibration import main
 
 sys.exit(main())

@@ -2,7 +2,7 @@
 
 Truth models (:mod:`.targets`), the N-dipole estimation model (:mod:`.model`), PCA shape
 (:mod:`.pca`), the experiment runner (:mod:`.experiment`), the bound (:mod:`.bound`) and the
-command line ``python -m core.shape`` (:mod:`.cli`). Filters: :mod:`core.unscented`.
+command line ``python -m core.shape`` (:mod:`core.cli.shape`). Filters: :mod:`core.tracking.unscented`.
 """
 
 from .model import DipoleModel, collapsed, start_state

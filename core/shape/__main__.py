@@ -1,5 +1,5 @@
-"""``python -m core.shape``: see :mod:`core.shape.cli`."""
+"""``python -m core.shape``: see :mod:`core.cli.shape`."""
 
-from .cli import main
+from ..cli.shape import main
 
 main()

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import unscented as uk
-from ..magnetic import EULER_RCOND, euler_locate
+from ..model.magnetic import EULER_RCOND, euler_locate
+from ..tracking import unscented as uk
 from . import model as md
 from .pca import axis_angle_deg, pca_shape
 from .targets import Outliers, Pass, Target

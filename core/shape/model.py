@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..magnetic import gradient_tensor, magnetic_field, magnetic_jacobian
+from ..model.magnetic import gradient_tensor, magnetic_field, magnetic_jacobian
 
 __all__ = ["G_COMPONENTS", "LAG", "N_DIPOLES", "P0_MOMENT_REL", "P0_POSITION", "Q_MOMENT",
            "Q_POSITION", "START_SPREAD", "DipoleModel", "collapsed", "start_state",
@@ -55,7 +55,7 @@ Q_MOMENT = 1e-2
 
 
 def _states8(sources, moments):
-    """Magnetic states (P, 8) of :mod:`core.magnetic` for dipoles at rest (velocity unused)."""
+    """Magnetic states (P, 8) of :mod:`core.model.magnetic` for dipoles at rest (velocity unused)."""
     sources = np.asarray(sources, float)
     st = np.zeros(sources.shape[:-1] + (8,))
     st[..., :3] = sources

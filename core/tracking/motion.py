@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import validation
+from ..model import validation
 
 __all__ = ["dwna_model", "sample_tracks", "straight_track"]
 

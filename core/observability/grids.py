@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels
+from ..kernels import gamma as kernels
 
 __all__ = ["Plane", "dual_station", "single_station", "velocity_from_heading"]
 

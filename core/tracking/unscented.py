@@ -2,7 +2,7 @@
 the NHUKF (Huber-robust update; seed 003 §2, Karlgaard & Schaub).
 
 Every function works on a *stack* of N independent filters (leading axis N: Monte-Carlo runs),
-as :mod:`core.filters` does for the EKF, so one step is one call of the measurement function on
+as :mod:`core.tracking.filters` does for the EKF, so one step is one call of the measurement function on
 an (N, 2n + 1, n) array of sigma points. The filters know nothing of the physics: the process
 function ``fx`` and the measurement function ``hx`` are callables on (..., n) arrays, e.g. a
 :class:`core.SensorModel`'s ``h`` (electric, seed 001) or :class:`core.shape.DipoleModel`'s
@@ -342,7 +342,7 @@ def sensor_hx(sensors):
     for :func:`run_ukf`.
 
     The field of a layered sea exists only in the water column, and a sigma point may fall
-    outside it: its depth is clipped into [0, D] first, as :mod:`core.filters` guards the EKF's
+    outside it: its depth is clipped into [0, D] first, as :mod:`core.tracking.filters` guards the EKF's
     linearisation point. In the whole space nothing is clipped.
 
     Parameters

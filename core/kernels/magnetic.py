@@ -2,7 +2,7 @@
 
 A leaf: it imports only math, numpy and numba, so numba's per-file cache check covers
 everything its kernels inline. Private: the inputs are validated float64 arrays
-(:mod:`core.magnetic` is the public front), and a target within ``ON_STATION`` of a sensor
+(:mod:`core.model.magnetic` is the public front), and a target within ``ON_STATION`` of a sensor
 gives NaN.
 
 Physics (spec §11; μ0/4π = 100 nT·m/A, r = sensor − target in m, m the moment in A·m²):

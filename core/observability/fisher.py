@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels, magnetic, sensors, validation
-from .observability import (
+from ..kernels import gamma as kernels
+from ..model import magnetic, sensors, validation
+from .gamma import (
     _BRACKET_MARGIN,
     RANK_RTOL,
     _full_rank,
@@ -171,7 +172,7 @@ def magnetic_fisher(states, stations, sensor, T, steps, known):
         log_norms = np.sum(np.log10(norms), axis=-1)
     # The one rank criterion without an SVD per point: rcond = 1 / (‖Γ_s‖_F ‖R⁻¹‖_F), with
     # ‖Γ_s‖_F² = n, brackets σmin/σmax in [rcond, n·rcond] (core.kernels); the thin band where
-    # the bracket straddles RANK_RTOL is decided by the SVD, as core.observability._full_rank.
+    # the bracket straddles RANK_RTOL is decided by the SVD, as core.observability.gamma._full_rank.
     invertible = np.all(diag > 0.0, axis=-1) & np.all(np.isfinite(r), axis=(-2, -1))
     idx = np.flatnonzero(invertible)
     rinv = np.full((npts, n, n), np.nan)

@@ -1,6 +1,6 @@
 """Measures evaluated over a plane of target positions, and difference maps (spec §5).
 
-Grid points within :data:`core.validation.ON_STATION` of a station are masked (NaN), not
+Grid points within :data:`core.kernels.electric.ON_STATION` of a station are masked (NaN), not
 raised on.
 """
 
@@ -10,11 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels, sensors, validation
-from . import sea as sea_module
+from ..kernels import gamma as kernels
+from ..model import sea as sea_module
+from ..model import sensors, validation
 from .design import magnetic_clear, magnetic_plane_states
 from .fisher import DEFAULT_STEPS, _fisher_from_kernel, magnetic_fisher
-from .observability import _full_rank, _options
+from .gamma import _full_rank, _options
 
 __all__ = ["MEASURES", "MapResult", "evaluate_map", "log10_positive_difference", "log10_ratio"]
 
@@ -40,11 +41,11 @@ class MapResult:
 
 def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1.0, sigma=4.0,
                  model="exact", sea=None, known=(), noise=None, steps=DEFAULT_STEPS, sensor=None):
-    """Evaluate one measure over a :class:`core.grids.Plane`.
+    """Evaluate one measure over a :class:`core.observability.grids.Plane`.
 
     Parameters
     ----------
-    plane : core.grids.Plane
+    plane : core.observability.grids.Plane
     stations : array_like, shape (S, 3)
         Station positions (m).
     velocity : (vx, vy)
@@ -57,7 +58,7 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     sensor : {"E", "B", "G", "BG"} or core.Sensor or None
         The measurement model, as for :func:`core.gamma`.
     sea : core.Sea or None
-        The whole space (``None``) or a layered sea (:mod:`core.sea`): then the plane must lie
+        The whole space (``None``) or a layered sea (:mod:`core.model.sea`): then the plane must lie
         in the water column (an x–y plane at 0 ≤ z ≤ D; an x–z plane with 0 ≤ z ≤ D).
 
     Returns
@@ -71,7 +72,7 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     Notes
     -----
     Rows are evaluated in chunks of at most :data:`CHUNK_POINTS` points, so memory is bounded
-    by the outputs for any resolution up to :data:`core.grids.MAX_RESOLUTION`.
+    by the outputs for any resolution up to :data:`core.observability.grids.MAX_RESOLUTION`.
     """
     if measure not in MEASURES:
         raise ValueError(f"measure must be one of {sorted(MEASURES)}; got {measure!r}")

@@ -30,9 +30,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels, sensors, validation
-from . import sea as sea_module
-from .fields import MODELS
+from ..kernels import gamma as kernels
+from ..model import sea as sea_module
+from ..model import sensors, validation
+from ..model.fields import MODELS
 
 __all__ = [
     "RANK_RTOL",
@@ -58,7 +59,7 @@ _BRACKET_MARGIN = 10.0
 
 def _options(stations, T, sigma, model, known, steps, sea=None):
     """Validate everything but the states: returns the kernel arguments after ``states``
-    (stations, T, κ = 1/(4πσ), model code, medium of :func:`core.sea.medium`, free columns)
+    (stations, T, κ = 1/(4πσ), model code, medium of :func:`core.model.sea.medium`, free columns)
     and the number of rows of Γ."""
     stations = validation.stations(stations)
     step = validation.positive("T", T, "s")
@@ -95,7 +96,7 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=
     sigma : float
         Sea conductivity (S/m), > 0; it scales Γ by 1/σ and so shifts log10|det Γ| by a constant.
     model : {"exact", "paper"}
-        Field model (see :mod:`core.fields`).
+        Field model (see :mod:`core.model.fields`).
     sea : core.Sea or None
         ``None``: the whole space. A :class:`core.Sea`: air / seawater / seabed (spec §7); z is
         depth and targets and stations must lie in the water column. Only ``model="exact"``.

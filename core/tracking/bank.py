@@ -7,7 +7,7 @@ log-likelihood of its innovations.
 Hypotheses (our reading of seed 001 eqs. (11)–(15); eq. (14) is lost in the text)
 --------------------------------------------------------------------------------------
 - Strength levels p_i (default 50, 100, 200 A·m): ``Ph = p_i``, ``Pv = 0`` (a horizontal
-  dipole, see :mod:`core.motion`).
+  dipole, see :mod:`core.tracking.motion`).
 - Bearings ψ_j (default π/4, 3π/4, 5π/4, 7π/4) of the start position from the array centre,
   in *our* frame (x, y, depth; see :data:`SEED_BEARINGS` for seed 001's z-up frame).
 - Start range r_ij **from the field magnitude**: seed 001 inverts |E| = p/(4πσ r³) (eq. (11)),
@@ -31,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.measurement import SensorModel
 from .filters import run_filters
-from .measurement import SensorModel
 
 __all__ = ["BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "bank_hypotheses",
            "run_bank", "start_range"]

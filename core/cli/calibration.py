@@ -15,19 +15,19 @@ import sys
 
 import numpy as np
 
-from .data import MAX_CSV_BYTES, MAX_CSV_ROWS, read_attitude_csv
-from .estimators import (
+from ..calibration.data import MAX_CSV_BYTES, MAX_CSV_ROWS, read_attitude_csv
+from ..calibration.estimators import (
     DEFAULT_P0_DIAG,
     MAX_KALMAN_ITERATIONS,
     default_iterations,
     kalman_calibrate,
     lsq_calibrate,
 )
-from .geomagnetic import geomagnetic_error, geomagnetic_solution
-from .misfit import fit_diagnosis
-from .model import COEFFICIENTS, CONVENTIONS
-from .observability import calibration_crlb, calibration_observability
-from .validation import NOISE_RANGE_NT, _angle_noise, _be, _count, _noise
+from ..calibration.geomagnetic import geomagnetic_error, geomagnetic_solution
+from ..calibration.misfit import fit_diagnosis
+from ..calibration.model import COEFFICIENTS, CONVENTIONS
+from ..calibration.observability import calibration_crlb, calibration_observability
+from ..calibration.validation import NOISE_RANGE_NT, _angle_noise, _be, _count, _noise
 
 PROG = "python -m core.calibration"
 

@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Targets closer than this to a station (m) are "on" it: the field is singular at D = 0.
-#: The public functions raise ValueError; maps (and the kernels) give NaN there.
-ON_STATION = 1e-6
+from ..kernels.electric import ON_STATION  # the kernels' bound, checked here
 
 #: Order of the state vector ``X = [x, y, z, vx, vy, Ph, Pv]``.
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "Ph", "Pv")
@@ -114,5 +112,5 @@ def no_target_on_station(states, stations):
         raise ValueError(
             f"target position {tuple(states[p, :3])} m coincides with station {s} at "
             f"{tuple(stations[s])} m: the dipole field is singular at D = 0 (closer than {ON_STATION} m counts); "
-            "move the target or mask such points (core.maps does)"
+            "move the target or mask such points (core.observability.maps does)"
         )

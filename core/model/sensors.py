@@ -8,7 +8,7 @@ Fisher, CRLB, maps and CRLB maps take it as ``sensor=`` (a kind name builds one 
 defaults); their old keywords ``sigma``, ``model``, ``sea`` still work and build the electric one.
 
 Electric kinds go through the compiled electric kernels (:mod:`core.kernels`); magnetic kinds
-through :mod:`core.magnetic_kernels` with the same Γ (time-major, then station, then
+through :mod:`core.kernels.magnetic` with the same Γ (time-major, then station, then
 component) and the same rank criterion (column-scaled SVD, :data:`core.RANK_RTOL`), on Γ
 whitened by the noise of each component (B in nT, G in nT/m, so that B + G rows are
 commensurate). The paper's square-Γ rule is the electric paper's and is refused for magnetic

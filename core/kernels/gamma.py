@@ -1,6 +1,6 @@
 """Compiled kernels that build Γ point by point and reduce it to scalar measures.
 
-Private: they assume validated float64 input (see :mod:`core.validation`) and never allocate
+Private: they assume validated float64 input (see :mod:`core.model.validation`) and never allocate
 per point. Work is split into blocks of ``_BLOCK`` points (``LANES`` for the map kernels,
 the hot paths, which compute their points side by side in vector registers) run in parallel
 (``prange``); each block owns its scratch buffers, so a 1000 × 1000 map needs no more memory
@@ -13,7 +13,7 @@ Column scaling is used throughout: with ``Γ_s = Γ / ‖Γ_j‖`` (unit columns
 and ``η = sqrt(det Γ_sᵀ Γ_s) ∈ [0, 1]`` (for square Γ, ``|det Γ_s|``, the Hadamard ratio) is the
 scale-free observability index: 1 for orthogonal columns, 0 for a rank-deficient Γ.
 
-The rank test (:data:`core.observability.RANK_RTOL`) reads ``rcond = 1 / (‖Γ_s‖_F ‖R_s⁻¹‖_F)``,
+The rank test (:data:`core.observability.gamma.RANK_RTOL`) reads ``rcond = 1 / (‖Γ_s‖_F ‖R_s⁻¹‖_F)``,
 the reciprocal Frobenius condition number of Γ_s (R_s its R factor), which brackets the ratio of
 extreme singular values: ``rcond ≤ σ_min/σ_max ≤ n · rcond``.
 """
@@ -25,9 +25,8 @@ import math
 import numba as nb
 import numpy as np
 
-from .fields import JIT, _local_jacobian, _store_rows
+from .electric import JIT, ON_STATION, _local_jacobian, _store_rows
 from .sea import PAIR_ROWS, SEA_ROWS, _load, layered_lanes, station_rows
-from .validation import ON_STATION
 
 _BLOCK = 256
 
@@ -35,7 +34,7 @@ _BLOCK = 256
 @nb.njit(parallel=True, nogil=True, **JIT)
 def field_and_jacobian(states, stations, kappa, model, medium, e_out, j_out):
     """E and ∂E/∂X: states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7).
-    ``medium`` = [D, η, tol] of :func:`core.sea.medium` (D = 0: whole space)."""
+    ``medium`` = [D, η, tol] of :func:`core.model.sea.medium` (D = 0: whole space)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
         w = np.empty((PAIR_ROWS, 1))  # the layered series' one-pair workspace
@@ -147,7 +146,7 @@ _CHUNKS = 64
 # per-lane scalars, the layered series.
 _X, _J, _G, _SQ, _T = 0, 7, 31, 80, 87
 _NORM2, _DET, _BETA, _DOT, _BAD = 95, 96, 97, 98, 99
-# The layered series' rows (core.sea.SEA_ROWS: a pair's inputs and its previous group), its
+# The layered series' rows (core.kernels.sea.SEA_ROWS: a pair's inputs and its previous group), its
 # outputs going straight to w[_J…]. In the Fisher kernel they share rows with the Givens and
 # R⁻¹ scratch, which is dead while a station's rows are being computed.
 _SEA = 100
@@ -168,7 +167,7 @@ def _jacobian_lanes(w, dt, stations, s, kappa, model, medium):
     station (its offset is replaced by a harmless one; the caller masks the result).
 
     A layered sea (medium[0] = D > 0) runs the image series on the LANES pairs side by side
-    (:func:`core.sea.layered_lanes`, its groups in lockstep, its rows at w[_SEA…]); the whole
+    (:func:`core.kernels.sea.layered_lanes`, its groups in lockstep, its rows at w[_SEA…]); the whole
     space keeps the straight loop below. Both loops LLVM vectorises across lanes."""
     sx, sy, sz = stations[s, 0], stations[s, 1], stations[s, 2]
     if medium[0] > 0.0:

@@ -21,11 +21,12 @@ import argparse
 import json
 import os
 import sys
+from dataclasses import replace
 
 import numpy as np
 
-from .cases import CASES, case_rows
-from .experiment import run_case
+from ..shape.cases import CASES, case_rows
+from ..shape.experiment import run_case
 
 PROG = "python -m core.shape"
 
@@ -131,7 +132,6 @@ def run(case, runs=1, seed=0, lag=0, out=None, plots=True):
     results = []
     for row in rows:
         if lag:
-            from dataclasses import replace
             row = replace(row, lag=lag)
         results.append(run_case(row, runs=runs, seed=seed))
     summary = {"case": case, "description": desc, "runs": runs, "seed": seed, "lag": lag,

@@ -25,11 +25,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 
-from . import validation
-from .measurement import SensorModel
+from ..kernels.pcrlb import _recursion
+from ..model import validation
+from ..model.measurement import SensorModel
 from .motion import dwna_model
 
 __all__ = ["SINGULAR_TOL", "PcrlbResult", "linearisation_breaks", "pcrlb"]
@@ -90,24 +90,6 @@ def measurement_information(tracks, sensors):
     """E[Hᵀ R⁻¹ H] at every step: (M, steps, 7) true states → (steps, 7, 7)."""
     H = sensors.jacobian(tracks) / sensors.noise_vector[:, None]  # R^-½ H: (M, steps, m, n)
     return np.einsum("nkri,nkrj->kij", H, H) / tracks.shape[0]
-
-
-@nb.njit(cache=True)
-def _recursion(Finv, FinvT, Q, J0, info):
-    """J_k for k = 0 … K−1 (K, 7, 7): the Tichavský recursion, compiled (a Python loop of
-    numpy 7 × 7 calls costs ~0.2 ms a step in call overhead alone)."""
-    steps = info.shape[0]
-    eye = np.eye(info.shape[1])
-    out = np.empty_like(info)
-    J = J0.copy()
-    for k in range(steps):
-        if k:
-            M = FinvT @ J @ Finv  # information of F X_k without the process noise
-            J = np.linalg.solve(eye + M @ Q, M)  # (Q + F J⁻¹ Fᵀ)⁻¹, valid for singular J, Q
-        J = J + info[k]
-        J = 0.5 * (J + J.T)  # keep it symmetric against round-off
-        out[k] = J
-    return out
 
 
 def _invert(J):

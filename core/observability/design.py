@@ -1,6 +1,6 @@
 """Sensor-layout design: CRLB error ellipses in metres, N-station layouts, the best spacing.
 
-Everything here builds on the all-rows Fisher information of :mod:`core.fisher`
+Everything here builds on the all-rows Fisher information of :mod:`core.observability.fisher`
 (F = ΓᵀΓ / noise², every component of every station over ``steps`` instants, spec §3):
 
 - :func:`crlb_covariance` — the full Cramér–Rao covariance F⁻¹, from a QR factorisation of the
@@ -37,10 +37,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from . import magnetic, sensors, validation
+from .. import dask_backend
+from ..model import magnetic, sensors, validation
 from .fisher import DEFAULT_STEPS, fisher_measures, magnetic_fisher
+from .gamma import RANK_RTOL, gamma
 from .grids import Plane
-from .observability import RANK_RTOL, gamma
 
 __all__ = [
     "CRITERIA",
@@ -625,8 +626,6 @@ def _map(f, values, client):
     """``[f(v) for v in values]`` as an array: here, or on a Dask cluster (core.dask_backend)."""
     if client is None:
         return np.array([f(v) for v in values])
-    from . import dask_backend
-
     return np.array(dask_backend.map_ordered(dask_backend.check_client(client), f, values))
 
 

@@ -1,6 +1,6 @@
 """Magnetic dipole sensing (spec §11): field, gradient tensor, invariants, Euler location.
 
-Validated numpy-shaped fronts of :mod:`core.magnetic_kernels` (the one copy of the physics).
+Validated numpy-shaped fronts of :mod:`core.kernels.magnetic` (the one copy of the physics).
 The magnetic target's state is ``[x, y, z, vx, vy, mx, my, mz]`` (8): position (m), horizontal
 velocity (m/s, as in the electric model; the field at one instant does not depend on it) and a
 free moment vector (A·m²). μ0/4π = 100 nT·m/A; fields in nT, tensors in nT/m. Seawater does
@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import magnetic_kernels as mk
+from ..kernels import magnetic as mk
 from . import validation
 
 __all__ = [
@@ -195,7 +195,7 @@ def sensor_flags(sensor):
 
 
 def measurement_rows(states_value, stations_value, sensor, baseline, dt):
-    """Validated :func:`core.magnetic_kernels.measurement_rows` at time offset ``dt`` (s·T)."""
+    """Validated :func:`core.kernels.magnetic.measurement_rows` at time offset ``dt`` (s·T)."""
     with_b, with_g = sensor_flags(sensor)
     flat, lead = states(states_value)
     stations = validation.stations(stations_value)

@@ -1,56 +1,20 @@
-"""A real sea: insulating air above, seawater, a conducting seabed below (spec §7).
-
-Frame: z is depth, positive down; the sea surface is z = 0 and the seabed z = D. Seawater has
-conductivity σ (the ``sigma`` of every public function), the seabed σb ≥ 0, the air none.
-
-Image series (derived in ``docs/sea.md``)
------------------------------------------
-For a point current source at depth z0 in the water, the Hankel-domain potential is
-``e^{−k|z−z0|} + a e^{−kz} + b e^{−k(D−z)}``. The insulating surface reflects with +1
-(∂φ/∂z = 0 at z = 0); the seabed with η = (σ − σb)/(σ + σb) (continuity of φ and σ ∂φ/∂z at
-z = D). Solving for a and b and expanding 1 / (1 − η e^{−2kD}) as a geometric series gives a
-sum of terms ``e^{−k c}``, each the transform of ``1 / sqrt(ρ² + c²)``: a free-space source at
-depth z' with c = |z − z'|. All the images are
-
-    z'(ε, m) = ε·z0 + 2 m D,   weight η^|m|,   ε = ±1, m ∈ ℤ,
-
-and c = |z − z'| holds for every receiver depth 0 ≤ z ≤ D, so the image positions do not depend
-on the receiver. A dipole is the limit of two opposite sources, so its images are dipoles at
-the same positions with the vertical moment multiplied by ε. (ε, m) = (+1, 0) is the source,
-(−1, 0) its surface image; η = 0 (σb = σ) leaves these two: the half-space.
-
-Truncation and tail
--------------------
-Per target–station pair, the images are summed in groups G_m (the four images with |m| = m)
-until the Euler–Maclaurin error estimate of closing the rest with an integral,
-``|G_m − η G_{m−1}| / 24``, is at most ``tol / 2`` times the running total field. The rest,
-Σ_{m > M} G_m, is then closed in closed form as the integral over a continuous image index t
-from M + ½ to ∞ (the images become a line-like sum), times κ = (α/2)/sinh(α/2), α = −ln η,
-which makes the midpoint rule exact for the geometric weight; the integral is a 4-, 5- or
-8-node Gauss–Legendre rule (by the size of the tail, ``_TAIL_N``) on t = M + ½ + b u/(1 − u),
-b = min(M + ½, 1/α). Every node is a virtual image at a non-integer t,
-added to the same image sums (``core.fields.image_sums``), so the Jacobian of the truncated
-field, tail included, is exact by the chain rule. A conductive seabed (η < 0) gives an
-alternating series: it is summed until |G_m| ≤ tol (1 − |η|) |E|, no tail.
+"""The compiled image series of a layered sea (spec §7): the sums of a target–station pair's
+images, in lanes of targets summed side by side. The physics, the truncation and the tail are
+described in :mod:`core.model.sea`, the validated front (:class:`core.Sea`, ``image_counts``).
+A leaf, as every module of :mod:`core.kernels`: math, numpy, numba and its sibling kernels.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
 
-from .fields import JIT, _local_jacobian, add_sums, image_sums, sums_field, sums_rows
+from .electric import JIT, _local_jacobian, add_sums, image_sums, sums_field, sums_rows
 
-__all__ = ["DEFAULT_TOL", "Sea", "image_counts"]
-
-#: Default truncation tolerance on the total field (relative).
-DEFAULT_TOL = 1e-6
 #: Image groups summed at most (a safeguard; reached only for η within ~1e-4 of −1).
 MAX_GROUPS = 100_000
-
 
 
 def _gauss_legendre01(n):
@@ -72,96 +36,6 @@ _TAIL_U = np.zeros((3, 8))
 _TAIL_W = np.zeros((3, 8))
 for _k, _n in enumerate(_TAIL_N):
     _TAIL_U[_k, :_n], _TAIL_W[_k, :_n] = _gauss_legendre01(_n)
-
-
-@dataclass(frozen=True)
-class Sea:
-    """A sea of depth ``depth`` (m) over a seabed of conductivity ``seabed_sigma`` (S/m).
-
-    Parameters
-    ----------
-    depth : float
-        Water depth D (m), finite, > 0. The surface is z = 0, the seabed z = D (z down).
-    seabed_sigma : float
-        Seabed conductivity σb (S/m), finite, ≥ 0 (0: an insulating seabed).
-    tol : float
-        Relative truncation tolerance of the image series on the total field, in
-        [1e-14, 1e-6] (default 1e-6).
-
-    Examples
-    --------
-    >>> import core
-    >>> sea = core.Sea(8.4, 0.4)
-    >>> round(sea.eta(4.0), 4)
-    0.8182
-    """
-
-    depth: float
-    seabed_sigma: float
-    tol: float = DEFAULT_TOL
-
-    def __post_init__(self):
-        for name, value, ok, accepted in (
-            ("depth", self.depth, lambda v: v > 0.0, "a finite number > 0 (m)"),
-            ("seabed_sigma", self.seabed_sigma, lambda v: v >= 0.0, "a finite number ≥ 0 (S/m)"),
-            ("tol", self.tol, lambda v: 1e-14 <= v <= 1e-6, "a number in [1e-14, 1e-6]"),
-        ):
-            try:
-                v = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(f"Sea {name} must be {accepted}; got {value!r}") from None
-            if not (math.isfinite(v) and ok(v)):
-                raise ValueError(f"Sea {name} must be {accepted}; got {value!r}")
-            object.__setattr__(self, name, v)
-
-    @classmethod
-    def from_resistivity(cls, depth, seabed_resistivity, tol=DEFAULT_TOL):
-        """A sea from the seabed resistivity ρb (Ω·m, > 0; ``inf`` for an insulating seabed)."""
-        try:
-            rho = float(seabed_resistivity)
-        except (TypeError, ValueError):
-            rho = float("nan")
-        if not rho > 0.0:
-            raise ValueError(f"seabed_resistivity must be a number > 0 (Ω·m); got {seabed_resistivity!r}")
-        return cls(depth, 0.0 if math.isinf(rho) else 1.0 / rho, tol)
-
-    @property
-    def seabed_resistivity(self):
-        """ρb = 1/σb (Ω·m); inf for an insulating seabed."""
-        return math.inf if self.seabed_sigma == 0.0 else 1.0 / self.seabed_sigma
-
-    def eta(self, sigma):
-        """Seabed reflection coefficient η = (σ − σb)/(σ + σb) ∈ (−1, 1] for water σ (S/m)."""
-        return (sigma - self.seabed_sigma) / (sigma + self.seabed_sigma)
-
-
-#: The kernels' medium of the whole space (``sea=None``): depth 0 switches the images off.
-WHOLE_SPACE = np.zeros(3)
-
-
-def medium(sea, sigma):
-    """Kernel form of a sea: float64 ``[D, η, tol]``; :data:`WHOLE_SPACE` for ``sea=None``."""
-    if sea is None:
-        return WHOLE_SPACE
-    if not isinstance(sea, Sea):
-        raise ValueError(f"sea must be None (whole space) or a core.Sea; got {type(sea).__name__}")
-    return np.array([sea.depth, sea.eta(sigma), sea.tol])
-
-
-def check_column(sea, states, stations, model):
-    """With a sea, every target (P, 7) and station (S, 3) must be in the water column 0 ≤ z ≤ D,
-    and the model must be "exact"."""
-    if sea is None:
-        return
-    if model != "exact":
-        raise ValueError(f"model {model!r} has no layered-sea form: the paper's printed formulas "
-                         "are not a dipole field, so they have no images; use model='exact' with sea")
-    for name, z in (("target depth z", states[:, 2]), ("station depth", stations[:, 2])):
-        bad = (z < 0.0) | (z > sea.depth)
-        if np.any(bad):
-            raise ValueError(f"{name} {float(z[bad][0])!r} m is outside the water column: with "
-                             f"sea=Sea(depth={sea.depth!r}) it must lie in [0, {sea.depth!r}] m "
-                             "(z is depth, positive down; surface 0, seabed D)")
 
 
 @nb.njit(inline="always", **JIT)
@@ -363,49 +237,3 @@ def station_rows(w, rx, ry, z, sz, vx, vy, ph, pv, kappa, model, medium):
     if medium[0] > 0.0:
         return pair_rows(w, rx, ry, z, sz, vx, vy, ph, pv, kappa, medium[0], medium[1], medium[2])[0]
     return _local_jacobian(rx, ry, z - sz, vx, vy, ph, pv, kappa, model)
-
-
-def image_counts(states, stations, sea, *, sigma=4.0, lanes=1):
-    """Number of free-space images (tail nodes included) the series uses per target and station.
-
-    Parameters
-    ----------
-    states : array_like, shape (..., 7)
-    stations : array_like, shape (S, 3)
-    sea : core.Sea
-    sigma : float
-        Sea conductivity (S/m), > 0.
-    lanes : int
-        1 (default): each pair summed alone, as :func:`core.dipole_field` and every per-point
-        function sum it. ``core.kernels.LANES``: the flattened targets summed ``lanes`` at a time
-        in lockstep (a short last run padded with its first target), as the map kernels sum
-        them; every pair of a run then shows the run's common count.
-
-    Returns
-    -------
-    ndarray of int, shape (..., S)
-    """
-    return _series(states, stations, sea, sigma, lanes)[2]
-
-
-def _series(states, stations, sea, sigma, lanes):
-    """E (..., S, 3), ∂E/∂X (..., S, 3, 7) and image counts (..., S) of the series summed
-    ``lanes`` targets at a time (:func:`image_counts`)."""
-    from . import kernels, validation  # kernels import this module
-
-    states, stations, lead = validation.states_and_stations(states, stations)
-    sigma = validation.positive("sigma", sigma, "S/m")
-    if not isinstance(sea, Sea):
-        raise ValueError(f"sea must be a core.Sea; got {type(sea).__name__}")
-    if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or not (
-            1 <= lanes <= kernels.LANES):
-        raise ValueError(f"lanes must be an integer in [1, {kernels.LANES}]; got {lanes!r}")
-    check_column(sea, states, stations, "exact")
-    validation.no_target_on_station(states, stations)
-    p, n_s = states.shape[0], stations.shape[0]
-    e, jac = np.empty((p, n_s, 3)), np.empty((p, n_s, 3, 7))
-    counts = np.empty((p, n_s), dtype=np.int64)
-    kernels.layered_pairs(states, stations, 1.0 / (4.0 * np.pi * sigma), medium(sea, sigma),
-                          int(lanes), e, jac, counts)
-    return (e.reshape(lead + (n_s, 3)), jac.reshape(lead + (n_s, 3, 7)),
-            counts.reshape(lead + (n_s,)))

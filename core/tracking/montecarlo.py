@@ -1,0 +1,421 @@
+"""Monte-Carlo tracking on seed 001's cases: TRMSE against the PCRLB.
+
+:func:`monte_carlo` runs a filter (EKF, PUEKF or the bank) over many noisy replays of a case
+and returns the TRMSE of its position against the PCRLB; ``python -m core.track``
+(:mod:`core.cli.track`) writes the result to files, the dashboard's Track tab plots it.
+
+Cases (our frame: x, y, z = depth positive down; seed 001's z-up frame is mapped by
+(x, y, z_up) → (x, −y, D − z_up), which keeps the frame right-handed; its bearings map by ψ → −ψ)
+---------------------------------------------------------------------------------------------
+``seed001-sim``
+    Seed 001's simulation: p = 100 A·m (Ph = 100, Pv = 0), two 3-axis sensors on the y axis,
+    σa = 0.1 m/s², α = 0.001, σ = 1e-7 V/m, whole space σ = 4 S/m. Its Table 1 (sensor positions,
+    start, course) is lost in the text: we use the trial's geometry — sensors at (0, ±5 m) at
+    8.4 m depth, source 0.2 m deep starting at (−57.1, 280.0) m (seed frame (−57.1, −280.0)),
+    course along the array line (−y here, +y in seed 001), 2 m/s, 300 s at T = 1 s.
+``seed001-trial``
+    The same track replayed in seed 001's sea trial: layered sea D = 8.4 m, σ = 4 S/m,
+    σb = 0.4 S/m, two **2-axis** sensors on the seabed at (0, ±5 m, 8.4 m), source 0.2 m deep,
+    10 A × 10 m = 100 A·m. Simulated measurements (the trial's recordings are not published).
+
+Truth: the nominal straight track (``truth_noise=False``, as seed 001's simulated straight
+course), or DWNA tracks sampled with the filter's own Q. The EKF and PUEKF start from a mean drawn
+from N(truth₀, P₀) with covariance P₀ (PCRLB prior J₀ = P₀⁻¹); the bank starts from its
+hypotheses, and its PCRLB knows only what every hypothesis assumes (depth ξ_z and Pv; flat in
+x, y, velocity, Ph). The PCRLB averages the measurement information over the runs' true tracks
+(all equal to the nominal track unless ``truth_noise``).
+
+Parallelism: runs are split into chunks; chunk results do not depend on the chunking (run r
+draws its noise from ``numpy.random.default_rng([seed, r])``). Chunks run in this process,
+in ``workers`` spawned processes (both cores), or on a Dask scheduler (``scheduler=ADDR``).
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+
+from ..model.measurement import SensorModel
+from ..model.sea import Sea
+from .bank import BANK_BEARINGS, BANK_STRENGTHS, SEED_BEARINGS, run_bank
+from .filters import run_filters
+from .motion import dwna_model, sample_tracks, straight_track
+from .pcrlb import pcrlb
+
+__all__ = ["CASES", "FILTERS", "MonteCarloResult", "TrackCase", "monte_carlo"]
+
+#: Filters of :func:`monte_carlo`.
+FILTERS = ("ekf", "puekf", "bank")
+#: Default progressive sub-updates of "puekf" (seed 001 does not print its N_pu). The bank's
+#: default is 1: on seed001-sim (100 runs) the nearest hypothesis won 61 / 45 / 30 / 11 % of the
+#: runs with N_pu = 1 / 2 / 3 / 5 — relinearising lets wrong-strength filters converge too, and
+#: the likelihood then tells the hypotheses apart less well (docs/tracking.md).
+DEFAULT_N_PU = 3
+
+
+@dataclass(frozen=True)
+class TrackCase:
+    """A tracking scenario: sensors, medium, true track, filter model and priors.
+
+    Lengths in m (z = depth), angles in rad (our frame), moments in A·m, noise in V/m.
+    """
+
+    name: str
+    stations: tuple
+    axes: int
+    start: tuple
+    heading: float
+    speed: float = 2.0
+    steps: int = 300
+    T: float = 1.0
+    Ph: float = 100.0
+    Pv: float = 0.0
+    noise: float = 1e-7
+    sigma: float = 4.0
+    sea_depth: float | None = None
+    seabed_sigma: float | None = None
+    sigma_a: float = 0.1
+    alpha: float = 0.001
+    #: Prior σ of the EKF/PUEKF start (x, y, z, vx, vy, Ph, Pv).
+    prior_std: tuple = (20.0, 20.0, 0.5, 0.5, 0.5, 20.0, 5.0)
+    #: Hypothesised source depth of the bank (m), its σ ξ_z (m) and the σ of Pv (A·m).
+    bank_depth: float = 0.2
+    bank_depth_std: float = 1.0
+    bank_pv_std: float = 10.0
+    description: str = field(default="", compare=False)
+
+    def sensors(self):
+        """The :class:`core.SensorModel` of the case (a :class:`core.Sea` where it has one)."""
+        sea = None if self.sea_depth is None else Sea(self.sea_depth, self.seabed_sigma)
+        return SensorModel(np.array(self.stations, float), axes=self.axes, noise=self.noise,
+                           sigma=self.sigma, sea=sea)
+
+    def nominal_track(self):
+        """The straight true track, (steps, 7)."""
+        return straight_track(self.start, self.heading, self.speed, self.steps, T=self.T,
+                              Ph=self.Ph, Pv=self.Pv)
+
+    def prior_cov(self):
+        """Prior covariance of the EKF / PUEKF start (7, 7)."""
+        return np.diag(np.asarray(self.prior_std, float) ** 2)
+
+    def bank_prior_info(self):
+        """What every bank hypothesis knows a priori, as information (7, 7): the depth (ξ_z)
+        and Pv; flat in x, y, velocity and Ph (those are what the hypotheses guess)."""
+        info = np.zeros((7, 7))
+        info[2, 2] = 1.0 / self.bank_depth_std**2
+        info[6, 6] = 1.0 / self.bank_pv_std**2
+        return info
+
+
+_SEED_GEOMETRY = dict(
+    stations=((0.0, -5.0, 8.4), (0.0, 5.0, 8.4)),
+    start=(-57.1, 280.0, 0.2),
+    heading=-np.pi / 2,
+)
+
+#: The two cases of seed 001 (see the module notes).
+CASES = {
+    "seed001-sim": TrackCase(
+        name="seed001-sim", axes=3, **_SEED_GEOMETRY,
+        description="seed 001 simulation: whole space, two 3-axis sensors, p = 100 A·m",
+    ),
+    "seed001-trial": TrackCase(
+        name="seed001-trial", axes=2, sea_depth=8.4, seabed_sigma=0.4, **_SEED_GEOMETRY,
+        prior_std=(20.0, 20.0, 0.1, 0.5, 0.5, 20.0, 5.0), bank_depth_std=0.2,
+        description="seed 001 sea-trial geometry: D = 8.4 m, σb = 0.4 S/m, two 2-axis seabed sensors",
+    ),
+}
+
+
+def _case(case):
+    if isinstance(case, TrackCase):
+        return case
+    if case not in CASES:
+        raise ValueError(f"case must be one of {list(CASES)} or a TrackCase; got {case!r}")
+    return CASES[case]
+
+
+def hypothesis_labels(strengths=BANK_STRENGTHS, seed_bearings=SEED_BEARINGS):
+    """Seed 001's filter names: 'F7 p=100 ψ=5π/4' (ψ in seed 001's frame), strength-major."""
+    out = []
+    for i, p in enumerate(strengths):
+        for j, b in enumerate(seed_bearings):
+            out.append(f"F{i * len(seed_bearings) + j + 1} p={p:g} ψ={round(4 * b / np.pi):d}π/4")
+    return out
+
+
+def nearest_hypothesis(truth0, centre, strengths=BANK_STRENGTHS, bearings=BANK_BEARINGS):
+    """Index of the hypothesis nearest a true start state (…, 7): the strength level nearest
+    in log and the bearing nearest the true start bearing from the array centre."""
+    truth0 = np.asarray(truth0, float)
+    i = np.argmin(np.abs(np.log(np.asarray(strengths))[None] - np.log(truth0[..., 5:6])), axis=-1)
+    b = np.arctan2(truth0[..., 1] - centre[1], truth0[..., 0] - centre[0])
+    gap = np.abs(np.angle(np.exp(1j * (b[..., None] - np.asarray(bearings)))))
+    j = np.argmin(gap, axis=-1)
+    return i * len(bearings) + j
+
+
+def _run_seed(seed, run):
+    return np.random.default_rng([int(seed), int(run)])
+
+
+def _truths_and_x0(case, filter_name, run_ids, seed, truth_noise):
+    """True tracks (n, K, 7) and filter start means (n, 7) of the given runs.
+
+    Every run's truth starts at the nominal start; an EKF / PUEKF starts from a mean drawn from
+    N(truth₀, P₀) (so that P₀ is its honest prior and the PCRLB's J₀ = P₀⁻¹), kept in the water.
+    """
+    nominal = case.nominal_track()
+    F, Q = dwna_model(case.T, case.sigma_a, case.alpha)
+    lo, hi = (0.0, case.sea_depth) if case.sea_depth is not None else (-np.inf, np.inf)
+    truths = np.empty((len(run_ids), case.steps, 7))
+    x0 = np.broadcast_to(nominal[0], (len(run_ids), 7)).copy()
+    root = np.asarray(case.prior_std, float)
+    for n, r in enumerate(run_ids):
+        rng = _run_seed(seed, r)
+        if filter_name != "bank":
+            x0[n] += root * rng.standard_normal(7)
+            x0[n, 2] = np.clip(x0[n, 2], lo, hi)
+        truths[n] = sample_tracks(nominal[0], F, Q, case.steps, rng) if truth_noise else nominal
+    return truths, x0
+
+
+def _measurements(case, sensors, truths, run_ids, seed):
+    h = sensors.h(truths)  # (n, K, m)
+    for n, r in enumerate(run_ids):
+        rng = _run_seed(seed + 1_000_003, r)  # a stream of its own, independent of the truth's
+        h[n] += case.noise * rng.standard_normal(h[n].shape)
+    return h
+
+
+def _chunk(case, filter_name, run_ids, seed, n_pu, truth_noise, keep_tracks=0, progress=None):
+    """Simulate and filter a chunk of runs; returns plain arrays (picklable for workers)."""
+    sensors = case.sensors()
+    F, Q = dwna_model(case.T, case.sigma_a, case.alpha)
+    truths, x0 = _truths_and_x0(case, filter_name, run_ids, seed, truth_noise)
+    ys = _measurements(case, sensors, truths, run_ids, seed)
+    out = {"run_ids": np.asarray(run_ids)}
+    if filter_name == "bank":
+        res = run_bank(ys, sensors, F, Q, depth=case.bank_depth, n_pu=n_pu, truth=truths,
+                       progress=progress, depth_std=case.bank_depth_std, pv_std=case.bank_pv_std)
+        est, nees, selected = res.x, res.nees, res.selected[:, -1]
+        out["selected"] = selected
+        out["loglik"] = res.loglik[:keep_tracks]
+        out["x_all"] = res.x_all[:keep_tracks, :, :, :3]
+    else:
+        run = run_filters(x0, case.prior_cov(), ys, sensors, F, Q, n_pu=n_pu, truth=truths,
+                          progress=progress)
+        est, nees = run.x, run.nees
+    out["error"] = np.linalg.norm(est[..., :3] - truths[..., :3], axis=-1)  # (n, K)
+    out["nees"] = nees
+    out["truth"] = truths[:keep_tracks, :, :3]
+    out["estimate"] = est[:keep_tracks, :, :3]
+    return out
+
+
+def _init_worker():
+    numba.set_num_threads(1)  # one process per core: no nested threads
+
+
+def _chunks(runs, n):
+    edges = np.linspace(0, runs, n + 1).astype(int)
+    return [list(range(a, b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """Output of :func:`monte_carlo`; arrays over K steps and R runs.
+
+    Attributes
+    ----------
+    time_s : ndarray (K,)
+    trmse_m, pcrlb_m : ndarray (K,)
+        TRMSE (seed 001 eq. (18)) and PCRLB position σ (m).
+    error_m : ndarray (R, K)
+        Position error of every run's reported estimate (m).
+    nees : ndarray (R, K)
+    summary : dict
+        What :func:`write_outputs` writes to summary.json.
+    tracks : dict
+        A few runs' true and estimated positions (and, for the bank, every filter's).
+    """
+
+    time_s: np.ndarray
+    trmse_m: np.ndarray
+    pcrlb_m: np.ndarray
+    error_m: np.ndarray
+    nees: np.ndarray
+    summary: dict
+    tracks: dict
+
+
+def monte_carlo(case="seed001-sim", *, filter="bank", runs=100, seed=0, n_pu=None, workers=1,
+                scheduler=None, chunks=None, truth_noise=False, keep_tracks=5, progress=None):
+    """Monte-Carlo runs of a filter on a case: TRMSE against the PCRLB.
+
+    Parameters
+    ----------
+    case : str or TrackCase
+        A key of :data:`CASES` or a custom case.
+    filter : {"ekf", "puekf", "bank"}
+    runs : int
+        Number of Monte-Carlo runs R ≥ 1.
+    seed : int
+        Seed of every run's noise (run r uses ``default_rng([seed, r])``).
+    n_pu : int, optional
+        Progressive sub-updates (default 1 for "ekf" and "bank", :data:`DEFAULT_N_PU` for
+        "puekf").
+    workers : int
+        Processes to spread the chunks over (1 = this process).
+    scheduler : str or dask.distributed.Client, optional
+        A Dask scheduler address (or client): chunks are submitted to it.
+    chunks : int, optional
+        Number of chunks (default: ``workers``, or 2 × the Dask workers).
+    truth_noise : bool
+        Sample the true tracks from the DWNA model instead of the straight nominal track.
+    keep_tracks : int
+        Runs whose tracks are kept in the result (for plots).
+    progress : tqdm-like, optional
+        A progress bar (``reset(total=)``, ``update(n)``, ``close()``; the command line passes a
+        ``tqdm``), advanced per chunk or per step and closed at the end; None: silent.
+
+    Returns
+    -------
+    MonteCarloResult
+    """
+    case = _case(case)
+    if filter not in FILTERS:
+        raise ValueError(f"filter must be one of {list(FILTERS)}; got {filter!r}")
+    for name, v, lo in (("runs", runs, 1), ("workers", workers, 1), ("seed", seed, 0)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
+            raise ValueError(f"{name} must be an integer ≥ {lo}; got {v!r}")
+    if n_pu is None:
+        n_pu = DEFAULT_N_PU if filter == "puekf" else 1
+    if isinstance(n_pu, bool) or not isinstance(n_pu, (int, np.integer)) or n_pu < 1:
+        raise ValueError(f"n_pu must be an integer ≥ 1; got {n_pu!r}")
+    if filter == "ekf" and n_pu != 1:
+        raise ValueError("filter 'ekf' has n_pu = 1; use filter 'puekf' for progressive updates")
+    sensors = case.sensors()  # fails early (e.g. no layered sea) before any worker starts
+    t0 = time.perf_counter()
+    args = (case, filter, seed, int(n_pu), bool(truth_noise))
+    results = []
+    bar = progress
+    try:
+        if scheduler is not None:
+            results = _run_dask(scheduler, args, runs, chunks, keep_tracks, bar)
+        elif workers > 1:
+            parts = _chunks(runs, chunks or workers)
+            if bar is not None:
+                bar.reset(total=len(parts))
+            with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
+                                     initializer=_init_worker) as pool:
+                futs = [pool.submit(_chunk, case, filter, ids, seed, int(n_pu), bool(truth_noise),
+                                    keep_tracks if n == 0 else 0)
+                        for n, ids in enumerate(parts)]
+                for fut in as_completed(futs):
+                    results.append(fut.result())
+                    if bar is not None:
+                        bar.update(1)
+        else:
+            if bar is not None:
+                bar.reset(total=case.steps)
+            results = [_chunk(case, filter, list(range(runs)), seed, int(n_pu), bool(truth_noise),
+                              keep_tracks, progress=None if bar is None else bar.update)]
+    finally:
+        if bar is not None:
+            bar.close()
+    results.sort(key=lambda r: r["run_ids"][0])
+    elapsed = time.perf_counter() - t0
+    return _collect(case, filter, int(n_pu), seed, runs, truth_noise, sensors, results, elapsed,
+                    workers if scheduler is None else "dask")
+
+
+def _run_dask(scheduler, args, runs, chunks, keep_tracks, bar):
+    from dask.distributed import Client
+    from dask.distributed import as_completed as dask_completed
+
+    own = not isinstance(scheduler, Client)
+    client = Client(scheduler) if own else scheduler
+    try:
+        n_workers = max(1, len(client.scheduler_info().get("workers", {})))
+        parts = _chunks(runs, chunks or 2 * n_workers)
+        if bar is not None:
+            bar.reset(total=len(parts))
+        case, filter_name, seed, n_pu, truth_noise = args
+        futs = [client.submit(_chunk, case, filter_name, ids, seed, n_pu, truth_noise,
+                              keep_tracks if n == 0 else 0, pure=False)
+                for n, ids in enumerate(parts)]
+        results = []
+        for fut in dask_completed(futs):
+            results.append(fut.result())
+            if bar is not None:
+                bar.update(1)
+        return results
+    finally:
+        if own:
+            client.close()
+
+
+def _collect(case, filter_name, n_pu, seed, runs, truth_noise, sensors, results, elapsed, workers):
+    error = np.concatenate([r["error"] for r in results])  # (R, K)
+    nees = np.concatenate([r["nees"] for r in results])
+    run_ids = np.concatenate([r["run_ids"] for r in results])
+    truths, _ = _truths_and_x0(case, filter_name, run_ids, seed, truth_noise)
+    if filter_name == "bank":
+        prior = dict(prior_info=case.bank_prior_info())
+    else:
+        prior = dict(prior_cov=case.prior_cov())
+    bound = pcrlb(truths, sensors, T=case.T, sigma_a=case.sigma_a, alpha=case.alpha,
+                  **prior).position_std
+    trmse = np.sqrt(np.mean(error**2, axis=0))
+    limit = max(5.0 * bound[-1], 10.0) if np.isfinite(bound[-1]) else np.inf
+    diverged = error[:, -1] > limit
+    with np.errstate(invalid="ignore"):
+        finite = np.isfinite(nees)
+    summary = {
+        "case": case.name,
+        "description": case.description,
+        "filter": filter_name,
+        "n_pu": n_pu,
+        "runs": int(runs),
+        "seed": int(seed),
+        "steps": int(case.steps),
+        "truth_noise": bool(truth_noise),
+        "diverged": float(diverged.mean()),
+        "diverged_rule": "final position error > max(5 × final PCRLB, 10 m)",
+        "nees": float(np.mean(nees[finite])) if finite.any() else None,
+        "nees_dof": 7,
+        "nees_finite_share": float(finite.mean()),
+        "trmse_final_m": float(trmse[-1]),
+        "trmse_mean_m": float(np.mean(trmse)),
+        "pcrlb_final_m": float(bound[-1]),
+        "trmse_final_converged_m": float(np.sqrt(np.mean(error[~diverged, -1] ** 2)))
+        if (~diverged).any() else None,
+        "elapsed_s": round(elapsed, 3),
+        "workers": workers,
+    }
+    tracks = {"truth": results[0]["truth"], "estimate": results[0]["estimate"]}
+    if filter_name == "bank":
+        labels = hypothesis_labels()
+        selected = np.concatenate([r["selected"] for r in results])
+        centre = np.mean(sensors.stations[:, :2], axis=0)
+        nearest = nearest_hypothesis(truths[:, 0], centre)
+        counts = np.bincount(selected, minlength=len(labels))
+        summary["winners"] = {labels[i]: int(c) for i, c in enumerate(counts)}
+        summary["nearest_hypothesis"] = labels[int(np.bincount(nearest).argmax())]
+        summary["nearest_wins"] = float(np.mean(selected == nearest))
+        summary["nearest_bearing_wins"] = float(np.mean(selected % 4 == nearest % 4))
+        tracks["x_all"] = results[0]["x_all"]
+        tracks["loglik"] = results[0]["loglik"]
+        tracks["labels"] = labels
+    else:
+        summary["winners"] = {}
+    t = case.T * np.arange(case.steps)
+    return MonteCarloResult(time_s=t, trmse_m=trmse, pcrlb_m=bound, error_m=error, nees=nees,
+                            summary=summary, tracks=tracks)
