@@ -11,6 +11,7 @@ import pytest
 from scipy import stats
 
 import core
+from core.cli import track as track_cli
 from core.tracking import montecarlo as tr
 
 STATIONS = np.array([[0.0, -10.0, 20.0], [0.0, 10.0, 20.0]])
@@ -291,7 +292,7 @@ def test_dask_scheduler_gives_the_same_results():
 
 def test_cli_in_two_processes_writes_csv_summary_and_png(tmp_path):
     out = tmp_path / "run"
-    assert tr.main(["--case", "seed001-sim", "--filter", "ekf", "--runs", "4", "--workers", "2",
+    assert track_cli.main(["--case", "seed001-sim", "--filter", "ekf", "--runs", "4", "--workers", "2",
                     "--seed", "2", "--out", str(out)]) == 0
     lines = (out / "trmse.csv").read_text().splitlines()
     assert lines[0] == "step,time_s,trmse_m,pcrlb_m" and len(lines) == 301
