@@ -378,16 +378,17 @@ class Scenario(param.Parameterized):
                 "whole space." if said else "")
         self.param.update(message=note, refused=["sea_model"] if note else [])
 
-    @param.depends("sensor", "sensor_b", "comparison", "measure", watch=True)
+    @param.depends("sensor", "sensor_b", "comparison", "measure", watch=True, on_init=True)
     def _all_rows_for_magnetic(self):
         """A magnetic kind on the maps moves the measure off the paper's square-Γ rule (the
         electric paper's, refused by core for magnetic kinds) to the CRLB, and says so."""
-        if self._restoring or self.measure not in SQUARE_MEASURES or not self.magnetic_maps():
+        if getattr(self, "_restoring", False) or self.measure not in SQUARE_MEASURES or not self.magnetic_maps():
             return
         self._quietly(measure="CRLB position error (m)")
         self.param.update(message=f"{self.param['measure'].label}: the paper's square-Γ rule is the electric "
                                   "paper's; magnetic sensors use all rows of N instants: measure → CRLB "
-                                  "position error.", refused=["measure"])
+                                  "position error.",
+                          refused=["sensor" if SENSORS[self.sensor] != "E" else "sensor_b"])
 
     def magnetic_maps(self):
         """Whether map A or B measures with a magnetic kind."""
