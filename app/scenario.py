@@ -489,7 +489,11 @@ class Scenario(param.Parameterized):
         nT/m; a static field does not see the sea)."""
         kind = SENSORS[self.sensor] if kind is None else kind
         known = STATE_SETS[self.state_set]
-        common = dict(T=self.T, steps=int(self.steps), measure=MEASURE_LABELS[self.measure])
+        # as the Scenario moves it (_all_rows_for_magnetic): also for values without the watcher
+        # (a design snapshot holds no measure; its default is the paper's)
+        measure = ("crlb_position" if self.measure in SQUARE_MEASURES and self.magnetic_maps()
+                   else MEASURE_LABELS[self.measure])
+        common = dict(T=self.T, steps=int(self.steps), measure=measure)
         if kind != "E":
             noise = {"B": self.noise_b, "G": self.noise_g, "BG": (self.noise_b, self.noise_g)}[kind]
             return dict(common, known=MAGNETIC_KNOWN if known else (), sensor=core.Sensor(kind, noise))
