@@ -230,6 +230,9 @@ def unobservable_note(s: Scenario, results, stations, moments, kinds=("E", "E"))
                 f"({probe[0]:.0f}, {probe[1]:.0f}, {probe[2]:.0f}) m: n ∝ (x−sx, y−sy, z−sz, vx, vy, "
                 f"3Ph, 3Pv) = ({nice}). Use 'moments known' or a second station."
             )
+        elif kind != "E" and not any(mom):
+            lines.append(f"{name}: the moment is m = (0, 0, 0) A·m²: the target has no magnetic "
+                         "field, so nothing about it is observable. Set m_x, m_y or m_z.")
         elif kind in ("B", "G") and len(st) == 1 and not options["known"]:
             power, what = (3, "B(λr, λ³m) = B") if kind == "B" else (4, "G(λr, λ⁴m) = G")
             probe = _probe(s, st, mom)
@@ -373,6 +376,8 @@ def value_label(label, kind):
 def filename(s, preset=""):
     """A saved map's file name (no extension): the paper figure, or the comparison, and the plane."""
     stem = preset or COMPARISONS[s.comparison]
+    kind = SENSORS[s.sensor]  # a magnetic kind is named (the electric names are unchanged)
+    stem += "" if kind == "E" or preset else f"_{KIND_NAMES[kind][0]}"
     slug = "".join(c if c.isalnum() else "_" for c in f"{stem}_{s.plane}_{s.measure.split(' ')[0]}")
     return "_".join(part for part in slug.lower().split("_") if part)
 

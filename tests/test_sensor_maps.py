@@ -62,6 +62,7 @@ def test_captions_colour_bars_and_hovers_name_the_kind_and_its_units():
     assert figs.colorbars[0].title.startswith("CRLB position error (1σ, m), gradiometer (nT/m)")
     assert figs.hovers[0].tooltips[-1][0] == "CRLB position error (1σ, m), gradiometer (nT/m)"
     assert "rank 7 of 8" in figs.labels[0].text and figs.labels[0].visible
+    assert p.filename == "dual_vs_single_gradiometer_x_y_crlb"
     s.sensor = BOTH
     both = compute(Snapshot.of(s)).captions[0]
     assert "magnetometer + gradiometer" in both and "noise 0.01 nT and 0.01 nT/m" in both
@@ -137,3 +138,9 @@ def test_inputs_follow_the_kind():
     assert applies("sensor_b", s, MAPS_TAB) and applies("layout", s, MAPS_TAB)
     s.comparison = "Moment split B − A (Fig. 4)"
     assert applies("mz_b", s, MAPS_TAB) and not applies("Ph_b", s, MAPS_TAB)
+
+
+def test_a_zero_magnetic_moment_is_said_not_computed_into_a_direction():
+    p = compute(Snapshot.of(Scenario(sensor=GRADIOMETER, mx=0.0, my=0.0, mz=0.0, **SMALL)))
+    assert not p.a.observable.any() and not p.b.observable.any()
+    assert p.note.count("the target has no magnetic field") == 2
