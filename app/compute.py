@@ -366,11 +366,19 @@ def caption(s, moments=None, stations=None, kinds="E"):
             f"noise {' and '.join(noises)}, N = {s.steps}, {model}{states}")
 
 
-def value_label(label, kind):
-    """A colour bar's label: the measure's, and for a magnetic kind the kind and its unit."""
+#: A measure's name on a magnetic map's colour bar: short, as the bar's title must fit its height
+#: with the kind after it.
+SHORT_MEASURES = {"crlb_position": "CRLB 1σ (m)", "d_optimal": "½·log10 det F"}
+#: A magnetic kind on a colour bar.
+SHORT_KINDS = {"B": "magnetometer", "G": "gradiometer", "BG": "B + G"}
+
+
+def value_label(measure, kind):
+    """A colour bar's label: the measure's (core.MEASURES), and for a magnetic kind a short name
+    of the measure, the kind and the unit of its readings ("CRLB 1σ (m), gradiometer (nT/m)")."""
     if kind == "E":
-        return label
-    return f"{label}, {KIND_NAMES[kind][0]} ({KIND_NAMES[kind][1]})"
+        return core.MEASURES[measure][0]
+    return f"{SHORT_MEASURES[measure]}, {SHORT_KINDS[kind]} ({KIND_NAMES[kind][1]})"
 
 
 def filename(s, preset=""):
@@ -417,7 +425,7 @@ def compute(snapshot: Snapshot) -> Panels:
                   caption(s, (mom_a, mom_b), f"A: {layout_text(st_a)}, B: {layout_text(st_b)}",
                           (kind_a, kind_b))),
         filename=filename(s, preset), kinds=(kind_a, kind_b),
-        value_labels=(value_label(label, kind_a), value_label(label, kind_b)),
+        value_labels=(value_label(measure, kind_a), value_label(measure, kind_b)),
     )
     p = dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
     if not log_scale:

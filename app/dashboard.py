@@ -249,7 +249,8 @@ def create_app():
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
                         *[scenario.param[k] for k in PRESETS[name]])
-        return pn.widgets.Button(name=name, button_type="primary", button_style=style, width=90,
+        return pn.widgets.Button(name=name, button_type="primary", button_style=style,
+                                 width=90 if len(name) <= 6 else 150,  # a seed's name is longer
                                  css_classes=[f"w-preset-{name[-1]}"],
                                  on_click=lambda e: scenario.apply_preset(name))
 

@@ -69,7 +69,7 @@ def test_choosing_gradiometer_then_both_redraws_with_the_kinds_captions_and_veil
     assert "rank 7 of 8" in a["label"] and "gradiometer" in a["label"]  # said inside its frame
     assert a["veiled"] > 0 and b["veiled"] == 0 and b["label"] == ""
     assert "nT/m" in a["caption"] and "A·m²" in a["caption"] and "V/m" not in a["caption"]
-    assert a["bar"].startswith("CRLB position error (1σ, m), gradiometer (nT/m)")
+    assert a["bar"] == "CRLB 1σ (m), gradiometer (nT/m), log scale"
     # the inputs follow the kind: the moment vector and the gradiometer's noise, not P_h and V/m
     page.locator(".w-mx").first.wait_for(state="visible", timeout=15_000)
     assert not page.locator(".w-Ph").first.is_visible()
@@ -83,7 +83,7 @@ def test_choosing_gradiometer_then_both_redraws_with_the_kinds_captions_and_veil
     a = drawn[0]
     assert a["label"] == "" and a["veiled"] == 0  # B + G at one station is observable (spec §11)
     assert "noise 0.01 nT and 0.01 nT/m" in a["caption"].replace("\n", " ")
-    assert "magnetometer + gradiometer (nT, nT/m)" in a["bar"]
+    assert a["bar"] == "CRLB 1σ (m), B + G (nT, nT/m), log scale"
 
     # the Track tab's filters are electric: it says so rather than track with a magnetic kind
     page.get_by_text("Track", exact=True).click()

@@ -56,16 +56,18 @@ def test_captions_colour_bars_and_hovers_name_the_kind_and_its_units():
         assert "sensor gradiometer" in text and "m = (-3000, 1000, 5000) A·m²" in text
         assert "noise 0.01 nT/m" in text and "V/m" not in text and "σ =" not in text
         assert "all 8 unknown" in text
-    assert p.value_labels == ("CRLB position error (1σ, m), gradiometer (nT/m)",) * 2
+    assert p.value_labels == ("CRLB 1σ (m), gradiometer (nT/m)",) * 2
     figs = map_figures.build()
     map_figures.fill(figs, p)
-    assert figs.colorbars[0].title.startswith("CRLB position error (1σ, m), gradiometer (nT/m)")
-    assert figs.hovers[0].tooltips[-1][0] == "CRLB position error (1σ, m), gradiometer (nT/m)"
+    assert figs.colorbars[0].title == "CRLB 1σ (m), gradiometer (nT/m), log scale"
+    assert figs.hovers[0].tooltips[-1][0] == "CRLB 1σ (m), gradiometer (nT/m)"
     assert "rank 7 of 8" in figs.labels[0].text and figs.labels[0].visible
     assert p.filename == "dual_vs_single_gradiometer_x_y_crlb"
     s.sensor = BOTH
     both = compute(Snapshot.of(s)).captions[0]
     assert "magnetometer + gradiometer" in both and "noise 0.01 nT and 0.01 nT/m" in both
+    s.measure = "D-optimal ½·log10 det F"
+    assert compute(Snapshot.of(s)).value_labels[0] == "½·log10 det F, B + G (nT, nT/m)"
 
 
 def test_the_electric_default_names_no_kind():
