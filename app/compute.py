@@ -21,6 +21,7 @@ from .scenario import (
     CRITERIA,
     DIFFERENCES,
     PAPER_MAPS,
+    SENSORS,
     Scenario,
     ScenarioValues,
     preset_of,
@@ -33,10 +34,11 @@ KERNEL_LOCK = threading.Lock()
 
 #: Values that define the comparison maps; everything else in Scenario is presentation or design.
 FIELDS = tuple(sorted(set(ACCEPTED) - {"threshold"} | {"plane", "layout", "comparison", "difference",
-                                                       "measure", "model", "state_set", "sea_model"}))
+                                                       "measure", "model", "state_set", "sea_model",
+                                                       "sensor", "sensor_b"}))
 #: Values that define the layout-design tab.
 DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure", "layout", "k", "Ph_b",
-                                            "Pv_b", "d_ref"} | {"stations", "criterion", "threshold",
+                                            "Pv_b", "d_ref", "sensor_b", "mx_b", "my_b", "mz_b"} | {"stations", "criterion", "threshold",
                                                                 "layout_kind", "n_stations"}))
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
 SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
@@ -90,6 +92,8 @@ class Panels:
     filename: str = "observability_map"  # of a saved PNG, after the scenario
     runaway: tuple = ()  # CRLB maps: bool (n, n) of A, B, difference where the bound runs away
     far_note: str = ""  # plain text on the runaway points; empty if none
+    kinds: tuple = ("E", "E")  # sensor kind of A and B (core.Sensor kinds: E, B, G, BG)
+    value_labels: tuple = ()  # colour-bar label of A and B (naming a magnetic kind and its unit)
 
     def shown(self, which):
         """The values map ``which`` (0 A, 1 B, 2 difference) is coloured by; NaN where none."""
@@ -103,23 +107,45 @@ class Panels:
         return np.where(np.isfinite(out), out, np.nan)
 
 
+#: A sensor kind in titles and captions (core kind -> words, and the unit of its readings).
+KIND_NAMES = {"E": ("electric", "V/m"), "B": ("magnetometer", "nT"), "G": ("gradiometer", "nT/m"),
+              "BG": ("magnetometer + gradiometer", "nT, nT/m")}
+
+
+def moment_text(moments, kind):
+    """A map's moments in words: P = (P_h, P_v) A·m, or m = (m_x, m_y, m_z) A·m²."""
+    if kind == "E":
+        return "P = (" + ", ".join(f"{v:g}" for v in moments) + ") A·m"
+    return "m = (" + ", ".join(f"{v:g}" for v in moments) + ") A·m²"
+
+
 def scenarios_ab(s: Scenario):
-    """(stations, moments, title) for A and B under the chosen comparison."""
+    """(stations, moments, title, sensor kind) for A and B under the chosen comparison; moments
+    are (P_h, P_v) A·m for the electric kind, (m_x, m_y, m_z) A·m² for a magnetic one."""
     single, dual = core.single_station(s.h), core.dual_station(s.h, s.d)
     layout = single if s.layout == "single" else dual
     lname = "single" if s.layout == "single" else f"dual d = {s.d:g} m"
-    mom = (s.Ph, s.Pv)
+    kind_a = SENSORS[s.sensor]
+    mom = s.moments(kind_a)
+    # electric titles are the paper's (unchanged); a magnetic kind is named in each title
+    tag = "" if kind_a == "E" else f" {KIND_NAMES[kind_a][0]}"
     kind = COMPARISONS[s.comparison]
     if kind == "dual_vs_single":
-        return ((single, mom, "A: single station"), (dual, mom, f"B: dual, d = {s.d:g} m"))
+        return ((single, mom, f"A: single{tag}" if tag else "A: single station", kind_a),
+                (dual, mom, f"B: dual{tag}, d = {s.d:g} m", kind_a))
     if kind == "moments_scaled":
-        return ((layout, mom, f"A: {lname}, P = ({s.Ph:g}, {s.Pv:g}) A·m"),
-                (layout, (s.k * s.Ph, s.k * s.Pv), f"B: {lname}, moments × {s.k:g}"))
+        return ((layout, mom, f"A: {lname}{tag}, {moment_text(mom, kind_a)}", kind_a),
+                (layout, tuple(s.k * v for v in mom), f"B: {lname}{tag}, moments × {s.k:g}", kind_a))
     if kind == "moment_split":
-        return ((layout, mom, f"A: {lname}, P = ({s.Ph:g}, {s.Pv:g}) A·m"),
-                (layout, (s.Ph_b, s.Pv_b), f"B: {lname}, P = ({s.Ph_b:g}, {s.Pv_b:g}) A·m"))
+        mom_b = (s.Ph_b, s.Pv_b) if kind_a == "E" else (s.mx_b, s.my_b, s.mz_b)
+        return ((layout, mom, f"A: {lname}{tag}, {moment_text(mom, kind_a)}", kind_a),
+                (layout, mom_b, f"B: {lname}{tag}, {moment_text(mom_b, kind_a)}", kind_a))
+    if kind == "sensor_kinds":
+        kind_b = SENSORS[s.sensor_b]
+        return ((layout, mom, f"A: {lname}, {KIND_NAMES[kind_a][0]}", kind_a),
+                (layout, s.moments(kind_b), f"B: {lname}, {KIND_NAMES[kind_b][0]}", kind_b))
     ref = core.dual_station(s.h, s.d_ref)
-    return ((ref, mom, f"A: dual, d = {s.d_ref:g} m"), (dual, mom, f"B: dual, d = {s.d:g} m"))
+    return ((ref, mom, f"A: dual{tag}, d = {s.d_ref:g} m", kind_a), (dual, mom, f"B: dual{tag}, d = {s.d:g} m", kind_a))
 
 
 def difference(a, b, measure, mode):
@@ -144,13 +170,20 @@ def blank_reason(measure, mode):
     return "undefined: on a station"
 
 
-def unobservable_text(s, stations):
+def unobservable_text(s, stations, kind="E"):
     """Hover text of a veiled point: the rank where it is known (one station with the moments
-    unknown: rank 6 at every point, spec §4), else only that Γ is rank-deficient."""
-    options = s.core_options()
-    if len(stations) == 1 and not options["known"] and options["sea"] is None:
-        return "unobservable (rank 6): colours are round-off"
-    n = 7 - len(options["known"])
+    unknown: rank 6 of 7 electric, rank 7 of 8 for one magnetometer or one gradiometer at every
+    point, spec §4 and §11), else only that Γ is rank-deficient."""
+    options = s.core_options(kind)
+    if kind == "E":
+        if len(stations) == 1 and not options["known"] and options["sea"] is None:
+            return "unobservable (rank 6): colours are round-off"
+        n = 7 - len(options["known"])
+    else:
+        if len(stations) == 1 and not options["known"] and kind in ("B", "G"):
+            return (f"unobservable (rank 7 of 8): one {KIND_NAMES[kind][0]} cannot tell range "
+                    "from moment strength")
+        n = 8 - len(options["known"])
     return f"unobservable (rank < {n}: σ_min/σ_max ≤ {core.RANK_RTOL:g}): colours are round-off"
 
 
@@ -164,23 +197,29 @@ def colour_range(*arrays):
     return (float(lo), float(hi if hi > lo else lo + 1.0))
 
 
-def unobservable_note(s: Scenario, results, stations, moments):
+def _probe(s, st, moments):
+    """A point of the map's own plane near station ``st`` (in x–z: at its fixed y)."""
+    sx, sy, sz = st[0]
+    on_xy = s.plane == "x–y"
+    return np.array([sx + s.extent / 3, sy + s.extent / 3 if on_xy else s.y,
+                     s.z if on_xy else 0.5 * (s.z_min + s.z_max), *s.velocity(), *moments])
+
+
+def unobservable_note(s: Scenario, results, stations, moments, kinds=("E", "E")):
     """Plain-text explanation where a map is mostly structurally unobservable, else ''.
-    ``results``: ((title, core.MapResult), ...) of A and B; ``stations`` and ``moments`` (A·m):
-    each map's own (B's unobservable direction is B's, not A's)."""
+    ``results``: ((title, core.MapResult), ...) of A and B; ``stations``, ``moments`` (A·m, or
+    A·m² magnetic) and ``kinds`` (sensor kinds): each map's own (B's unobservable direction is
+    B's, not A's)."""
     lines = []
-    for (name, res), st, (ph, pv) in zip(results, stations, moments):
+    for (name, res), st, mom, kind in zip(results, stations, moments, kinds):
         frac = 1.0 - res.observable.mean()
         if frac < 0.5:
             continue
-        if len(st) == 1 and not s.core_options()["known"]:
-            sx, sy, sz = st[0]
-            # a point of the map's own plane (in x–z: at its fixed y, not y = sy + extent/3)
-            on_xy = s.plane == "x–y"
-            probe = np.array([sx + s.extent / 3, sy + s.extent / 3 if on_xy else s.y,
-                              s.z if on_xy else 0.5 * (s.z_min + s.z_max), *s.velocity(), ph, pv])
+        options = s.core_options(kind)
+        if kind == "E" and len(st) == 1 and not options["known"]:
+            probe = _probe(s, st, mom)
             n = core.unobservable_direction(probe, st, T=s.T, sigma=s.sigma,
-                                            model=s.core_options()["model"], sea=s.core_options()["sea"])
+                                            model=options["model"], sea=options["sea"])
             nice = ", ".join(f"{v:+.3f}" for v in n)
             lines.append(
                 f"{name}: one station, source strength unknown: rank Γ = 6 < 7 at every point "
@@ -191,10 +230,27 @@ def unobservable_note(s: Scenario, results, stations, moments):
                 f"({probe[0]:.0f}, {probe[1]:.0f}, {probe[2]:.0f}) m: n ∝ (x−sx, y−sy, z−sz, vx, vy, "
                 f"3Ph, 3Pv) = ({nice}). Use 'moments known' or a second station."
             )
+        elif kind != "E" and not any(mom):
+            lines.append(f"{name}: the moment is m = (0, 0, 0) A·m²: the target has no magnetic "
+                         "field, so nothing about it is observable. Set m_x, m_y or m_z.")
+        elif kind in ("B", "G") and len(st) == 1 and not options["known"]:
+            power, what = (3, "B(λr, λ³m) = B") if kind == "B" else (4, "G(λr, λ⁴m) = G")
+            probe = _probe(s, st, mom)
+            n = core.unobservable_direction(probe, st, T=s.T, steps=int(s.steps), sensor=options["sensor"])
+            nice = ", ".join(f"{v:+.3f}" for v in n)
+            lines.append(
+                f"{name}: one {KIND_NAMES[kind][0]}, moment unknown: rank Γ = 7 < 8 at every point "
+                f"({frac:.0%} of the map flagged; spec §11). {what}: moving the target λ times farther "
+                f"(and faster) with its moment × λ^{power} changes no reading, for any number of "
+                f"instants, so range and moment strength cannot be told apart. Unobservable direction at "
+                f"({probe[0]:.0f}, {probe[1]:.0f}, {probe[2]:.0f}) m: n ∝ (x−sx, y−sy, z−sz, vx, vy, "
+                f"{power}mx, {power}my, {power}mz) = ({nice}). Use both kinds (B + G), a second "
+                "station or 'moments known'."
+            )
         else:
             line = f"{name}: {frac:.0%} of the map is numerically singular (σ_min/σ_max ≤ {core.RANK_RTOL:g})."
-            n_free = 7 - len(s.core_options()["known"])
-            if core.MEASURES[s.core_options()["measure"]][2] and 3 * len(st) >= n_free:
+            n_free = 7 - len(options["known"])
+            if kind == "E" and core.MEASURES[options["measure"]][2] and 3 * len(st) >= n_free:
                 line += (" The paper's square rule keeps only the first instant's rows here, and one "
                          "snapshot cannot see the speed: use the D-optimal or CRLB measure (all rows, "
                          "N instants).")
@@ -261,61 +317,115 @@ def layout_text(stations):
     return f"{len(st)} stations"
 
 
-def caption(s, moments=None, stations=None):
-    """The parameters of a scenario's map as one line of plain text. ``moments``: (P_h, P_v) of
-    the map (A·m; default the scenario's), or ((P_h, P_v) of A, of B) for the difference map;
-    ``stations``: the map's (S, 3) stations (m), or a text naming A's and B's."""
-    moments = (s.Ph, s.Pv) if moments is None else moments
-    if np.ndim(moments) == 2 and tuple(moments[0]) != tuple(moments[1]):
-        (pha, pva), (phb, pvb) = moments
-        power = f"P_A = ({pha:g}, {pva:g}) A·m, P_B = ({phb:g}, {pvb:g}) A·m"
+def _kind_pair(kinds):
+    return (kinds, kinds) if isinstance(kinds, str) else tuple(kinds)
+
+
+def caption(s, moments=None, stations=None, kinds="E"):
+    """The parameters of a scenario's map as one line of plain text. ``moments``: the map's
+    ((P_h, P_v) A·m or (m_x, m_y, m_z) A·m²; default the scenario's), or (A's, B's) for the
+    difference map; ``stations``: the map's (S, 3) stations (m), or a text naming A's and B's;
+    ``kinds``: the map's sensor kind, or (A's, B's). Electric maps name no kind (the paper's)."""
+    ka, kb = _kind_pair(kinds)
+    pair = not isinstance(kinds, str)
+    moments = s.moments(ka) if moments is None else moments
+    if pair or (len(moments) == 2 and np.ndim(moments[0]) == 1):
+        mom_a, mom_b = moments
     else:
-        ph, pv = moments[0] if np.ndim(moments) == 2 else moments
-        power = f"P = ({ph:g}, {pv:g}) A·m"
+        mom_a = mom_b = moments
+    if tuple(mom_a) != tuple(mom_b) or (ka == "E") != (kb == "E"):
+        sym = {"E": "P", "B": "m", "G": "m", "BG": "m"}
+        power = (f"{sym[ka]}_A {moment_text(mom_a, ka)[2:]}, {sym[kb]}_B {moment_text(mom_b, kb)[2:]}")
+    else:
+        power = moment_text(mom_a, ka)
+    used = [ka] if ka == kb else [ka, kb]
+    sensor = "" if used == ["E"] else (
+        f"sensor {KIND_NAMES[ka][0]}, " if len(used) == 1 else
+        f"sensors A {KIND_NAMES[ka][0]}, B {KIND_NAMES[kb][0]}, ")
     vx, vy = (0.0 if abs(c) < 1e-9 * s.speed else c for c in s.velocity())  # cos 90° is 6e-17
     where = (f"target depth z = {s.z:g} m" if s.plane == "x–y"
              else f"x–z plane at y = {s.y:g} m, z {s.z_min:g}–{s.z_max:g} m")
     layout = f"{stations}, " if isinstance(stations, str) else (
         "" if stations is None else f"{layout_text(stations)}, ")
     n = int(s.resolution)
-    return (f"{power}, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, {layout}"
-            f"stations at depth h = {s.h:g} m, grid {n} × {n} over x ±{s.extent:g} m, T = {s.T:g} s, σ = {s.sigma:g} S/m, {sea_text(s)}"
-            f"noise {s.noise:.3g} V/m, N = {s.steps}, {s.model}, {s.state_set}")
+    electric = "E" in used
+    medium = (f"σ = {s.sigma:g} S/m, {sea_text(s)}" if electric else
+              "static field (the sea does not change it), ")
+    noises = []
+    if electric:
+        noises.append(f"{s.noise:.3g} V/m")
+    if any(k in ("B", "BG") for k in used):
+        noises.append(f"{s.noise_b:.3g} nT")
+    if any(k in ("G", "BG") for k in used):
+        noises.append(f"{s.noise_g:.3g} nT/m")
+    states = s.state_set if electric else (
+        "all 8 unknown" if s.state_set == "all 7 unknown" else "moments known (5 states)")
+    model = f"{s.model}, " if electric else ""
+    return (f"{sensor}{power}, v = ({vx:.3g}, {vy:.3g}) m/s, {where}, {layout}"
+            f"stations at depth h = {s.h:g} m, grid {n} × {n} over x ±{s.extent:g} m, T = {s.T:g} s, {medium}"
+            f"noise {' and '.join(noises)}, N = {s.steps}, {model}{states}")
+
+
+#: A measure's name on a magnetic map's colour bar: short, as the bar's title must fit its height
+#: with the kind after it.
+SHORT_MEASURES = {"crlb_position": "CRLB 1σ (m)", "d_optimal": "½·log10 det F"}
+#: A magnetic kind on a colour bar.
+SHORT_KINDS = {"B": "magnetometer", "G": "gradiometer", "BG": "B + G"}
+
+
+def value_label(measure, kind):
+    """A colour bar's label: the measure's (core.MEASURES), and for a magnetic kind a short name
+    of the measure, the kind and the unit of its readings ("CRLB 1σ (m), gradiometer (nT/m)")."""
+    if kind == "E":
+        return core.MEASURES[measure][0]
+    return f"{SHORT_MEASURES[measure]}, {SHORT_KINDS[kind]} ({KIND_NAMES[kind][1]})"
 
 
 def filename(s, preset=""):
     """A saved map's file name (no extension): the paper figure, or the comparison, and the plane."""
     stem = preset or COMPARISONS[s.comparison]
+    kind = SENSORS[s.sensor]  # a magnetic kind is named (the electric names are unchanged)
+    stem += "" if kind == "E" or preset else f"_{KIND_NAMES[kind][0]}"
     slug = "".join(c if c.isalnum() else "_" for c in f"{stem}_{s.plane}_{s.measure.split(' ')[0]}")
     return "_".join(part for part in slug.lower().split("_") if part)
+
+
+def _core_options(s, kind):
+    opts = s.core_options(kind)
+    opts.pop("measure")
+    return opts
 
 
 def compute(snapshot: Snapshot) -> Panels:
     """The maps for one scenario. Pure: same snapshot, same numbers."""
     s = snapshot.scenario()
-    opts = s.core_options()
-    measure = opts.pop("measure")
+    measure = s.core_options()["measure"]
     plane = s.core_plane()
-    (st_a, mom_a, title_a), (st_b, mom_b, title_b) = scenarios_ab(s)
+    (st_a, mom_a, title_a, kind_a), (st_b, mom_b, title_b, kind_b) = scenarios_ab(s)
     vel = s.velocity()
     with KERNEL_LOCK:
-        a = core.evaluate_map(plane, st_a, velocity=vel, moments=mom_a, measure=measure, **opts)
-        b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure, **opts)
+        a = core.evaluate_map(plane, st_a, velocity=vel, moments=mom_a, measure=measure,
+                              **_core_options(s, kind_a))
+        b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure,
+                              **_core_options(s, kind_b))
     diff, diff_label, diff_short = difference(a, b, measure, s.difference)
     label, unit, _ = core.MEASURES[measure]
-    note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b), (mom_a, mom_b))
+    note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b), (mom_a, mom_b),
+                             (kind_a, kind_b))
     log_scale = measure == "crlb_position"  # metres over decades: coloured by log10 (as the design tab)
     preset = preset_of(s, FIELDS) or ""
     p = Panels(
         plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_short),
         stations=(st_a, st_b), measure=measure, value_label=label, value_unit=unit,
         diff_label=diff_label, clim=(0.0, 1.0), note=note, log_scale=log_scale,
-        unobservable=(unobservable_text(s, st_a), unobservable_text(s, st_b)),
+        unobservable=(unobservable_text(s, st_a, kind_a), unobservable_text(s, st_b, kind_b)),
         paper=PAPER_MAPS.get(preset, ((), "")), preset=preset,
         blank=blank_reason(measure, s.difference),
-        captions=(caption(s, mom_a, st_a), caption(s, mom_b, st_b),
-                  caption(s, (mom_a, mom_b), f"A: {layout_text(st_a)}, B: {layout_text(st_b)}")),
-        filename=filename(s, preset),
+        captions=(caption(s, mom_a, st_a, kind_a), caption(s, mom_b, st_b, kind_b),
+                  caption(s, (mom_a, mom_b), f"A: {layout_text(st_a)}, B: {layout_text(st_b)}",
+                          (kind_a, kind_b))),
+        filename=filename(s, preset), kinds=(kind_a, kind_b),
+        value_labels=(value_label(measure, kind_a), value_label(measure, kind_b)),
     )
     p = dataclasses.replace(p, clim=colour_range(p.shown(0), p.shown(1)))
     if not log_scale:
@@ -327,9 +437,7 @@ def compute(snapshot: Snapshot) -> Panels:
 
 
 def _fisher_options(s: Scenario):
-    opts = s.core_options()
-    opts.pop("measure")
-    return opts
+    return _core_options(s, None)
 
 
 def xy_region(s: Scenario, n):
@@ -351,7 +459,7 @@ def design(snapshot: Snapshot) -> Design:
     stations = np.array(s.stations, dtype=float)
     plane = xy_region(s, int(s.resolution))
     with KERNEL_LOCK:
-        errors = core.crlb_maps(plane, stations, velocity=s.velocity(), moments=(s.Ph, s.Pv),
+        errors = core.crlb_maps(plane, stations, velocity=s.velocity(), moments=s.moments(),
                                 **_fisher_options(s))
     return Design(plane=plane, stations=stations, errors=errors)
 
@@ -359,7 +467,7 @@ def design(snapshot: Snapshot) -> Design:
 def error_at(snapshot: Snapshot, x, y):
     """CRLB errors (core.CrlbErrors of scalars) of a target at (x, y, z) for the custom layout."""
     s = snapshot.scenario()
-    state = [x, y, s.z, *s.velocity(), s.Ph, s.Pv]
+    state = [x, y, s.z, *s.velocity(), *s.moments()]
     try:
         return core.horizontal_error_ellipse(state, np.array(s.stations, dtype=float),
                                              **_fisher_options(s))
@@ -382,7 +490,7 @@ def best_spacing(snapshot: Snapshot) -> Spacing:
     s = snapshot.scenario()
     key = CRITERIA[s.criterion]
     region = xy_region(s, REGION_RESOLUTION)
-    common = dict(velocity=s.velocity(), moments=(s.Ph, s.Pv), **_fisher_options(s))
+    common = dict(velocity=s.velocity(), moments=s.moments(), **_fisher_options(s))
     with KERNEL_LOCK:
         result = core.best_spacing(region, d_range=SPACING_RANGE, n_curve=SPACING_POINTS, h=s.h,
                                    criterion=key, threshold=s.threshold, **common)
@@ -402,7 +510,7 @@ def optimised_layout(snapshot: Snapshot):
     s = snapshot.scenario()
     with KERNEL_LOCK:
         return core.optimise_layout(s.layout_kind, int(s.n_stations), xy_region(s, 31), h=s.h,
-                                    velocity=s.velocity(), moments=(s.Ph, s.Pv),
+                                    velocity=s.velocity(), moments=s.moments(),
                                     criterion=CRITERIA[s.criterion], threshold=s.threshold,
                                     **_fisher_options(s))  # spacing up to what fits in the region
 

@@ -14,21 +14,21 @@ from bokeh.models.formatters import PrintfTickFormatter
 
 from . import maps, url
 from .calibration import calibration_tab
-from .compute import PanelCache
+from .compute import KIND_NAMES, PanelCache
 from .design import design_tab
 from .inputs import number_input
-from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, Scenario
+from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, SENSORS, Scenario
 from .track import track_tab
 
 #: Sidebar sections: (title, parameters, collapsed?).
 SECTIONS = (
-    ("View", ["measure", "comparison", "difference", "plane"], False),
-    ("Target", ["Ph", "Pv", "speed", "heading", "z", "y"], False),
+    ("View", ["sensor", "measure", "comparison", "sensor_b", "difference", "plane"], False),
+    ("Target", ["Ph", "Pv", "mx", "my", "mz", "speed", "heading", "z", "y"], False),
     ("Stations", ["h", "d", "layout"], False),
     ("Sea", ["sea_model", "sea_depth", "seabed_sigma"], False),
-    ("Scenario B of Figs. 3, 4, 6", ["k", "Ph_b", "Pv_b", "d_ref"], True),
-    ("Advanced", ["model", "state_set", "T", "sigma", "noise", "steps", "extent", "z_min", "z_max",
-                  "resolution"], True),
+    ("Scenario B of Figs. 3, 4, 6", ["k", "Ph_b", "Pv_b", "mx_b", "my_b", "mz_b", "d_ref"], True),
+    ("Advanced", ["model", "state_set", "T", "sigma", "noise", "noise_b", "noise_g", "steps", "extent",
+                  "z_min", "z_max", "resolution"], True),
 )
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB = 0, 1, 2, 3
 
@@ -47,7 +47,9 @@ _alert = maps.alert
 #: Numbers typed or dragged (:func:`app.inputs.number_input`); the noise has a box only.
 NUMBERS = ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k", "Ph_b", "Pv_b", "d_ref", "T",
            "sigma", "extent", "z_min", "z_max", "threshold", "sea_depth", "seabed_sigma", "steps",
-           "resolution")
+           "resolution", "mx", "my", "mz", "mx_b", "my_b", "mz_b", "noise_b", "noise_g")
+#: Number formats other than number_input's default (the magnetic noise is hundredths of nT).
+FORMATS = {"noise_b": "0.[0000]", "noise_g": "0.[0000]"}
 
 
 def _widgets():
@@ -64,6 +66,16 @@ def _widgets():
     return spec
 
 
+def sensor_kinds(s, tab):
+    """The sensor kinds (core kinds E, B, G, BG) the inputs of tab ``tab`` feed: maps A's and B's
+    on the Maps tab, the scenario's on the Layout design tab, electric on the Track tab (its
+    filters are the electric ones)."""
+    if tab == MAPS_TAB:
+        kind = SENSORS[s.sensor]
+        return {kind, SENSORS[s.sensor_b]} if COMPARISONS[s.comparison] == "sensor_kinds" else {kind}
+    return {"E"} if tab == TRACK_TAB else {SENSORS[s.sensor]}
+
+
 def applies(name, s, tab):
     """Whether the input of parameter ``name`` applies to scenario ``s`` on tab ``tab`` (others
     are hidden: Fixed y in x–y, target depth in x–z, the maps' controls on the design tab)."""
@@ -71,9 +83,17 @@ def applies(name, s, tab):
         return False
     kind = COMPARISONS[s.comparison]
     on_maps = tab == MAPS_TAB
-    layered = s.sea_model == "layered"
+    kinds = sensor_kinds(s, tab)
+    electric, magnetic = "E" in kinds, bool(kinds - {"E"})
+    # a static magnetic field does not see the sea: its inputs are the electric maps'
+    layered = s.sea_model == "layered" and electric
+    split = on_maps and kind == "moment_split"
     rules = {
-        "sea_depth": layered, "seabed_sigma": layered,
+        "sea_model": electric, "sea_depth": layered, "seabed_sigma": layered,
+        "Ph": electric, "Pv": electric, "mx": magnetic, "my": magnetic, "mz": magnetic,
+        "model": electric, "sigma": electric, "noise": electric,
+        "noise_b": bool(kinds & {"B", "BG"}), "noise_g": bool(kinds & {"G", "BG"}),
+        "sensor_b": on_maps and kind == "sensor_kinds",
         # the Track tab has a speed and heading of its own (track_speed, track_heading)
         "speed": tab != TRACK_TAB, "heading": tab != TRACK_TAB,
         "y": on_maps and s.plane == "x–z",
@@ -82,11 +102,15 @@ def applies(name, s, tab):
         "z_max": on_maps and s.plane == "x–z",
         "plane": on_maps, "comparison": on_maps, "measure": on_maps,
         "difference": on_maps and MEASURE_LABELS[s.measure] in ("log10_det", "d_optimal"),
-        "d": on_maps and not (kind in ("moments_scaled", "moment_split") and s.layout == "single"),
-        "layout": on_maps and kind in ("moments_scaled", "moment_split"),
+        "d": on_maps and not (kind in ("moments_scaled", "moment_split", "sensor_kinds")
+                              and s.layout == "single"),
+        "layout": on_maps and kind in ("moments_scaled", "moment_split", "sensor_kinds"),
         "k": on_maps and kind == "moments_scaled",
-        "Ph_b": on_maps and kind == "moment_split",
-        "Pv_b": on_maps and kind == "moment_split",
+        "Ph_b": split and SENSORS[s.sensor] == "E",
+        "Pv_b": split and SENSORS[s.sensor] == "E",
+        "mx_b": split and SENSORS[s.sensor] != "E",
+        "my_b": split and SENSORS[s.sensor] != "E",
+        "mz_b": split and SENSORS[s.sensor] != "E",
         "d_ref": on_maps and kind == "spacing",
     }
     return rules.get(name, True)
@@ -94,7 +118,7 @@ def applies(name, s, tab):
 
 #: Selectors whose change moves other values by a rule (a layered sea puts the stations on the
 #: seabed): the note on what moved shows under them.
-MOVES = ("sea_model", "model")
+MOVES = ("sea_model", "model", "sensor", "sensor_b")
 
 
 def _message_pane(scenario, names, css):
@@ -115,14 +139,16 @@ def _section(scenario, tabs, title, names, collapsed):
     """A sidebar card of ``names``' inputs; an input that does not apply is hidden, and so is the
     card when none does. A refused value's message shows under its input."""
     watched = [scenario.param.plane, scenario.param.comparison, scenario.param.measure,
-               scenario.param.layout, scenario.param.sea_model, tabs.param.active]
+               scenario.param.layout, scenario.param.sea_model, scenario.param.sensor,
+               scenario.param.sensor_b, tabs.param.active]
 
     def visible(name):
         return pn.bind(lambda *_: applies(name, scenario, tabs.active), *watched)
 
     def widget(name):
         if name in NUMBERS:
-            return number_input(scenario, name, css_classes=[f"w-{name}"], visible=visible(name))
+            return number_input(scenario, name, css_classes=[f"w-{name}"], visible=visible(name),
+                                **({"fmt": FORMATS[name]} if name in FORMATS else {}))
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
         return cls.from_param(scenario.param[name], visible=visible(name), **spec)
@@ -141,6 +167,36 @@ def _section(scenario, tabs, title, names, collapsed):
                    collapsed=collapsed, sizing_mode="stretch_width")
     # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
     return pn.Column(card, visible=any_visible, sizing_mode="stretch_width", margin=0)
+
+
+#: What the Layout design and Track tabs say over their content for a magnetic sensor kind.
+DESIGN_SENSOR = ("Sensor: {name}. The Cramér–Rao maps, spacing and layouts below are for this "
+                 "kind: moment m = ({mx:g}, {my:g}, {mz:g}) A·m², noise {noise}, point gradient tensor.")
+TRACK_SENSOR = ("The Track tab tracks the electric dipole only: its filters (seed 001's EKF bank, "
+                "EKF, PU-EKF) are written for the 7 electric states and the electric field. The "
+                "sensor chosen in the sidebar, {name}, is not used here: the track, PCRLB and "
+                "trackers below are for electric stations (P_h, P_v, noise in V/m).")
+
+
+def sensor_banner(scenario, tab):
+    """An HTML pane over tab ``tab`` (DESIGN_TAB or TRACK_TAB) saying which sensor kind its
+    numbers are for when the scenario's is magnetic; hidden for the electric kind."""
+    def text(sensor, *_):
+        kind = SENSORS[sensor]
+        if kind == "E":
+            return ""
+        name = f"{KIND_NAMES[kind][0]} ({KIND_NAMES[kind][1]})"
+        if tab == TRACK_TAB:
+            return _alert(TRACK_SENSOR.format(name=name), "warning")
+        noise = {"B": f"{scenario.noise_b:g} nT", "G": f"{scenario.noise_g:g} nT/m",
+                 "BG": f"{scenario.noise_b:g} nT and {scenario.noise_g:g} nT/m"}[kind]
+        return _alert(DESIGN_SENSOR.format(name=name, mx=scenario.mx, my=scenario.my, mz=scenario.mz,
+                                           noise=noise), "info")
+
+    deps = [scenario.param[n] for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g")]
+    return pn.pane.HTML(pn.bind(text, *deps), visible=pn.bind(lambda k, *_: SENSORS[k] != "E", *deps),
+                        sizing_mode="stretch_width",
+                        css_classes=["w-track-sensor" if tab == TRACK_TAB else "w-design-sensor"])
 
 
 def panel_extension():
@@ -178,8 +234,11 @@ def create_app():
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
     titles = ("Maps", "Layout design", "Track", "Calibration")
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
-                   (titles[1], design_tab(scenario, cache, _widgets())),
-                   (titles[2], track_tab(scenario)),
+                   (titles[1], pn.Column(sensor_banner(scenario, DESIGN_TAB),
+                                         design_tab(scenario, cache, _widgets()),
+                                         sizing_mode="stretch_width", margin=0)),
+                   (titles[2], pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
+                                         sizing_mode="stretch_width", margin=0)),
                    (titles[3], calibration_tab(scenario)),
                    dynamic=True, sizing_mode="stretch_width")
     if served:
@@ -190,7 +249,8 @@ def create_app():
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
                         *[scenario.param[k] for k in PRESETS[name]])
-        return pn.widgets.Button(name=name, button_type="primary", button_style=style, width=90,
+        return pn.widgets.Button(name=name, button_type="primary", button_style=style,
+                                 width=90 if len(name) <= 6 else 150,  # a seed's name is longer
                                  css_classes=[f"w-preset-{name[-1]}"],
                                  on_click=lambda e: scenario.apply_preset(name))
 

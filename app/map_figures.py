@@ -35,7 +35,7 @@ from bokeh.models import (
 )
 from bokeh.palettes import RdBu11, Viridis256
 
-from .compute import RUNAWAY_LIMIT, Panels, colour_range
+from .compute import KIND_NAMES, RUNAWAY_LIMIT, Panels, colour_range
 
 #: Veil codes of a pixel (the veil image): 0 observable, 1 and 2 unobservable (the two colours of
 #: its stripes), 3 no value (on a station, or blank where the paper's Δ ≤ 0), 4 and 5 a CRLB
@@ -250,7 +250,11 @@ def veiled_text(p: Panels, which):
     if "rank 6" in p.unobservable[which]:
         return ("unobservable at every\npoint (rank 6 of 7):\none station cannot\n"
                 "tell range from\nsource strength")
-    return "unobservable at every\npoint (rank < 7):\ncolours are round-off"
+    kind = p.kinds[which]
+    if "rank 7 of 8" in p.unobservable[which]:  # one magnetometer or gradiometer (spec §11)
+        return (f"unobservable at every\npoint (rank 7 of 8):\none {KIND_NAMES[kind][0]}\n"
+                "cannot tell range\nfrom moment strength")
+    return f"unobservable at every\npoint (rank < {7 if kind == 'E' else 8}):\ncolours are round-off"
 
 
 def _changed(model, values):
@@ -349,7 +353,7 @@ def set_maps(figs: MapFigures, prepared):
         fig.title.text_color = "#b03a2e" if paper else "#222222"
         fig.outline_line_color, fig.outline_line_width = ("#b03a2e", 3) if paper else ("#e5e5e5", 1)
         fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
-        label = p.value_label if which < 2 else p.diff_label
+        label = (p.value_labels[which] if p.value_labels else p.value_label) if which < 2 else p.diff_label
         log = which < 2 and p.log_scale
         bar = figs.colorbars[which]
         bar.title = f"{label}, log scale" if log else label

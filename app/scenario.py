@@ -42,6 +42,15 @@ ACCEPTED = {
     "threshold": (0.01, 1e5, "m"),
     "sea_depth": (0.5, 10000.0, "m"),
     "seabed_sigma": (0.0, 1000.0, "S/m"),
+    # -- sensor kinds (issue 26): the magnetic moment vector and the magnetic noise
+    "mx": (-1e7, 1e7, "A·m²"),
+    "my": (-1e7, 1e7, "A·m²"),
+    "mz": (-1e7, 1e7, "A·m²"),
+    "noise_b": (1e-6, 1e3, "nT"),
+    "noise_g": (1e-6, 1e3, "nT/m"),
+    "mx_b": (-1e7, 1e7, "A·m²"),
+    "my_b": (-1e7, 1e7, "A·m²"),
+    "mz_b": (-1e7, 1e7, "A·m²"),
 }
 
 MEASURE_LABELS = {
@@ -55,6 +64,7 @@ COMPARISONS = {
     "Moments ×k − original (Fig. 3)": "moments_scaled",
     "Moment split B − A (Fig. 4)": "moment_split",
     "Spacing d − reference d (Fig. 6)": "spacing",
+    "Sensor kind B − A (seed 003)": "sensor_kinds",
 }
 CRITERIA = {
     "Mean D-optimal over the region": "mean_dopt",
@@ -68,6 +78,13 @@ ERROR_QUANTITIES = {
     "Depth error σz (m)": "sigma_z",
     "Speed error σ|v| (m/s)": "sigma_speed",
 }
+#: Sensor kinds (spec §11, core.Sensor): label -> core kind.
+SENSORS = {"electric (E, V/m)": "E", "magnetometer (B, nT)": "B", "gradiometer (G, nT/m)": "G",
+           "magnetometer + gradiometer (BG)": "BG"}
+#: Moments of a magnetic target named by the "moments known" state set.
+MAGNETIC_KNOWN = ("mx", "my", "mz")
+#: Measures that use the paper's square Γ (electric only): a magnetic kind moves off them.
+SQUARE_MEASURES = ("log10|det Γ| (paper)", "Observability index log10 η")
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
 #: Parameters that are depths below the sea surface (m): a negative value is above the surface.
@@ -103,6 +120,12 @@ PRESETS = {
                                # along x, as core.dual_station(h, d) puts the Maps tab's pair: one
                                # geometry on every tab (it was along y here, along x on Maps)
                                stations=[[0.0, 0.0, 8.4], [10.0, 0.0, 8.4]]),
+    # spec §11 at one station: magnetometer (A) against magnetometer + gradiometer (B); A alone
+    # is rank 7 of 8 (veiled), B + G is observable. Switch A to the gradiometer to see it veiled too.
+    "Seed 003 sensors": dict(_COMMON, measure="CRLB position error (m)", layout="single",
+                             comparison="Sensor kind B − A (seed 003)",
+                             sensor="magnetometer (B, nT)",
+                             sensor_b="magnetometer + gradiometer (BG)", z=110.0, extent=60.0),
 }
 
 #: Which map shows each paper figure: preset -> (map index 0 A, 1 B, 2 difference, caption).
@@ -220,6 +243,25 @@ class Scenario(param.Parameterized):
     track_runs = param.Integer(5, bounds=(1, 20), label="Monte-Carlo runs",
                                doc="Noise realisations shown and averaged in the TRMSE, 1 to 20.")
 
+    # -- sensor kinds (issue 26, spec §11): what every station measures. Electric: the moments
+    # Ph, Pv (A·m) and the noise (V/m) above; magnetic: a free moment vector (A·m²), the noise
+    # of the magnetometer (nT) and of the gradiometer (nT/m); a point gradient tensor.
+    sensor = param.Selector(objects=list(SENSORS), default="electric (E, V/m)", label="Sensor",
+                            doc="What every station measures: the electric field (the paper), the "
+                                "magnetic field, its gradient tensor, or both (spec §11).")
+    sensor_b = param.Selector(objects=list(SENSORS), default="magnetometer + gradiometer (BG)",
+                              label="B: sensor", doc="Sensor comparison: the kind of scenario B.")
+    mx = _num(-3000.0, (-20000, 20000), "m_x (A·m²)", "Magnetic moment of the target, x, A·m².")
+    my = _num(1000.0, (-20000, 20000), "m_y (A·m²)", "Magnetic moment of the target, y, A·m².")
+    mz = _num(5000.0, (-20000, 20000), "m_z (A·m²)", "Magnetic moment of the target, z (down), A·m².")
+    mx_b = _num(0.0, (-20000, 20000), "B: m_x (A·m²)", "Moment split, magnetic: m_x of scenario B, A·m².")
+    my_b = _num(0.0, (-20000, 20000), "B: m_y (A·m²)", "Moment split, magnetic: m_y of scenario B, A·m².")
+    mz_b = _num(6000.0, (-20000, 20000), "B: m_z (A·m²)", "Moment split, magnetic: m_z of scenario B, A·m².")
+    noise_b = _num(0.01, (1e-3, 10), "Magnetometer noise (nT)",
+                   "Noise standard deviation per field component, nT.")
+    noise_g = _num(0.01, (1e-3, 10), "Gradiometer noise (nT/m)",
+                   "Noise standard deviation per tensor component, nT/m.")
+
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
     refused = param.List([], item_type=str,
@@ -336,6 +378,23 @@ class Scenario(param.Parameterized):
                 "whole space." if said else "")
         self.param.update(message=note, refused=["sea_model"] if note else [])
 
+    @param.depends("sensor", "sensor_b", "comparison", "measure", watch=True, on_init=True)
+    def _all_rows_for_magnetic(self):
+        """A magnetic kind on the maps moves the measure off the paper's square-Γ rule (the
+        electric paper's, refused by core for magnetic kinds) to the CRLB, and says so."""
+        if getattr(self, "_restoring", False) or self.measure not in SQUARE_MEASURES or not self.magnetic_maps():
+            return
+        self._quietly(measure="CRLB position error (m)")
+        self.param.update(message=f"{self.param['measure'].label}: the paper's square-Γ rule is the electric "
+                                  "paper's; magnetic sensors use all rows of N instants: measure → CRLB "
+                                  "position error.",
+                          refused=["sensor" if SENSORS[self.sensor] != "E" else "sensor_b"])
+
+    def magnetic_maps(self):
+        """Whether map A or B measures with a magnetic kind."""
+        return SENSORS[self.sensor] != "E" or (COMPARISONS[self.comparison] == "sensor_kinds"
+                                               and SENSORS[self.sensor_b] != "E")
+
     @param.depends("model", watch=True)
     def _exact_in_a_sea(self):
         if self.sea_model == "layered" and self.model != "exact dipole" and not self._restoring:
@@ -424,11 +483,28 @@ class Scenario(param.Parameterized):
     def velocity(self):
         return core.velocity_from_heading(self.speed, self.heading)
 
-    def core_options(self):
+    def core_options(self, kind=None):
+        """Keywords of core's map functions for sensor ``kind`` (a :data:`SENSORS` value; default
+        the scenario's): the electric medium, or a magnetic ``core.Sensor`` (its noise in nT and
+        nT/m; a static field does not see the sea)."""
+        kind = SENSORS[self.sensor] if kind is None else kind
+        known = STATE_SETS[self.state_set]
+        # as the Scenario moves it (_all_rows_for_magnetic): also for values without the watcher
+        # (a design snapshot holds no measure; its default is the paper's)
+        measure = ("crlb_position" if self.measure in SQUARE_MEASURES and self.magnetic_maps()
+                   else MEASURE_LABELS[self.measure])
+        common = dict(T=self.T, steps=int(self.steps), measure=measure)
+        if kind != "E":
+            noise = {"B": self.noise_b, "G": self.noise_g, "BG": (self.noise_b, self.noise_g)}[kind]
+            return dict(common, known=MAGNETIC_KNOWN if known else (), sensor=core.Sensor(kind, noise))
         sea = core.Sea(self.sea_depth, self.seabed_sigma) if self.sea_model == "layered" else None
-        return dict(T=self.T, sigma=self.sigma, model=MODELS[self.model], known=STATE_SETS[self.state_set],
-                    noise=self.noise, steps=int(self.steps), measure=MEASURE_LABELS[self.measure],
-                    sea=sea)
+        return dict(common, sigma=self.sigma, model=MODELS[self.model], known=known,
+                    noise=self.noise, sea=sea)
+
+    def moments(self, kind=None):
+        """The target's moments for sensor ``kind``: (P_h, P_v) A·m, or (m_x, m_y, m_z) A·m²."""
+        kind = SENSORS[self.sensor] if kind is None else kind
+        return (self.Ph, self.Pv) if kind == "E" else (self.mx, self.my, self.mz)
 
 
 #: Parameters a paper-figure preset does not set: feedback, and the calibration tab's own problem.
@@ -461,6 +537,8 @@ class ScenarioValues(types.SimpleNamespace):
     core_plane = Scenario.core_plane
     velocity = Scenario.velocity
     core_options = Scenario.core_options
+    moments = Scenario.moments
+    magnetic_maps = Scenario.magnetic_maps
 
     @classmethod
     def of(cls, values):

@@ -73,6 +73,18 @@ def _tracking():
             core_track.monte_carlo(case, filter=name, runs=1, seed=0, workers=1)
 
 
+def _magnetic_maps():
+    """The magnetic kinds (issue 26): the maps of the Maps tab and the CRLB maps of the design
+    tab, for each kind the sidebar offers."""
+    magnetic = dict(velocity=(2, 2), moments=(-3000.0, 1000.0, 5000.0))
+    for kind in ("B", "G", "BG"):
+        for measure in ("d_optimal", "crlb_position"):
+            with KERNEL_LOCK:
+                core.evaluate_map(_PLANE, _STATIONS, measure=measure, sensor=kind, **magnetic)
+    with KERNEL_LOCK:
+        core.crlb_maps(_PLANE, _STATIONS, sensor="BG", **magnetic)
+
+
 #: (what the stage compiles, the function that compiles it), in the order they run: what the
 #: default page draws first.
 STAGES = (
@@ -81,6 +93,7 @@ STAGES = (
     ("layered-sea maps", _layered_maps),
     ("CRLB maps (Layout design tab)", _crlb_maps),
     ("tracking filters and bound (Track tab)", _tracking),
+    ("magnetic sensor maps (magnetometer, gradiometer, both)", _magnetic_maps),
 )
 
 
