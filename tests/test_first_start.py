@@ -4,6 +4,7 @@ it compiles and what, and the page says so and reloads itself into the dashboard
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -50,7 +51,7 @@ def test_a_cold_server_answers_at_once_with_the_warming_page_and_says_it_compile
         assert WARMING_MARK.encode() in page, "a cold server served the dashboard before compiling"
         text = log.read_text()
         assert "[warm-up] compiling the numba kernels: first start" in text, text
-        assert "1/5: the default page's maps (log10|det Γ|, whole space) ..." in text, text
+        assert re.search(r"1/\d+: the default page's maps \(log10\|det Γ\|, whole space\) \.\.\.", text), text
         assert "ready in" not in text  # nothing of the default page can be compiled this fast
         print(f"cold server: /app answered in {answered:.1f} s")
     finally:
