@@ -18,6 +18,7 @@ from .compute import PanelCache
 from .design import design_tab
 from .inputs import number_input
 from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, Scenario
+from .shape import shape_tab
 from .track import track_tab
 
 #: Sidebar sections: (title, parameters, collapsed?).
@@ -30,7 +31,7 @@ SECTIONS = (
     ("Advanced", ["model", "state_set", "T", "sigma", "noise", "steps", "extent", "z_min", "z_max",
                   "resolution"], True),
 )
-MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB = 0, 1, 2, 3
+MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
 
 
 def _release_freed_memory():
@@ -67,7 +68,7 @@ def _widgets():
 def applies(name, s, tab):
     """Whether the input of parameter ``name`` applies to scenario ``s`` on tab ``tab`` (others
     are hidden: Fixed y in x–y, target depth in x–z, the maps' controls on the design tab)."""
-    if tab == CALIBRATION_TAB:  # the magnetometer problem has inputs of its own, in its tab
+    if tab in (CALIBRATION_TAB, SHAPE_TAB):  # problems with inputs of their own, in their tabs
         return False
     kind = COMPARISONS[s.comparison]
     on_maps = tab == MAPS_TAB
@@ -176,11 +177,12 @@ def create_app():
                                         color="light", bgcolor="dark", throttle=0)
     # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
-    titles = ("Maps", "Layout design", "Track", "Calibration")
+    titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    (titles[1], design_tab(scenario, cache, _widgets())),
                    (titles[2], track_tab(scenario)),
                    (titles[3], calibration_tab(scenario)),
+                   (titles[4], shape_tab(scenario)),
                    dynamic=True, sizing_mode="stretch_width")
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,

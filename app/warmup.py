@@ -73,6 +73,18 @@ def _tracking():
             core_track.monte_carlo(case, filter=name, runs=1, seed=0, workers=1)
 
 
+def _shape():
+    from core.shape import Pass, Target
+    from core.shape.bound import shape_bound
+    from core.shape.experiment import Case, run_case
+
+    target = Target(height=0.3, radius=0.1)  # a few cells, a short pass: the kernels, not the work
+    track = Pass(start=(-2.0, 2.0, -2.0), velocity=(1.0, 0.0, 0.0), rate=1.0, samples=12)
+    with KERNEL_LOCK:
+        run_case(Case(name="warm-up", target=target, track=track), runs=1)
+        shape_bound(target, track)
+
+
 #: (what the stage compiles, the function that compiles it), in the order they run: what the
 #: default page draws first.
 STAGES = (
@@ -81,6 +93,7 @@ STAGES = (
     ("layered-sea maps", _layered_maps),
     ("CRLB maps (Layout design tab)", _crlb_maps),
     ("tracking filters and bound (Track tab)", _tracking),
+    ("gradiometer filters and shape bound (Shape tab)", _shape),
 )
 
 
