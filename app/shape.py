@@ -59,6 +59,15 @@ CURVE_MAX, CURVE_POINTS = 35.0, 14
 FILTERS = {"ukf": ("UKF", "#1f77b4"), "nhukf": ("NHUKF (Huber)", "#d62728"),
            "euler": ("Euler point fix", "#7f7f7f")}
 TRUTH = "#000000"
+CAPTION = """
+*Plan and side views*: the true outline (black) and axis (dashed), the 4 dipoles of every pass
+(hover: filter, pass, x, y, z), the PCA axes of pass 1 (a line's u1 over its main scale; a plane's
+u1 and u2), the track (green) and its closest point. *Error along the pass*: the centroid of the 4
+dipoles against the target's (Euler: its point fix), crosses and dotted lines at the outliers.
+*Bound*: the Cramér–Rao σ of the main scale (free 4-dipole model, and a rigid line for a
+cylinder) and of the centroid against the closest approach of a pass in the same direction; the
+star is this pass, the dotted line the true main scale (a bound above it: no sizing).
+"""
 
 HELP = """
 A target of 0.1 m dipole cells (the **Target** inputs; attitude R = Rz(yaw)·Ry(pitch)·Rx(roll), the
@@ -245,13 +254,21 @@ def verdict_text(out):
     return "\n\n".join(lines)
 
 
+#: Farthest (m) the track's closest point may be from the target's box and still be in the views.
+NEAR_TRACK = 4.0
+
+
 def _window(out):
-    """((x0, x1), (y0, y1), (z0, z1)) of the views (m): the target and the track's closest point
-    with a 1 m margin, square."""
+    """((x0, x1), (y0, y1), (z0, z1)) of the views (m), square: the target with a 1 m margin,
+    and the track's closest point if it lies within :data:`NEAR_TRACK` of it (a far track would
+    shrink the target to a dot; the title then says where the track is)."""
     case = out["case"]
     t, p = case.target, case.track
-    pts = np.vstack([t.positions, p.positions[np.argmin(np.linalg.norm(p.positions - t.centroid, axis=1))]])
-    lo, hi = pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0
+    lo, hi = t.positions.min(axis=0), t.positions.max(axis=0)
+    near = p.positions[np.argmin(np.linalg.norm(p.positions - t.centroid, axis=1))]
+    if np.all(near >= lo - NEAR_TRACK) and np.all(near <= hi + NEAR_TRACK):
+        lo, hi = np.minimum(lo, near), np.maximum(hi, near)
+    lo, hi = lo - 1.0, hi + 1.0
     c, half = (lo + hi) / 2, (hi - lo).max() / 2
     return [(float(m - half), float(m + half)) for m in c]
 
@@ -272,6 +289,7 @@ def target_view(out, plane="xy"):
         color=TRUTH, line_dash="dashed", line_width=1))
     for name in ("ukf", "nhukf"):
         label, color = FILTERS[name]
+        label = label.split(" (")[0]  # short: the legend fits under a half-width plot
         dip = res.dipoles[name]  # (R, N, 3)
         run = np.repeat(np.arange(1, dip.shape[0] + 1), dip.shape[1])
         flat = dip.reshape(-1, 3)
@@ -286,7 +304,7 @@ def target_view(out, plane="xy"):
         c, L = f["centroid"][0], float(f["main_scale_m"][0])
         for k in ((0,) if str(f["kind"][0]) == "line" else (0, 1)):
             seg = c + np.outer([-0.5, 0.5], f["axes"][0][:, k]) * L
-            layers.append(hv.Curve(seg[:, [i, j]], a, b, label=f"{label} PCA axes (pass 1)").opts(
+            layers.append(hv.Curve(seg[:, [i, j]], a, b, label=f"{label} axes").opts(
                 color=color, line_width=3, alpha=0.7))
     pos = case.track.positions
     k = int(np.argmin(np.linalg.norm(pos - t.centroid, axis=1)))
@@ -295,14 +313,15 @@ def target_view(out, plane="xy"):
         {"a": pos[[k], i], "b": pos[[k], j], "cpa": [out["cpa"]]},
         kdims=[hv.Dimension("a", label=a.label, unit="m"), hv.Dimension("b", label=b.label, unit="m")],
         vdims=[hv.Dimension("cpa", label="closest approach", unit="m")],
-        label="closest point of the track").opts(color="#2ca02c", marker="triangle", size=12,
+        label="closest point").opts(color="#2ca02c", marker="triangle", size=12,
                                                  tools=["hover"]))
     w = _window(out)
-    title = ("Plan view (x–y): dipoles and PCA axes over the true outline" if plane == "xy" else
-             "Side view (x–z, z down)")
+    title = "Plan (x–y)" if plane == "xy" else "Side (x–z)"
+    if not w[j][0] <= pos[k, j] <= w[j][1]:  # off the view: said in the title
+        title += f"; track {names[j]} = {pos[k, j]:g} m".replace("-", "−")
     return hv.Overlay(layers).opts(
-        title=title, aspect="equal", xlim=w[i], ylim=w[j][::-1] if j == 2 else w[j],
-        legend_position="top_left", responsive=True, show_legend=plane == "xy")
+        title=title, aspect="equal", xlim=w[i], ylim=w[j], invert_yaxis=j == 2,
+        legend_position="bottom", legend_cols=2, responsive=True, show_legend=plane == "xy")
 
 
 def error_view(out):
@@ -327,8 +346,8 @@ def error_view(out):
                                                                line_width=1))
     runs = "" if res.runs == 1 else f", median of {res.runs} passes"
     return hv.Overlay(layers).opts(
-        title=f"Position error along the pass (centroid of the 4 dipoles; Euler's point){runs}",
-        logy=True, legend_position="top_right", responsive=True)
+        title=f"Error along the pass{runs}", logy=True, legend_position="bottom", legend_cols=3,
+        responsive=True)
 
 
 def bound_view(out):
@@ -349,8 +368,8 @@ def bound_view(out):
     layers.append(hv.Scatter(([out["cpa"]], [b.main_scale_m]), x, y, label="this pass").opts(
         color="black", marker="star", size=16, tools=["hover"]))
     return hv.Overlay(layers).opts(
-        title=f"Bound against the closest approach (dotted: the main scale, {t.main_scale:g} m)",
-        logx=True, logy=True, legend_position="top_left", responsive=True)
+        title="Bound vs closest approach", logx=True, logy=True, legend_position="bottom",
+        legend_cols=2, responsive=True)
 
 
 def views(key):
@@ -409,19 +428,21 @@ def _inputs(scenario):
               ("Filters", ("shape_window", "shape_runs", "shape_seed")))
     cards = [pn.Card(*[_input(scenario, n) for n in names], title=title, collapsed=False,
                      sizing_mode="stretch_width") for title, names in groups]
-    return pn.Column(preset, *cards, width=330)
+    return pn.Column(preset, *cards, width=300)
 
 
 def _build(scenario):
     """The tab's layout; starts its first computation."""
     problem = pn.pane.HTML("", visible=False, sizing_mode="stretch_width", css_classes=["w-shape-problem"])
     verdict = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-shape-verdict"])
-    plan = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=460)
-    side = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=460)
-    error = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=330)
-    bound = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=330)
+    plan = pn.pane.HoloViews(None, height=500, sizing_mode="stretch_width")
+    side = pn.pane.HoloViews(None, height=500, sizing_mode="stretch_width")
+    error = pn.pane.HoloViews(None, height=380, sizing_mode="stretch_width")
+    bound = pn.pane.HoloViews(None, height=380, sizing_mode="stretch_width")
     outputs = pn.Column(verdict, pn.Row(plan, side, sizing_mode="stretch_width"),
-                        pn.Row(error, bound, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+                        pn.Row(error, bound, sizing_mode="stretch_width"),
+                        pn.pane.Markdown(CAPTION + HELP, sizing_mode="stretch_width"),
+                        sizing_mode="stretch_width")
     latest = [None]
     doc = pn.state.curdoc
 
@@ -464,8 +485,7 @@ def _build(scenario):
     scenario.param.watch(start, list(PARAMS))
     start()
     return pn.Row(_inputs(scenario),
-                  pn.Column(pn.pane.Markdown(HELP, sizing_mode="stretch_width"), problem, outputs,
-                            sizing_mode="stretch_width"),
+                  pn.Column(problem, outputs, sizing_mode="stretch_width"),
                   sizing_mode="stretch_width")
 
 

@@ -131,7 +131,7 @@ def test_views_have_units_and_mark_the_outliers():
     assert "outlier samples" in labels
     plan, side = hv.render(v["plan"]), hv.render(v["side"])
     assert (plan.xaxis[0].axis_label, plan.yaxis[0].axis_label) == ("x (m)", "y (m)")
-    assert side.yaxis[0].axis_label == "z (down) (m)"
+    assert side.yaxis[0].axis_label == "z (down) (m)"  # the side view: depth down
     assert side.y_range.start > side.y_range.end  # depth down
     bound = hv.render(v["bound"])
     assert (bound.xaxis[0].axis_label, bound.yaxis[0].axis_label) == ("closest approach (m)", "1σ bound (m)")
