@@ -101,5 +101,11 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
                 ".map(m => m.text).join(' ')"):
             assert time.time() < deadline, "no refusal message"
             time.sleep(0.3)
+        for name, value in (("shape_offset", "0"), ("shape_above", "0.3")):  # through the target
+            field = pg.locator(f".w-{name} input").first
+            field.fill(value)
+            field.press("Enter")
+        pg.get_by_text("Not computed: the track passes").first.wait_for(timeout=30_000)
+        _, text = _wait(pg, lambda got, text: "closest approach 5 m" in text)  # offset 0: drawn
         pg.close()
     assert errors == [], errors
