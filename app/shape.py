@@ -24,6 +24,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import functools
+import threading
 from functools import partial
 
 import holoviews as hv
@@ -449,18 +450,21 @@ def _build(scenario):
     def say(text):
         problem.param.update(object=alert(text, "warning") if text else "", visible=bool(text))
 
+    lock = threading.Lock()  # Panel may run two changes' watchers on two threads at once
+
     def start(*_):
-        key = key_of(scenario)
-        if key == latest[0]:
-            return
-        try:
-            case_of(dict(key))
-        except ValueError as exc:  # each value accepted, not together: said, the last plots stay
-            say(f"Not computed: {exc}. The plots show the last computed pass.")
-            return
-        latest[0] = key
-        outputs.loading = True
-        computing = _COMPUTE.submit(views, key)
+        with lock:
+            key = key_of(scenario)
+            if key == latest[0]:
+                return
+            try:
+                case_of(dict(key))
+            except ValueError as exc:  # each value accepted, not together: said, last plots stay
+                say(f"Not computed: {exc}. The plots show the last computed pass.")
+                return
+            latest[0] = key
+            outputs.loading = True
+            computing = _COMPUTE.submit(views, key)
         with set_curdoc(doc):
             pn.state.execute(partial(finish, key, computing))
 

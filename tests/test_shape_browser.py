@@ -85,6 +85,12 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
         assert bound1 > 100 * bound0  # the bound grows steeply with the closest approach
         assert "cannot size the target" in text
         assert "shape_offset=15" in pg.evaluate("() => window.location.search")
+        runs = pg.locator(".w-shape_runs input").first  # 20 passes: long enough to see it busy
+        runs.fill("20")
+        runs.press("Enter")
+        pg.locator(".pn-loading").first.wait_for(state="attached", timeout=10_000)  # busy shown
+        _, text = _wait(pg, lambda got, text: "20 passes (medians)" in text)
+        assert pg.locator(".pn-loading").count() == 0  # and gone once drawn
         narrow = browser.new_page(viewport={"width": 1280, "height": 800})  # the link reopens it
         narrow.goto(server + pg.evaluate("() => window.location.search"))
         narrow.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=120_000)
