@@ -27,7 +27,8 @@ PLOTS_JS = """() => {
     if (m.renderers !== undefined && m.title !== undefined && m.title && m.title.text)
       out.push([m.title.text, m.renderers.length]);
     if (m.axis_label !== undefined && m.axis_label) labels.push(m.axis_label);
-    if (typeof m.text === "string" && m.text.includes("Truth")) texts.push(m.text);
+    if (typeof m.text === "string" && (m.text.includes("Truth") || m.text.includes("Not computed")))
+      texts.push(m.text);
   }
   return [out, labels, texts.join(" ")];
 }"""
@@ -112,6 +113,9 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
             field.fill(value)
             field.press("Enter")
         pg.get_by_text("Not computed: the track passes").first.wait_for(timeout=30_000)
-        _, text = _wait(pg, lambda got, text: "closest approach 5 m" in text)  # offset 0: drawn
+        field = pg.locator(".w-shape_above input").first  # back above it: drawn, message gone
+        field.fill("5")
+        field.press("Enter")
+        _, text = _wait(pg, lambda got, text: "closest approach 5 m" in text and "Not computed" not in text)
         pg.close()
     assert errors == [], errors
