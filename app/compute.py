@@ -33,9 +33,9 @@ from .scenario import (
 KERNEL_LOCK = threading.Lock()
 
 #: Values that define the comparison maps; everything else in Scenario is presentation or design.
-FIELDS = tuple(sorted(set(ACCEPTED) - {"threshold"} | {"plane", "layout", "comparison", "difference",
-                                                       "measure", "model", "state_set", "sea_model",
-                                                       "sensor", "sensor_b"}))
+FIELDS = tuple(sorted({n for n in ACCEPTED if not n.startswith("shape_")} - {"threshold"}
+                     | {"plane", "layout", "comparison", "difference", "measure", "model",
+                        "state_set", "sea_model", "sensor", "sensor_b"}))
 #: Values that define the layout-design tab.
 DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure", "layout", "k", "Ph_b",
                                             "Pv_b", "d_ref", "sensor_b", "mx_b", "my_b", "mz_b"} | {"stations", "criterion", "threshold",

@@ -19,6 +19,7 @@ from .compute import KIND_NAMES, PanelCache
 from .design import design_tab
 from .inputs import number_input
 from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, SENSORS, Scenario
+from .shape import shape_tab
 from .track import track_tab
 
 #: Sidebar sections: (title, parameters, collapsed?).
@@ -31,7 +32,7 @@ SECTIONS = (
     ("Advanced", ["model", "state_set", "T", "sigma", "noise", "noise_b", "noise_g", "steps", "extent",
                   "z_min", "z_max", "resolution"], True),
 )
-MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB = 0, 1, 2, 3
+MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
 
 
 #: Seconds after a session closes that the memory of the closed sessions is collected, once for
@@ -118,7 +119,7 @@ def sensor_kinds(s, tab):
 def applies(name, s, tab):
     """Whether the input of parameter ``name`` applies to scenario ``s`` on tab ``tab`` (others
     are hidden: Fixed y in x–y, target depth in x–z, the maps' controls on the design tab)."""
-    if tab == CALIBRATION_TAB:  # the magnetometer problem has inputs of its own, in its tab
+    if tab in (CALIBRATION_TAB, SHAPE_TAB):  # problems with inputs of their own, in their tabs
         return False
     kind = COMPARISONS[s.comparison]
     on_maps = tab == MAPS_TAB
@@ -270,7 +271,7 @@ def create_app():
                                         color="light", bgcolor="dark", throttle=0)
     # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
-    titles = ("Maps", "Layout design", "Track", "Calibration")
+    titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    (titles[1], pn.Column(sensor_banner(scenario, DESIGN_TAB),
                                          design_tab(scenario, cache, _widgets()),
@@ -278,6 +279,7 @@ def create_app():
                    (titles[2], pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
                                          sizing_mode="stretch_width", margin=0)),
                    (titles[3], calibration_tab(scenario)),
+                   (titles[4], shape_tab(scenario)),
                    dynamic=True, sizing_mode="stretch_width")
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,

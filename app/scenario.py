@@ -51,6 +51,23 @@ ACCEPTED = {
     "mx_b": (-1e7, 1e7, "A·m²"),
     "my_b": (-1e7, 1e7, "A·m²"),
     "mz_b": (-1e7, 1e7, "A·m²"),
+    # the Shape tab (seed 003, app/shape.py); not map inputs: app.compute.FIELDS leaves shape_* out
+    "shape_height": (0.1, 20.0, "m"),
+    "shape_radius": (0.05, 10.0, "m"),
+    "shape_inner_height": (0.0, 20.0, "m"),
+    "shape_inner_radius": (0.0, 10.0, "m"),
+    "shape_roll": (-180.0, 180.0, "°"),
+    "shape_pitch": (-180.0, 180.0, "°"),
+    "shape_yaw": (-180.0, 180.0, "°"),
+    "shape_mx": (-1000.0, 1000.0, "A·m² per cell"),
+    "shape_my": (-1000.0, 1000.0, "A·m² per cell"),
+    "shape_mz": (-1000.0, 1000.0, "A·m² per cell"),
+    "shape_offset": (-100.0, 100.0, "m"),
+    "shape_above": (-100.0, 100.0, "m"),
+    "shape_noise": (1e-5, 10.0, "nT/m"),
+    "shape_outlier_size": (0.0, 1e5, "σ"),
+    "shape_runs": (1, 20, "passes"),
+    "shape_seed": (0, 1_000_000, ""),
 }
 
 MEASURE_LABELS = {
@@ -261,6 +278,58 @@ class Scenario(param.Parameterized):
                    "Noise standard deviation per field component, nT.")
     noise_g = _num(0.01, (1e-3, 10), "Gradiometer noise (nT/m)",
                    "Noise standard deviation per tensor component, nT/m.")
+    # -- shape tab (seed 003, app/shape.py): every name starts with shape_. A target (a grid of
+    # 0.1 m dipole cells) passed by a gradiometer on a straight track along +x (start x = −40 m,
+    # 5 m/s, 5 Hz, 81 samples); the defaults are seed 003's Fig. 4 (core.shape.cases). Numbers
+    # are refused outside ACCEPTED; rules between them (cavity inside, type vs H and R, the
+    # track clear of the target, the outliers' text) are said by the tab (app.shape.case_of).
+    shape_type = param.Selector(objects=["cylinder", "disc"], default="cylinder", label="Target type",
+                                doc="Seed 003: a cylinder has H > R (read as a line), a disc H ≤ R "
+                                    "(read as a plane). Switching sets typical sizes if H, R disagree.")
+    shape_height = _num(3.0, (0.1, 6.0), "Height H (m)", "Target height H along its axis, m.")
+    shape_radius = _num(0.5, (0.05, 3.0), "Radius R (m)", "Target radius R, m.")
+    shape_inner_height = _num(0.0, (0.0, 6.0), "Cavity height H_in (m, 0: solid)",
+                              "Hollow target: height of the coaxial cavity, m (0 with R_in = 0: solid).")
+    shape_inner_radius = _num(0.0, (0.0, 3.0), "Cavity radius R_in (m, 0: solid)",
+                              "Hollow target: radius of the coaxial cavity, m (< R).")
+    shape_roll = _num(30.0, (-180, 180), "Roll θ (°)", "Attitude: roll about x, degrees (R = Rz·Ry·Rx).")
+    shape_pitch = _num(45.0, (-180, 180), "Pitch β (°)", "Attitude: pitch about y, degrees.")
+    shape_yaw = _num(60.0, (-180, 180), "Yaw φ (°)", "Attitude: yaw about z, degrees.")
+    shape_mx = _num(-3.0, (-10, 10), "Cell moment mx (A·m²)", "Moment of each 0.1 m cell, x (A·m²).")
+    shape_my = _num(1.0, (-10, 10), "Cell moment my (A·m²)", "Moment of each 0.1 m cell, y (A·m²).")
+    shape_mz = _num(5.0, (-10, 10), "Cell moment mz (A·m²)", "Moment of each 0.1 m cell, z (A·m²).")
+    shape_offset = _num(5.0, (-30, 30), "Track lateral offset y (m)",
+                        "y of the straight track along x (the target's centre is the origin), m.")
+    shape_above = _num(5.0, (-30, 30), "Track height above the target (m)",
+                       "Height of the track above the target's centre, m (z = −height: z is down).")
+    shape_noise = param.Number(0.01, softbounds=(1e-3, 1.0), label="Noise σ (nT/m)",
+                               doc="Gaussian noise of each tensor component, nT/m (seed 003: 0.01).")
+    shape_outliers = param.String("", label="Outliers at platform x (m)",
+                                  doc="Comma-separated x positions (m) of the samples that get an "
+                                      "outlier on all five components (Fig. 5: −20, −10, 0); empty: none.")
+    shape_outlier_size = _num(500.0, (0, 2000), "Outlier size (σ)",
+                              "Added to each hit component, in units of the noise σ (Fig. 5: 500).")
+    shape_window = param.Selector(objects=["one sample", "seed 003 window (lag 5)"],
+                                  default="one sample", label="Filter update",
+                                  doc="One sample: the honest update. Seed 003's window of three lagged "
+                                      "readings (eq. 15): every sample counts three times.")
+    shape_runs = param.Integer(1, softbounds=(1, 20), label="Monte-Carlo passes",
+                               doc="Noise realisations: errors and shape are their medians, 1 to 20.")
+    shape_seed = param.Integer(0, softbounds=(0, 100), label="Random seed", doc="Seed of the noise.")
+
+    @param.depends("shape_type", watch=True)
+    def _shape_type_sizes(self):
+        """A type the sizes disagree with (a cylinder has H > R, a disc H ≤ R) sets the type's
+        typical sizes (seed 003's cylinder, Table 5's disc) and a solid body, and says so."""
+        if self._restoring:
+            return
+        cylinder = self.shape_type == "cylinder"
+        if (self.shape_height > self.shape_radius) == cylinder:
+            return
+        H, R = (3.0, 0.5) if cylinder else (0.3, 1.0)
+        self._quietly(shape_height=H, shape_radius=R, shape_inner_height=0.0, shape_inner_radius=0.0)
+        self.param.update(message=f"{self.shape_type.capitalize()}: set H = {H:g} m, R = {R:g} m, "
+                                  "solid (the sizes were the other type's).", refused=["shape_type"])
 
     # -- feedback
     message = param.String("", doc="Why the last input was refused (plain text).")
@@ -509,13 +578,15 @@ class Scenario(param.Parameterized):
 
 #: Parameters a paper-figure preset does not set: feedback, and the calibration tab's own problem.
 NOT_IN_PRESETS = ("name", "message", "refused")
+#: Prefixes of tabs with problems (and presets) of their own, left alone by a paper-figure preset.
+OWN_PRESETS = ("cal_", "shape_")
 
 
 def preset_values(name):
     """Every parameter :meth:`Scenario.apply_preset` sets for preset ``name``: its values over
     the defaults of every parameter but the calibration tab's and the feedback."""
     defaults = {n: p.default for n, p in Scenario.param.objects().items()
-                if n not in NOT_IN_PRESETS and not n.startswith("cal_")}
+                if n not in NOT_IN_PRESETS and not n.startswith(OWN_PRESETS)}
     return {**defaults, **{k: [list(v) for v in val] if k == "stations" else val
                            for k, val in PRESETS[name].items()}}
 

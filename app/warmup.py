@@ -26,6 +26,9 @@ from pathlib import Path
 
 import core
 from core import pcrlb
+from core.shape import Pass, Target
+from core.shape.bound import shape_bound
+from core.shape.experiment import Case, run_case
 from core.tracking import montecarlo as core_track
 
 from .compute import KERNEL_LOCK
@@ -83,6 +86,12 @@ def _magnetic_maps():
                 core.evaluate_map(_PLANE, _STATIONS, measure=measure, sensor=kind, **magnetic)
     with KERNEL_LOCK:
         core.crlb_maps(_PLANE, _STATIONS, sensor="BG", **magnetic)
+def _shape():
+    target = Target(height=0.3, radius=0.1)  # a few cells, a short pass: the kernels, not the work
+    track = Pass(start=(-2.0, 2.0, -2.0), velocity=(1.0, 0.0, 0.0), rate=1.0, samples=12)
+    with KERNEL_LOCK:
+        run_case(Case(name="warm-up", target=target, track=track), runs=1)
+        shape_bound(target, track)
 
 
 #: (what the stage compiles, the function that compiles it), in the order they run: what the
@@ -94,6 +103,7 @@ STAGES = (
     ("CRLB maps (Layout design tab)", _crlb_maps),
     ("tracking filters and bound (Track tab)", _tracking),
     ("magnetic sensor maps (magnetometer, gradiometer, both)", _magnetic_maps),
+    ("gradiometer filters and shape bound (Shape tab)", _shape),
 )
 
 

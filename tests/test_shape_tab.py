@@ -1,0 +1,137 @@
+"""The Shape tab's pure functions (app/shape.py) and its parameters in the Scenario and the link."""
+
+import holoviews as hv
+import numpy as np
+import pytest
+
+from app import shape, url
+from app.compute import DESIGN_FIELDS, FIELDS
+from app.scenario import Scenario, preset_values
+from core.shape.bound import shape_bound
+from core.shape.cases import CASES
+
+
+def values(**changed):
+    s = Scenario()
+    return {**{n: getattr(s, n) for n in shape.PARAMS}, **changed}
+
+
+def test_every_paper_case_row_is_a_preset_that_rebuilds_its_case():
+    rows = [row for _, rs in CASES.values() for row in rs]
+    for row in rows:  # every row is a preset (a row equal to Fig. 4 is the Fig. 4 preset)
+        name = shape.preset_of(values(**shape.values_of(row)))
+        case = shape.case_of(values(**shape.PRESETS[name]))
+        np.testing.assert_allclose(case.target.positions, row.target.positions, atol=1e-12)
+        np.testing.assert_allclose(case.track.positions, row.track.positions, atol=1e-12)
+        assert case.outliers.samples(case.track) == row.outliers.samples(row.track), name
+        assert (case.noise_g, case.lag) == (row.noise_g, row.lag)
+    assert len(shape.PRESETS) == len({shape.preset_of(values(**shape.values_of(r))) for r in rows}) > 10
+
+
+def test_the_defaults_are_fig4_and_fig5_has_its_outliers():
+    assert shape.preset_of(values()) == "seed003-fig4"
+    assert shape.parse_outliers(shape.PRESETS["seed003-fig5"]["shape_outliers"]) == (-20.0, -10.0, 0.0)
+
+
+@pytest.mark.parametrize("text, why", [
+    ("-20, ten", "'ten' is not a number"),
+    ("-20, 55", "off the pass"),
+    ("nan", "off the pass"),
+])
+def test_outlier_text_is_refused_with_what_is_accepted(text, why):
+    with pytest.raises(ValueError, match=why):
+        shape.parse_outliers(text)
+    assert shape.parse_outliers(" −20 , 0 ") == (-20.0, 0.0)
+    assert shape.parse_outliers("") == ()
+
+
+@pytest.mark.parametrize("changed, why", [
+    (dict(shape_height=0.4), "make a disc"),  # H ≤ R with the type cylinder
+    (dict(shape_inner_height=3.5, shape_inner_radius=0.2), "cavity must fit"),
+    (dict(shape_inner_height=1.0), "cavity needs both"),
+    (dict(shape_offset=0.0, shape_above=0.5), "passes [0-9.]+ m from"),
+    (dict(shape_mx=0.0, shape_my=0.0, shape_mz=0.0), "moment is zero"),
+    (dict(shape_outliers="100"), "off the pass"),
+])
+def test_values_accepted_alone_but_not_together_are_refused(changed, why):
+    with pytest.raises(ValueError, match=why):
+        shape.case_of(values(**changed))
+
+
+def test_the_scenario_refuses_an_out_of_range_shape_value_and_keeps_the_last_good():
+    s = Scenario()
+    s.shape_offset = 500.0
+    assert s.shape_offset == 5.0
+    assert "outside the accepted range" in s.message and s.refused == ["shape_offset"]
+    s.shape_noise = 0.05
+    assert s.shape_noise == 0.05 and s.message == ""
+    s.shape_runs = 0
+    assert s.shape_runs == 1 and "shape_runs" in s.refused
+
+
+def test_switching_the_type_sets_that_types_sizes_and_says_so():
+    s = Scenario()
+    s.shape_type = "disc"
+    assert (s.shape_height, s.shape_radius) == (0.3, 1.0)
+    assert "Disc" in s.message and s.refused == ["shape_type"]
+    shape.case_of(values(**{n: getattr(s, n) for n in shape.PARAMS}))  # consistent now
+    s.shape_radius = 0.2  # H > R: a disc no more, said by the tab
+    with pytest.raises(ValueError, match="make a cylinder"):
+        shape.case_of({n: getattr(s, n) for n in shape.PARAMS})
+
+
+def test_shape_inputs_are_not_map_inputs_nor_reset_by_a_paper_figure():
+    assert not [n for n in FIELDS + DESIGN_FIELDS if n.startswith("shape_")]
+    assert not [n for n in preset_values("Fig. 1") if n.startswith("shape_")]
+    s = Scenario()
+    s.shape_offset = 12.0
+    s.apply_preset("Fig. 5")
+    assert s.shape_offset == 12.0
+
+
+def test_the_link_carries_the_shape_inputs_and_refuses_bad_ones():
+    s = Scenario()
+    s.param.update(shape_offset=12.5, shape_outliers="-20, 0", shape_window="seed 003 window (lag 5)")
+    q = url.query(s, "Shape")
+    assert "shape_offset=12.5" in q and "shape_outliers=-20%2C+0" in q and "tab=Shape" in q
+    assert url.link_problem("shape_offset", 500) is not None
+    assert url.link_problem("shape_type", "sphere") is not None
+    assert url.link_problem("shape_offset", 12.5) is None
+
+
+def test_verdict_and_bound_are_cores_and_the_bound_grows_with_the_offset():
+    near = shape.compute(shape.key_of(Scenario()))
+    case = near["case"]
+    b = shape_bound(case.target, case.track, case.noise_g)
+    assert near["bound"].main_scale_m == pytest.approx(b.main_scale_m, rel=1e-9)
+    assert near["cpa"] == pytest.approx(np.hypot(5.0, 5.0), abs=1e-9)  # fig4: y 5 m, 5 m above
+    text = shape.verdict_text(near)
+    s = near["res"].summary["filters"]["nhukf"]
+    assert f"{s['main_scale_m']:.3g} m ± {b.main_scale_m:.2g} m" in text
+    far_scenario = Scenario()
+    far_scenario.shape_offset = 20.0
+    far = shape.compute(shape.key_of(far_scenario))
+    assert far["cpa"] > near["cpa"]
+    assert far["bound"].main_scale_m > 100 * near["bound"].main_scale_m  # CPA^7.6: docs/shape.md
+    # the curve is increasing and holds the current pass
+    ms = [c.main_scale_m for c in far["curve"]]
+    assert np.all(np.diff(ms) > 0) and far["cpa"] in far["cpas"]
+
+
+def test_views_have_units_and_mark_the_outliers():
+    s = Scenario()
+    s.param.update(shape.PRESETS["seed003-fig5"])
+    v = shape.views(shape.key_of(s))
+    err = hv.render(v["error"])
+    assert err.xaxis[0].axis_label == "platform x (m)"
+    assert err.yaxis[0].axis_label == "position error (m)"
+    out = shape.compute(shape.key_of(s))
+    assert out["res"].outlier_samples == [4 * 5, 6 * 5, 8 * 5]  # x = −20, −10, 0 at 5 m / sample
+    labels = [el.label for el in v["error"]]
+    assert "outlier samples" in labels
+    plan, side = hv.render(v["plan"]), hv.render(v["side"])
+    assert (plan.xaxis[0].axis_label, plan.yaxis[0].axis_label) == ("x (m)", "y (m)")
+    assert side.yaxis[0].axis_label == "z (down) (m)"  # the side view: depth down
+    assert side.y_range.start > side.y_range.end  # depth down
+    bound = hv.render(v["bound"])
+    assert (bound.xaxis[0].axis_label, bound.yaxis[0].axis_label) == ("closest approach (m)", "1σ bound (m)")
