@@ -132,13 +132,17 @@ class Warmup:
     def _say(self, text):
         print(f"[warm-up] {text}", file=self.out or sys.stderr, flush=True)
 
-    def run(self):
-        """Run every stage in turn, in this thread; returns the seconds taken."""
-        self.started = time.monotonic()
-        first = not cache_present()
+    def _header(self):
         self._say("compiling the numba kernels: first start after install or an edit, a few "
-                  "minutes on 2 cores; the page says so meanwhile" if first else
+                  "minutes on 2 cores; the page says so meanwhile" if not cache_present() else
                   "loading the compiled numba kernels from numba's cache")
+
+    def run(self, header=True):
+        """Run every stage in turn, in this thread; returns the seconds taken. ``header=False``:
+        the caller (a parent process) has said already what the warm-up does."""
+        self.started = time.monotonic()
+        if header:
+            self._header()
         try:
             for i, (what, compile_stage) in enumerate(self.stages):
                 self.current = i
@@ -182,7 +186,8 @@ class Warmup:
         sessions while LLVM works (in-process, a session's first maps waited ~40 s behind the
         later stages' compiles), and only one of the two cores goes to compiling."""
         self.started = time.monotonic()
-        cmd = [sys.executable, "-m", "app.warmup"]
+        self._header()  # at once: the child's first line comes after its imports, seconds later
+        cmd = [sys.executable, "-m", "app.warmup", "--no-header"]
         proc = subprocess.Popen(cmd, cwd=Path(__file__).resolve().parents[1], text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, bufsize=1)
         tail = []
@@ -232,10 +237,10 @@ _STAGE_LINE = re.compile(r"^\[warm-up\] (?P<i>\d+)/\d+: .*?(?P<ready> ready in [
 WARMUP = Warmup(child=True)
 
 
-def compile_kernels(out=None):
+def compile_kernels(out=None, header=True):
     """Run every stage now, in this process; returns the seconds taken."""
-    return Warmup(out=out).run()
+    return Warmup(out=out).run(header=header)
 
 
 if __name__ == "__main__":
-    compile_kernels(out=sys.stdout)
+    compile_kernels(out=sys.stdout, header="--no-header" not in sys.argv[1:])
