@@ -86,6 +86,11 @@ def _magnetic_maps():
                 core.evaluate_map(_PLANE, _STATIONS, measure=measure, sensor=kind, **magnetic)
     with KERNEL_LOCK:
         core.crlb_maps(_PLANE, _STATIONS, sensor="BG", **magnetic)
+        # a few points: the kernels' serial twins (core.kernels.magnetic.BLOCK)
+        core.gamma([30, 40, 120, 2, 2, -3000.0, 1000.0, 5000.0], _STATIONS, sensor="BG")
+        core.gradient_tensor([30, 40, 120, 2, 2, -3000.0, 1000.0, 5000.0], _STATIONS)
+
+
 def _shape():
     target = Target(height=0.3, radius=0.1)  # a few cells, a short pass: the kernels, not the work
     track = Pass(start=(-2.0, 2.0, -2.0), velocity=(1.0, 0.0, 0.0), rate=1.0, samples=12)

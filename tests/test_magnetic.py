@@ -100,6 +100,26 @@ def test_field_broadcasts_like_one_by_one_calls():
     np.testing.assert_array_equal(b[1, 2, 1:], one)
 
 
+@pytest.mark.parametrize("baseline", [None, 0.5])
+def test_serial_and_parallel_kernels_agree(baseline):
+    """Above ``BLOCK`` points the fronts run the parallel kernels, at or below it their serial
+    twins: the same numbers, bit for bit, for the field, the tensor and the Jacobian rows."""
+    from core.kernels.magnetic import BLOCK
+    states = random_states(2 * BLOCK + 37)
+    stations = np.array([[0.0, 0.0, 0.0], [3.0, -2.0, 1.0]])
+    whole_b = core.magnetic_field(states, stations)
+    whole_g = core.gradient_tensor(states, stations, baseline=baseline)
+    whole_h, whole_j = core.magnetic_jacobian(states, stations, sensor="BG", baseline=baseline)
+    for lo in range(0, len(states), BLOCK):
+        part = states[lo:lo + BLOCK]
+        np.testing.assert_array_equal(core.magnetic_field(part, stations), whole_b[lo:lo + BLOCK])
+        np.testing.assert_array_equal(core.gradient_tensor(part, stations, baseline=baseline),
+                                      whole_g[lo:lo + BLOCK])
+        h, j = core.magnetic_jacobian(part, stations, sensor="BG", baseline=baseline)
+        np.testing.assert_array_equal(h, whole_h[lo:lo + BLOCK])
+        np.testing.assert_array_equal(j, whole_j[lo:lo + BLOCK])
+
+
 def test_tensor_matches_central_differences_of_magpylib():
     states = random_states(60, rmin=2.0)
     station = np.array([0.0, 0.0, 0.0])

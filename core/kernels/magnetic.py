@@ -41,7 +41,10 @@ ON_STATION = 1e-6
 G_PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2))
 
 JIT = dict(cache=True, error_model="numpy")
-_BLOCK = 256
+#: Points per parallel work item. A call with at most this many points runs the serial twin of a
+#: kernel (``*_serial``): a parallel launch on one block only wakes numba's threads (seed 003's
+#: filter calls the tensor ~160 times per pass on 31 sigma points × 4 dipoles).
+BLOCK = 256
 
 
 @nb.njit(inline="always", **JIT)
@@ -129,27 +132,40 @@ def baseline_point(r, m, baseline, g, dg_dx, dg_dm, rr, bb, gg, dd):
     return ok
 
 
+@nb.njit(nogil=True, **JIT)
+def _tensor_block(states, stations, baseline, b_out, g_out, lo, hi):
+    """:func:`field_and_tensor` for the points lo ≤ p < hi."""
+    r, m, rr, bb = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    b, db_dm = np.empty(3), np.empty((3, 3))
+    gg, dd = np.empty((3, 3)), np.empty((3, 3))
+    t3, u3 = np.empty((3, 3, 3)), np.empty((3, 3, 3))
+    for p in range(lo, hi):
+        for k in range(3):
+            m[k] = states[p, 5 + k]
+        for s in range(stations.shape[0]):
+            for k in range(3):
+                r[k] = stations[s, k] - states[p, k]
+            dipole_point(r, m, False, b, g_out[p, s], db_dm, t3, u3)
+            if baseline > 0.0:
+                baseline_point(r, m, baseline, g_out[p, s], t3, u3, rr, bb, gg, dd)
+            for k in range(3):
+                b_out[p, s, k] = b[k]
+
+
 @nb.njit(parallel=True, nogil=True, **JIT)
 def field_and_tensor(states, stations, baseline, b_out, g_out):
     """B (P, S, 3) nT and the gradiometer's tensor (P, S, 3, 3) nT/m (point tensor if
     ``baseline`` = 0, else the magnetometer differences) for states (P, 8), stations (S, 3)."""
     npts = states.shape[0]
-    for blk in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        r, m, rr, bb = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-        b, db_dm = np.empty(3), np.empty((3, 3))
-        gg, dd = np.empty((3, 3)), np.empty((3, 3))
-        t3, u3 = np.empty((3, 3, 3)), np.empty((3, 3, 3))
-        for p in range(blk * _BLOCK, min(npts, (blk + 1) * _BLOCK)):
-            for k in range(3):
-                m[k] = states[p, 5 + k]
-            for s in range(stations.shape[0]):
-                for k in range(3):
-                    r[k] = stations[s, k] - states[p, k]
-                dipole_point(r, m, False, b, g_out[p, s], db_dm, t3, u3)
-                if baseline > 0.0:
-                    baseline_point(r, m, baseline, g_out[p, s], t3, u3, rr, bb, gg, dd)
-                for k in range(3):
-                    b_out[p, s, k] = b[k]
+    for blk in nb.prange((npts + BLOCK - 1) // BLOCK):
+        _tensor_block(states, stations, baseline, b_out, g_out, blk * BLOCK,
+                      min(npts, (blk + 1) * BLOCK))
+
+
+@nb.njit(nogil=True, **JIT)
+def field_and_tensor_serial(states, stations, baseline, b_out, g_out):
+    """:func:`field_and_tensor` on the calling thread (for at most :data:`BLOCK` points)."""
+    _tensor_block(states, stations, baseline, b_out, g_out, 0, states.shape[0])
 
 
 @nb.njit(**JIT)
@@ -196,17 +212,30 @@ def _rows_point(x, stations, with_b, with_g, baseline, dt, h, jac, r, m, rr, bb,
             jac[s, c2, 4] = dt * jac[s, c2, 1]
 
 
+@nb.njit(nogil=True, **JIT)
+def _rows_block(states, stations, with_b, with_g, baseline, dt, h_out, j_out, lo, hi):
+    """:func:`measurement_rows` for the points lo ≤ p < hi."""
+    r, m, rr, bb, b = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    g, ga, db_dm = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    gg, dd = np.empty((3, 3)), np.empty((3, 3))
+    t3, u3 = np.empty((3, 3, 3)), np.empty((3, 3, 3))
+    for p in range(lo, hi):
+        _rows_point(states[p], stations, with_b, with_g, baseline, dt, h_out[p], j_out[p],
+                    r, m, rr, bb, b, g, ga, db_dm, gg, dd, t3, u3)
+
+
 @nb.njit(parallel=True, nogil=True, **JIT)
 def measurement_rows(states, stations, with_b, with_g, baseline, dt, h_out, j_out):
     """Measurements h (P, S, C) and Γ blocks ∂h(Φ^i x)/∂x (P, S, C, 8) at time offset ``dt``
     (= i·T) for states (P, 8): C = 3 (B), 5 (G) or 8 (B then G). NaN where a target is within
     ON_STATION of a magnetometer."""
     npts = states.shape[0]
-    for blk in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        r, m, rr, bb, b = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-        g, ga, db_dm = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-        gg, dd = np.empty((3, 3)), np.empty((3, 3))
-        t3, u3 = np.empty((3, 3, 3)), np.empty((3, 3, 3))
-        for p in range(blk * _BLOCK, min(npts, (blk + 1) * _BLOCK)):
-            _rows_point(states[p], stations, with_b, with_g, baseline, dt, h_out[p], j_out[p],
-                        r, m, rr, bb, b, g, ga, db_dm, gg, dd, t3, u3)
+    for blk in nb.prange((npts + BLOCK - 1) // BLOCK):
+        _rows_block(states, stations, with_b, with_g, baseline, dt, h_out, j_out, blk * BLOCK,
+                    min(npts, (blk + 1) * BLOCK))
+
+
+@nb.njit(nogil=True, **JIT)
+def measurement_rows_serial(states, stations, with_b, with_g, baseline, dt, h_out, j_out):
+    """:func:`measurement_rows` on the calling thread (for at most :data:`BLOCK` points)."""
+    _rows_block(states, stations, with_b, with_g, baseline, dt, h_out, j_out, 0, states.shape[0])

@@ -83,7 +83,8 @@ def _field_and_tensor(states_value, stations_value, baseline):
     n_s = stations.shape[0]
     b = np.empty((flat.shape[0], n_s, 3))
     g = np.empty((flat.shape[0], n_s, 3, 3))
-    mk.field_and_tensor(flat, stations, baseline, b, g)
+    kernel = mk.field_and_tensor if flat.shape[0] > mk.BLOCK else mk.field_and_tensor_serial
+    kernel(flat, stations, baseline, b, g)
     return b.reshape(lead + (n_s, 3)), g.reshape(lead + (n_s, 3, 3))
 
 
@@ -207,7 +208,8 @@ def measurement_rows(states_value, stations_value, sensor, baseline, dt):
     n_s, n_c = stations.shape[0], len(MAGNETIC_COMPONENTS[sensor])
     h = np.empty((flat.shape[0], n_s, n_c))
     jac = np.empty((flat.shape[0], n_s, n_c, mk.N_STATE))
-    mk.measurement_rows(flat, stations, with_b, with_g, baseline, float(dt), h, jac)
+    kernel = mk.measurement_rows if flat.shape[0] > mk.BLOCK else mk.measurement_rows_serial
+    kernel(flat, stations, with_b, with_g, baseline, float(dt), h, jac)
     return h.reshape(lead + (n_s, n_c)), jac.reshape(lead + (n_s, n_c, mk.N_STATE))
 
 
