@@ -87,7 +87,7 @@ def _magnetic_maps():
     with KERNEL_LOCK:
         core.crlb_maps(_PLANE, _STATIONS, sensor="BG", **magnetic)
         # a few points: the kernels' serial twins (core.kernels.magnetic.BLOCK)
-        core.gamma([30, 40, 120, 2, 2, -3000.0, 1000.0, 5000.0], _STATIONS, sensor="BG")
+        core.gamma([30, 40, 120, 2, 2, -3000.0, 1000.0, 5000.0], _STATIONS, sensor="BG", steps=3)
         core.gradient_tensor([30, 40, 120, 2, 2, -3000.0, 1000.0, 5000.0], _STATIONS)
 
 
