@@ -1,16 +1,22 @@
 """``python -m core.shape --case CASE [--runs N] [--seed S] [--lag N] --out DIR``.
 
-Runs a case of seed 003 (:data:`core.shape.cases.CASES`) with ``runs`` Monte-Carlo passes and
-writes into DIR:
+Runs a case of seed 003 (:data:`core.shape.cases.CASES`) with ``runs`` Monte-Carlo passes
+(1 to :data:`MAX_RUNS`: each run keeps ~0.3 MB of tracks and covariances in memory) and writes
+into DIR:
 
 - ``summary.json``: the case's truth and, per row of the case (Tables have several), per filter
   ("euler", "ukf", "nhukf") ``centroid_error_m``, ``peak_error_m``, ``main_scale_m``,
   ``main_scale_error_m``, ``axis_error_deg``, ``kind``, ``nees`` (medians over runs; the
-  metrics of :mod:`core.shape.experiment`); the top-level ``filters`` and ``truth`` are the
-  first row's;
+  metrics of :mod:`core.shape.experiment`: ``kind`` is the majority verdict or ``"tie"``,
+  ``main_scale_m`` the median over the runs of the majority kind, null on a tie); the
+  top-level ``filters`` and ``truth`` are the first row's;
 - ``errors_rowI.png``: position error along the pass for each filter (run 0), outliers marked;
 - ``shape_rowI.png``: run 0's final dipoles and PCA axes over the target's outline, plan (x–y)
   and side (x–z) views.
+
+The filter update is the case's own (:mod:`core.shape.cases`): the figures use the one-sample
+update, the tables seed 003's window of lag 5; ``--lag N`` sets it for every row (0: one
+sample), with 2N below the pass's sample count (81 samples: N ≤ 40).
 
 Every bad input prints one line ``python -m core.shape: error: …`` and exits with status 2.
 """
@@ -19,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from dataclasses import replace
@@ -29,6 +36,9 @@ from ..shape.cases import CASES, case_rows
 from ..shape.experiment import run_case
 
 PROG = "python -m core.shape"
+#: Largest ``--runs``: each run keeps ~0.3 MB (the two filters' 81 covariances of 15 × 15, the
+#: tracks), so 10000 runs need ~3 GB.
+MAX_RUNS = 10000
 
 
 class _Parser(argparse.ArgumentParser):
@@ -37,7 +47,7 @@ class _Parser(argparse.ArgumentParser):
         sys.exit(2)
 
 
-def _int(lo, what):
+def _int(lo, what, hi=None, why=""):
     def conv(s):
         try:
             v = int(s)
@@ -45,6 +55,8 @@ def _int(lo, what):
             raise argparse.ArgumentTypeError(f"must be an integer ≥ {lo} ({what}); got {s!r}") from None
         if v < lo:
             raise argparse.ArgumentTypeError(f"must be an integer ≥ {lo} ({what}); got {s!r}")
+        if hi is not None and v > hi:
+            raise argparse.ArgumentTypeError(f"must be at most {hi} ({what}{why}); got {s!r}")
         return v
     return conv
 
@@ -53,9 +65,14 @@ def _parser():
     p = _Parser(prog=PROG, description=__doc__.split("\n")[0])
     p.add_argument("--case", required=True, choices=list(CASES), metavar="CASE",
                    help="one of " + ", ".join(CASES))
-    p.add_argument("--runs", type=_int(1, "Monte-Carlo passes"), default=1)
+    p.add_argument("--runs", type=_int(1, "Monte-Carlo passes", MAX_RUNS,
+                                       ": each keeps ~0.3 MB in memory"), default=1,
+                   help=f"Monte-Carlo passes, 1 to {MAX_RUNS} (default 1)")
     p.add_argument("--seed", type=_int(0, "random seed"), default=0)
-    p.add_argument("--lag", type=_int(0, "seed 003's window lag n; 0 = one-sample update"), default=0)
+    p.add_argument("--lag", type=_int(0, "seed 003's window lag n; 0 = one-sample update"), default=None,
+                   help="the update's window lag n for every row: 0 = one-sample update, n > 0 = "
+                        "seed 003's [k − 2n, k − n, k] with 2n below the sample count (81: n ≤ 40); "
+                        "default: the case's own (figures 0, tables 5)")
     p.add_argument("--out", required=True, help="output folder (created if missing)")
     return p
 
@@ -69,6 +86,29 @@ def _check_out(out):
         raise ValueError(f"--out {out!r} cannot be created: {exc.strerror}") from None
     if not os.access(out, os.W_OK):
         raise ValueError(f"--out {out!r} is not writable")
+
+
+def check_lag(case, lag):
+    """ValueError unless every row of ``case`` can take the window lag ``lag`` (None: the rows'
+    own): seed 003's window [k − 2n, k − n, k] needs 2n below the pass's sample count."""
+    for row in case_rows(case)[1]:
+        n = row.lag if lag is None else lag
+        K = row.track.samples
+        if 2 * n >= K:
+            raise ValueError(f"--lag {n} is too large for {case}: its pass has {K} samples and the "
+                             f"window [k − 2n, k − n, k] needs 2n < {K}; the largest lag accepted "
+                             f"is {(K - 1) // 2}")
+
+
+def _json_safe(v):
+    """NaN → None (strict JSON: null), recursively."""
+    if isinstance(v, float) and math.isnan(v):
+        return None
+    if isinstance(v, dict):
+        return {k: _json_safe(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_safe(x) for x in v]
+    return v
 
 
 def _plot_errors(res, path):
@@ -126,21 +166,25 @@ def _plot_shape(res, path):
     plt.close(fig)
 
 
-def run(case, runs=1, seed=0, lag=0, out=None, plots=True):
-    """Run a case; write summary.json (and plots) into ``out`` if given. Returns the summary."""
+def run(case, runs=1, seed=0, lag=None, out=None, plots=True):
+    """Run a case; write summary.json (and plots) into ``out`` if given. Returns the summary
+    (as written: NaN as None). ``lag`` None keeps each row's own update (cases.py)."""
     desc, rows = case_rows(case)
+    check_lag(case, lag)
     results = []
     for row in rows:
-        if lag:
+        if lag is not None:
             row = replace(row, lag=lag)
         results.append(run_case(row, runs=runs, seed=seed))
-    summary = {"case": case, "description": desc, "runs": runs, "seed": seed, "lag": lag,
+    summary = {"case": case, "description": desc, "runs": runs, "seed": seed,
+               "lag": results[0].case.lag,
                "truth": results[0].summary["case"], "filters": results[0].summary["filters"],
                "rows": [{"label": r.case.name, "truth": r.summary["case"], "filters": r.summary["filters"],
                          "outlier_samples": r.outlier_samples} for r in results]}
+    summary = _json_safe(summary)
     if out is not None:
         with open(os.path.join(out, "summary.json"), "w", encoding="utf-8") as fh:
-            json.dump(summary, fh, indent=1)
+            json.dump(summary, fh, indent=1, allow_nan=False)
         if plots:
             for i, r in enumerate(results):
                 _plot_errors(r, os.path.join(out, f"errors_row{i}.png"))
@@ -148,9 +192,14 @@ def run(case, runs=1, seed=0, lag=0, out=None, plots=True):
     return summary
 
 
+def _fmt(v, spec):
+    return "—" if v is None else format(v, spec)
+
+
 def main(argv=None):
     a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     try:
+        check_lag(a.case, a.lag)
         _check_out(a.out)
     except ValueError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -159,8 +208,8 @@ def main(argv=None):
     for row in s["rows"]:
         f = row["filters"]
         print(f"{row['label']}: " + "; ".join(
-            f"{n} centroid {v['centroid_error_m']:.3f} m" + (
-                f", scale {v['main_scale_m']:.2f} m, axis {v['axis_error_deg']:.1f}°, {v['kind']}"
+            f"{n} centroid {_fmt(v['centroid_error_m'], '.3f')} m" + (
+                f", scale {_fmt(v['main_scale_m'], '.2f')} m, axis {v['axis_error_deg']:.1f}°, {v['kind']}"
                 if "kind" in v else "") for n, v in f.items()))
     print(f"wrote {os.path.join(a.out, 'summary.json')}")
     return s

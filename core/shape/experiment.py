@@ -8,7 +8,11 @@ Metrics (per filter; "position" is the centroid of the N dipoles, or Euler's poi
 - ``centroid_error_m``: |centroid − true centroid| at the last sample;
 - ``peak_error_m``: the largest position error after the first :data:`SETTLE` samples;
 - ``main_scale_m`` / ``main_scale_error_m`` / ``axis_error_deg`` / ``kind``: the PCA of the final
-  dipoles (:func:`core.shape.pca_shape`) against the target's H (or 2R) and axis;
+  dipoles (:func:`core.shape.pca_shape`) against the target's H (or 2R) and axis. Over runs,
+  ``kind`` is the majority verdict (``"tie"`` if line and plane have as many runs: see
+  ``kind_share``), ``main_scale_m`` the median over the runs of that kind (a length and a
+  diameter do not mix; NaN on a tie; ``main_scale_by_kind_m`` gives each kind's median), and
+  ``main_scale_error_m`` the median over all runs of |main scale − truth|;
 - ``nees``: mean over runs and samples after :data:`SETTLE` of the centroid's NEES
   (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true), 3 degrees of freedom (A averages the dipole positions):
   3 for a consistent filter; the true target is not a 4-dipole state, so only the centroid has
@@ -28,7 +32,7 @@ from .pca import axis_angle_deg, pca_shape
 from .targets import Outliers, Pass, Target
 
 __all__ = ["BASELINE", "NOISE_B", "NOISE_G", "SETTLE", "Case", "CaseResult", "euler_point",
-           "run_case", "simulate"]
+           "run_case", "simulate", "verdict"]
 
 #: Gradiometer baseline of the truth (m), seed 003's Ls.
 BASELINE = 0.5
@@ -201,6 +205,23 @@ def run_case(case, runs=1, seed=0, filters=("ukf", "nhukf")):
     return out
 
 
+def verdict(kinds, scales):
+    """The verdict over runs: (kind, share per kind, median main scale per kind).
+
+    ``kind`` is the majority verdict, ``"tie"`` when line and plane have as many runs. A line's
+    main scale is a length and a plane's a diameter, so the medians are per kind: the summary's
+    ``main_scale_m`` is the majority kind's (NaN on a tie, where ``main_scale_by_kind_m`` gives
+    both)."""
+    kinds = np.asarray(kinds)
+    scales = np.asarray(scales, float)
+    names, counts = np.unique(kinds, return_counts=True)
+    top = names[counts == counts.max()]
+    kind = str(top[0]) if top.size == 1 else "tie"
+    share = {str(k): float(c / kinds.size) for k, c in zip(names, counts)}
+    by_kind = {str(k): float(np.median(scales[kinds == k])) for k in names}
+    return kind, share, by_kind
+
+
 def summarise(res):
     """summary.json's content (module notes); medians over runs where there are several."""
     case = res.case
@@ -213,13 +234,14 @@ def summarise(res):
                  "peak_error_m": float(np.nanmedian(np.nanmax(err[:, SETTLE:], axis=1)))}
         if name in res.final:
             f = res.final[name]
-            kinds, counts = np.unique(f["kind"], return_counts=True)
+            kind, share, by_kind = verdict(f["kind"], f["main_scale_m"])
             d.update({
-                "main_scale_m": float(np.median(f["main_scale_m"])),
+                "main_scale_m": by_kind.get(kind, float("nan")),
+                "main_scale_by_kind_m": by_kind,
                 "main_scale_error_m": float(np.median(np.abs(f["main_scale_m"] - truth_scale))),
                 "axis_error_deg": float(np.median(f["axis_error_deg"])),
-                "kind": str(kinds[np.argmax(counts)]),
-                "kind_share": {str(k): float(c / res.runs) for k, c in zip(kinds, counts)},
+                "kind": kind,
+                "kind_share": share,
                 "nees": float(np.nanmean(res.nees[name][:, SETTLE:])),
                 "nees_dof": 3,
                 "moment_total_Am2": (np.median(f["moment"], axis=0) * md.N_DIPOLES).tolist(),

@@ -15,7 +15,8 @@ Measurement: the 5 independent tensor components (Gxx, Gxy, Gxz, Gyy, Gyz), nT/m
 (``lag=0``, the honest one-sample update) or seed 003's window of three lagged readings
 ``[G_{k−2n}, G_{k−n}, G_k]`` (eq. (15), ``lag=n``; n is not printed, 5 is our choice), which
 uses every sample three times and so makes the filter's covariance optimistic. At k < 2n the
-window holds the readings that exist.
+window holds the readings that exist (a lag with 2n ≥ K leaves the older readings missing at
+every sample: the command line refuses it).
 
 Start: not at one point. With all N dipoles at one point, every dipole's position columns of
 ∂h/∂X are equal (each adds the same T(r)·m), so the Jacobian stacked over any number of
@@ -195,6 +196,8 @@ class DipoleModel:
         out = np.full(z5.shape[:-2] + (K, self.n_meas), np.nan)
         for w, off in enumerate(self.window):
             k0 = max(0, -off)
+            if k0 >= K:  # the window reaches before the first sample at every step
+                continue
             out[..., k0:, 5 * w: 5 * w + 5] = z5[..., k0 + off: K + off, :]
         return out
 
