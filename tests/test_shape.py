@@ -94,7 +94,11 @@ def test_cli_writes_summary_fields(tmp_path):
         f = data["filters"][name]
         assert set(f) >= {"centroid_error_m", "peak_error_m", "main_scale_m", "main_scale_error_m",
                           "axis_error_deg", "kind", "nees"}
-        assert f["kind"] in ("line", "plane")
+        assert f["kind"] in ("line", "plane", "tie")  # 2 runs: seed 1 splits the NHUKF's 1:1
+        if f["kind"] == "tie":
+            assert f["main_scale_m"] is None and len(f["main_scale_by_kind_m"]) == 2
+        else:
+            assert f["main_scale_m"] == f["main_scale_by_kind_m"][f["kind"]]
     assert set(data["filters"]["euler"]) >= {"centroid_error_m", "peak_error_m"}
     assert data["truth"]["target"]["cells"] == 2400
 
@@ -107,6 +111,9 @@ def test_cli_writes_summary_fields(tmp_path):
     (["--case", "seed003-fig4", "--runs", "two", "--out", "{tmp}"], "integer ≥ 1"),
     (["--case", "seed003-fig4", "--seed", "-1", "--out", "{tmp}"], "integer ≥ 0"),
     (["--case", "seed003-fig4", "--lag", "x", "--out", "{tmp}"], "integer ≥ 0"),
+    (["--case", "seed003-fig4", "--lag", "41", "--out", "{tmp}"], "the largest lag accepted is 40"),
+    (["--case", "seed003-table3", "--lag", "100", "--out", "{tmp}"], "the largest lag accepted is 40"),
+    (["--case", "seed003-fig4", "--runs", "10001", "--out", "{tmp}"], "at most 10000"),
     (["--case", "seed003-fig4", "--out", "{file}"], "is a file"),
     (["--case", "seed003-fig4", "--out", "{tmp}", "--bogus"], "unrecognized"),
 ])
@@ -181,3 +188,121 @@ def test_cli_run_writes_plots(tmp_path):
             assert im.size[0] > 300 and len(im.convert("RGB").getcolors(1 << 16) or range(99)) > 20
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["rows"][0]["outlier_samples"] == [20, 30, 40]
+
+
+def test_cli_accepts_the_largest_lag_and_runs_the_window_it_says():
+    """--lag 40 (2n = 80 < 81 samples) runs: the update's last sample carries all three readings."""
+    from core.cli.shape import check_lag
+
+    check_lag("seed003-fig4", 40)
+    with pytest.raises(ValueError, match="largest lag accepted is 40"):
+        check_lag("seed003-fig4", 41)
+
+
+def test_window_measurements_when_the_window_reaches_before_the_pass():
+    """2n ≥ K: the oldest reading is missing (NaN) at every sample, the others where they exist
+    (this raised a broadcast error before)."""
+    K = 10
+    mdl = md.DipoleModel(TRACK.positions[:K], lag=6)
+    z = np.arange(2 * K * 5, dtype=float).reshape(2, K, 5)
+    w = mdl.window_measurements(z)
+    assert w.shape == (2, K, 15)
+    assert np.all(np.isnan(w[..., :5]))
+    assert np.all(np.isnan(w[:, :6, 5:10]))
+    np.testing.assert_array_equal(w[:, 6:, 5:10], z[:, :4])
+    np.testing.assert_array_equal(w[..., 10:], z)
+    w3 = md.DipoleModel(TRACK.positions[:K], lag=3).window_measurements(z)  # 2n = 6 < K
+    np.testing.assert_array_equal(w3[:, 6:, :5], z[:, :4])
+    assert np.all(np.isnan(w3[:, :6, :5])) and np.all(np.isnan(w3[:, :3, 5:10]))
+
+
+def test_verdict_is_the_majority_and_a_tie_says_so():
+    """Over runs: the majority kind; its main scale the median of its own runs (a length and a
+    diameter do not mix); a tie is reported as such, with NaN main scale and both medians."""
+    from core.shape.experiment import verdict
+
+    kind, share, by = verdict(["line", "plane", "line"], [3.0, 10.0, 3.2])
+    assert kind == "line" and share == {"line": 2 / 3, "plane": 1 / 3}
+    assert by == {"line": pytest.approx(3.1), "plane": 10.0}  # all three: median 3.2
+    kind, share, by = verdict(["plane", "line", "plane", "line"], [10.0, 3.0, 12.0, 3.2])
+    assert kind == "tie" and share == {"line": 0.5, "plane": 0.5}
+    assert by == {"line": pytest.approx(3.1), "plane": 11.0}
+    assert verdict(["plane", "plane", "line"], [2.0, 2.2, 3.0])[0] == "plane"
+
+
+def test_summary_of_a_tie_has_null_main_scale_in_json(tmp_path):
+    """summarise() on runs split 1:1 says "tie" and NaN, and the CLI's JSON writes null (strict
+    JSON), keeping the per-kind medians."""
+    from core.cli.shape import _json_safe
+    from core.shape.experiment import CaseResult, summarise
+
+    R, K = 2, TRACK.samples
+    res = CaseResult(case=Case("tie"), runs=R, times=TRACK.times, platform_x=TRACK.positions[:, 0],
+                     outlier_samples=[], errors={"euler": np.ones((R, K)), "ukf": np.ones((R, K))},
+                     final={"ukf": {"main_scale_m": np.array([3.1, 2.0]), "kind": np.array(["line", "plane"]),
+                                    "axis_error_deg": np.array([1.0, 50.0]), "moment": np.ones((R, 3))}},
+                     dipoles={}, euler_cond=np.ones((R, K)), nees={"ukf": np.ones((R, K))})
+    f = summarise(res)["filters"]["ukf"]
+    assert f["kind"] == "tie" and np.isnan(f["main_scale_m"])
+    assert f["main_scale_by_kind_m"] == {"line": 3.1, "plane": 2.0}
+    s = json.loads(json.dumps(_json_safe(summarise(res)), allow_nan=False))
+    assert s["filters"]["ukf"]["main_scale_m"] is None
+
+
+def test_tables_use_seed003s_window_and_the_figures_one_sample():
+    """The update is the case's (cases.py): the report and the CLI agree without a --lag."""
+    from core.shape.cases import CASES, TABLE_LAG
+
+    assert TABLE_LAG == md.LAG
+    for name, (_, rows) in CASES.items():
+        assert {r.lag for r in rows} == ({TABLE_LAG} if "table" in name else {0}), name
+    s = cli_run("seed003-table5", runs=1, seed=0, plots=False)
+    assert s["lag"] == TABLE_LAG and [r["truth"]["lag"] for r in s["rows"]] == [TABLE_LAG] * 3
+    s = cli_run("seed003-table5", runs=1, seed=0, lag=0, plots=False)
+    assert [r["truth"]["lag"] for r in s["rows"]] == [0] * 3
+
+
+def _fd_fisher(h, th0, steps, noise):
+    D = np.stack([(h(th0 + s * e) - h(th0 - s * e)) / (2 * s) for e, s in zip(np.eye(th0.size), steps)], -1)
+    return D.T @ D / noise**2
+
+
+def test_bound_matches_an_independent_fisher_matrix_of_core_gradient_tensor():
+    """Seed 003's pass (σ = 0.01 nT/m, 5 components, 81 samples): the rigid-line main scale's σ
+    and the point dipole's position σ of core.shape.bound equal those from a Fisher matrix built
+    here by central differences of core.gradient_tensor itself (not the model's exact Jacobian):
+    steps 1e-6 m / rad and 1e-6 relative on the moment, truncation ~(h/r)² ~ 1e-14, round-off
+    ~1e-16 · |G| / h ~ 1e-10 relative, amplified by the Fisher matrix's conditioning: 1e-5
+    relative is a wide margin. The absolute values pinned: 0.153 mm (rigid line) and 21.7 µm
+    (point dipole; the spec: ~20 µm)."""
+    from core import gradient_tensor
+    from core.shape import bound as bd
+    from core.shape.targets import Target
+
+    t = Target()
+    b = bd.shape_bound(t, TRACK)
+    i, j = zip(*md.G_COMPONENTS)
+
+    def g5(pos, mom):
+        st = np.zeros((len(pos), 8))
+        st[:, :3], st[:, 5:] = pos, mom
+        return gradient_tensor(st, TRACK.positions).sum(axis=0)[:, i, j].ravel()
+
+    a = t.axis
+    th0 = np.r_[t.centroid, np.arctan2(a[1], a[0]), np.arcsin(a[2]), t.height, t.total_moment / 4]
+
+    def rigid(th):
+        u = np.array([np.cos(th[4]) * np.cos(th[3]), np.cos(th[4]) * np.sin(th[3]), np.sin(th[4])])
+        pos = th[:3] + np.outer((np.arange(4) + 0.5) / 4 * th[5] - th[5] / 2, u)
+        return g5(pos, np.tile(th[6:], (4, 1)))
+
+    steps = np.r_[np.full(6, 1e-6), 1e-6 * np.abs(th0[6:])]
+    sig_L = np.sqrt(np.linalg.inv(_fd_fisher(rigid, th0, steps, 0.01))[5, 5])
+    assert b.rigid_main_scale_m == pytest.approx(sig_L, rel=1e-5)
+    assert b.rigid_main_scale_m == pytest.approx(1.531e-4, rel=1e-3)
+
+    p0 = np.r_[t.centroid, t.total_moment]
+    C = np.linalg.inv(_fd_fisher(lambda p: g5(p[None, :3], p[None, 3:]), p0,
+                                 np.r_[np.full(3, 1e-6), 1e-6 * np.abs(p0[3:])], 0.01))
+    assert b.point_position_m == pytest.approx(np.sqrt(np.trace(C[:3, :3])), rel=1e-5)
+    assert b.point_position_m == pytest.approx(2.170e-5, rel=1e-3)
