@@ -233,11 +233,19 @@ def verdict_text(out):
     rigid = (f", rigid line ± {b.rigid_main_scale_m:.2g} m" if np.isfinite(b.rigid_main_scale_m) else "")
     for name in ("ukf", "nhukf"):
         d = s[name]
-        share = d["kind_share"].get(d["kind"], 1.0)
-        kind = d["kind"] + (f" ({100 * share:.0f} % of passes)" if runs > 1 else "")
-        ok = "✓" if d["kind"] == t.kind else "✗ (truth: " + t.kind + ")"
+        if d["kind"] == "tie":  # as many passes say line as plane: both, with their scales
+            by_kind = d.get("main_scale_by_kind_m", {})
+            kind = "line or plane: a tie (" + ", ".join(
+                f"{k} {100 * d['kind_share'].get(k, 0.0):.0f} %, {by_kind.get(k, float('nan')):.3g} m"
+                for k in ("line", "plane")) + ")"
+            ok, scale = "?", "—"
+        else:
+            share = d["kind_share"].get(d["kind"], 1.0)
+            kind = d["kind"] + (f" ({100 * share:.0f} % of passes)" if runs > 1 else "")
+            ok = "✓" if d["kind"] == t.kind else "✗ (truth: " + t.kind + ")"
+            scale = f"{d['main_scale_m']:.3g} m"
         lines.append(
-            f"**{FILTERS[name][0]}**: **{kind}** {ok}, main scale **{d['main_scale_m']:.3g} m ± "
+            f"**{FILTERS[name][0]}**: **{kind}** {ok}, main scale **{scale} ± "
             f"{b.main_scale_m:.2g} m** (bound{rigid}; error {d['main_scale_error_m']:.2g} m), "
             f"axis {d['axis_error_deg']:.3g}° off (bound ± {b.axis_deg:.2g}°), centroid error "
             f"{d['centroid_error_m']:.2g} m (bound {b.centroid_m:.2g} m), centroid NEES "

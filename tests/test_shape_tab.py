@@ -135,3 +135,17 @@ def test_views_have_units_and_mark_the_outliers():
     assert side.y_range.start > side.y_range.end  # depth down
     bound = hv.render(v["bound"])
     assert (bound.xaxis[0].axis_label, bound.yaxis[0].axis_label) == ("closest approach (m)", "1σ bound (m)")
+
+
+def test_a_tie_between_line_and_plane_is_shown_as_such_with_both_scales():
+    """With an even number of passes the verdict can tie (core says "tie" and gives the main
+    scale of each kind): the tab must not print it as a 100 % verdict nor a "nan m" scale."""
+    import copy
+    out = shape.compute(shape.key_of(Scenario()))
+    tied = dict(out, res=copy.deepcopy(out["res"]))
+    d = tied["res"].summary["filters"]["ukf"]
+    d.update(kind="tie", kind_share={"line": 0.5, "plane": 0.5}, main_scale_m=float("nan"),
+             main_scale_by_kind_m={"line": 3.1, "plane": 1.2})
+    text = shape.verdict_text(tied)
+    assert "a tie (line 50 %, 3.1 m, plane 50 %, 1.2 m)" in text
+    assert "nan" not in text and "100 %" not in text
