@@ -515,33 +515,91 @@ def optimised_layout(snapshot: Snapshot):
                                     **_fisher_options(s))  # spacing up to what fits in the region
 
 
-class PanelCache:
-    """A few recent :func:`compute` results for one session (freed with the session)."""
+def _arrays(value, seen=None):
+    """The numpy arrays inside a result (dataclasses, tuples, lists, dicts), each once."""
+    seen = set() if seen is None else seen
+    if id(value) in seen:
+        return
+    seen.add(id(value))
+    if isinstance(value, np.ndarray):
+        yield value
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        for f in dataclasses.fields(value):
+            yield from _arrays(getattr(value, f.name), seen)
+    elif isinstance(value, (tuple, list)):
+        for v in value:
+            yield from _arrays(v, seen)
+    elif isinstance(value, dict):
+        for v in value.values():
+            yield from _arrays(v, seen)
 
-    def __init__(self, size=4):
-        self.size = size
-        self._store = OrderedDict()
+
+class PanelCache:
+    """Recent results of the tabs' pure computations (:func:`compute`, :func:`design`, …), keyed
+    by (function, :class:`Snapshot`) and shared by every session of the process (:data:`SHARED`):
+    the default view and the presets are computed once per process, not once per visitor
+    (issue 29). Bounded by ``size`` entries and ``max_bytes`` of arrays, least recently used out
+    first. A key being computed is computed once: a second session asking for it waits for the
+    first's result. A cached result's arrays are made read-only, so that no view can change
+    what another session sees."""
+
+    def __init__(self, size=16, max_bytes=48 * 2**20):
+        self.size, self.max_bytes = size, max_bytes
+        self._store = OrderedDict()  # key -> (result, bytes)
+        self._pending = {}  # key -> threading.Event, set when its computation ends
+        self._bytes = 0
         self._lock = threading.Lock()
 
     def get(self, snapshot: Snapshot, fn=None):
         """``fn(snapshot)`` (default :func:`compute`), from the cache when it was asked before."""
         fn = fn or compute
-        key = (fn.__name__, snapshot)
+        key = (fn.__module__, fn.__qualname__, snapshot)
+        while True:
+            with self._lock:
+                if key in self._store:
+                    self._store.move_to_end(key)
+                    return self._store[key][0]
+                pending = self._pending.get(key)
+                if pending is None:
+                    self._pending[key] = threading.Event()
+                    break
+            pending.wait()  # another session computes it; if that failed, try again ourselves
+        try:
+            result = fn(snapshot)
+        except BaseException:
+            with self._lock:
+                self._pending.pop(key).set()
+            raise
+        arrays = list(_arrays(result))
+        for arr in arrays:
+            arr.flags.writeable = False
+        nbytes = sum(arr.nbytes for arr in arrays)
         with self._lock:
-            if key in self._store:
-                self._store.move_to_end(key)
-                return self._store[key]
-        result = fn(snapshot)
-        with self._lock:
-            self._store[key] = result
-            while len(self._store) > self.size:
-                self._store.popitem(last=False)
+            self._pending.pop(key).set()
+            if nbytes <= self.max_bytes:
+                self._store[key] = (result, nbytes)
+                self._bytes += nbytes
+                while len(self._store) > self.size or self._bytes > self.max_bytes:
+                    self._bytes -= self._store.popitem(last=False)[1][1]
         return result
+
+    def __len__(self):
+        return len(self._store)
+
+    @property
+    def nbytes(self):
+        """Bytes of the cached results' arrays."""
+        return self._bytes
 
     def clear(self):
         with self._lock:
             self._store.clear()
+            self._bytes = 0
 
 
-__all__ = ["DESIGN_FIELDS", "FIELDS", "PanelCache", "Panels", "Snapshot", "best_spacing", "compute",
+#: The process's one cache of computed results (every session's tabs use it).
+SHARED = PanelCache()
+
+
+__all__ = ["DESIGN_FIELDS", "FIELDS", "PanelCache", "Panels", "SHARED", "Snapshot", "best_spacing", "compute",
            "design", "difference", "error_at"]

@@ -15,7 +15,7 @@ from bokeh.models.formatters import PrintfTickFormatter
 
 from . import maps, url
 from .calibration import calibration_tab
-from .compute import KIND_NAMES, PanelCache
+from .compute import KIND_NAMES, SHARED
 from .design import design_tab
 from .inputs import number_input
 from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, SENSORS, Scenario
@@ -249,10 +249,9 @@ def panel_extension():
 
 def create_app():
     scenario = Scenario()
-    cache = PanelCache()
+    cache = SHARED  # results are shared by every session of the process (app.compute)
 
     def session_closed(ctx):
-        cache.clear()
         _schedule_collection()
 
     pn.state.on_session_destroyed(session_closed)

@@ -105,6 +105,65 @@ def test_cache_computes_once_per_scenario(monkeypatch):
     assert len(calls) == 2
 
 
+def test_the_cache_is_shared_computes_a_key_once_and_stays_within_its_bounds():
+    """Issue 29: results are shared by the sessions of a process (two visitors of the default
+    view cost one computation, even when they ask at the same time), bounded in entries and
+    bytes, and read-only (no session's view can change what another sees)."""
+    import threading
+    import time as _time
+
+    calls = []
+
+    def slow(snap):
+        calls.append(snap)
+        _time.sleep(0.3)
+        return compute(snap)
+
+    cache = PanelCache(size=3)
+    first, second = Scenario(resolution=21), Scenario(resolution=21)  # two sessions, same view
+    results = []
+    threads = [threading.Thread(target=lambda s=s: results.append(cache.get(Snapshot.of(s), slow)))
+               for s in (first, second)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(calls) == 1 and results[0] is results[1]
+    with pytest.raises(ValueError, match="read-only"):
+        results[0].a.value[0, 0] = 1.0
+    for ph in (10.0, 20.0, 30.0, 40.0):  # entries beyond the size push the oldest out
+        first.Ph = ph
+        cache.get(Snapshot.of(first), slow)
+    assert len(calls) == 5
+    cache.get(Snapshot.of(second), slow)  # the default view was the least recently used
+    assert len(calls) == 6
+    one = results[0]
+    nbytes = sum(a.nbytes for a in (one.a.value, one.b.value, one.diff))
+    small = PanelCache(size=10, max_bytes=int(2.5 * nbytes))  # room for about two results
+    for ph in (10.0, 20.0, 30.0):
+        first.Ph = ph
+        small.get(Snapshot.of(first))
+    assert len(small) <= 2 and small.nbytes <= small.max_bytes
+
+
+def test_a_failed_computation_is_not_cached_and_does_not_block_the_next_asker():
+    cache = PanelCache()
+    snap = Snapshot.of(Scenario(resolution=21))
+
+    attempts = []
+
+    def flaky(snap):
+        attempts.append(1)
+        if len(attempts) == 1:
+            raise RuntimeError("no")
+        return compute(snap)
+
+    with pytest.raises(RuntimeError):
+        cache.get(snap, flaky)
+    assert cache.get(snap, flaky) is not None and len(attempts) == 2  # computed again, once
+    assert cache.get(snap, flaky) is not None and len(attempts) == 2
+
+
 def test_downloads_carry_data_and_parameters():
     s = Scenario(resolution=21)
     p = compute(Snapshot.of(s))
