@@ -10,6 +10,14 @@ Axis syntax: ``NAME=START:STOP:COUNT`` (evenly spaced; append ``:log`` for log s
 ``NAME=V1,V2,…``. Parameters not swept take their ``--set NAME=VALUE`` or default (the paper's
 scenario, spec §5): see :data:`PARAMETERS`. ``ratio`` sets Ph = ratio · Pv.
 
+``--sensor`` (``sensor`` in the settings of :func:`evaluate` and :func:`run`) is the measurement
+model, one :class:`core.Sensor` built per cell: ``E`` (electric, the default), ``B``
+(magnetometer), ``G`` (gradiometer), ``BG`` (both). The magnetic kinds take the moment vector
+``mx``, ``my``, ``mz`` (A·m²) instead of Ph, Pv, noise in nT (``noise``, B) and nT/m
+(``noise_g``, G; BG uses both; defaults :data:`core.MAGNETIC_NOISE`) and the gradiometer's
+``baseline`` (m, 0 = the point tensor); ``sigma``, ``--model`` and ``--sea-depth`` are electric.
+The paper's square rule (``log10_det``) is electric only.
+
 Point measures are evaluated for one target at (x, y, z); region measures (``mean_dopt``,
 ``worst_dopt``, ``area_crlb``, see :func:`core.layout_criterion`) over the x–y rectangle
 ``--region=XMIN:XMAX:YMIN:YMAX:N`` at target depth z; x and y are then not used. (Write it
@@ -65,12 +73,22 @@ PARAMETERS = {
     "speed": (2.0 * math.sqrt(2.0), "m/s", "target speed"),
     "heading": (45.0, "deg", "heading from +x towards +y"),
     "sigma": (4.0, "S/m", "sea conductivity"),
-    "noise": (1e-7, "V/m", "sensor noise 1σ"),
+    "noise": (None, "V/m; nT", "sensor noise 1σ (electric 1e-7 V/m; magnetometer, nT)"),
     "T": (1.0, "s", "sample interval"),
+    "mx": (1e3, "A·m²", "magnetic moment x (magnetic kinds)"),
+    "my": (-2e3, "A·m²", "magnetic moment y (magnetic kinds)"),
+    "mz": (5e2, "A·m²", "magnetic moment z (magnetic kinds)"),
+    "noise_g": (None, "nT/m", "gradiometer noise 1σ (kinds G, BG)"),
+    "baseline": (0.0, "m", "gradiometer baseline (0: point tensor)"),
 }
 
 #: Parameters that must be > 0.
-POSITIVE = ("d", "speed", "sigma", "noise", "T", "ratio")
+POSITIVE = ("d", "speed", "sigma", "noise", "T", "ratio", "noise_g")
+#: Sensor kinds of ``--sensor`` (:data:`core.KINDS`).
+SENSORS = tuple(core.KINDS)
+#: Parameters of the electric kind only, and of the magnetic kinds only.
+ELECTRIC_ONLY = ("Ph", "Pv", "ratio", "sigma")
+MAGNETIC_ONLY = ("mx", "my", "mz", "noise_g", "baseline")
 
 #: name -> (label, unit, region measure?).
 SWEEP_MEASURES = {
@@ -135,29 +153,69 @@ def parse_region(text):
         raise ValueError(f"region must be XMIN:XMAX:YMIN:YMAX:N (m, m, m, m, points); got {text!r}") from None
 
 
-def scenario(params):
-    """Target state (7,) and Γ options from a full parameter dict (see :data:`PARAMETERS`)."""
-    ph = params["Ph"] if params.get("ratio") is None else params["ratio"] * params["Pv"]
+def unused_parameters(kind):
+    """Parameters that do not apply to sensor ``kind`` (refused as axes or ``--set``)."""
+    if kind == "E":
+        return MAGNETIC_ONLY
+    return ELECTRIC_ONLY + {"B": ("noise_g", "baseline"), "G": ("noise",), "BG": ()}[kind]
+
+
+def default_noise(kind):
+    """The noise parameters of sensor ``kind`` at its defaults (:class:`core.Sensor`)."""
+    nb, ng = core.MAGNETIC_NOISE
+    return {"E": {"noise": core.DEFAULT_NOISE}, "B": {"noise": nb}, "G": {"noise_g": ng},
+            "BG": {"noise": nb, "noise_g": ng}}[kind]
+
+
+def sensor_of(params, settings):
+    """The :class:`core.Sensor` of one cell: ``settings["sensor"]`` (a kind name, default
+    ``"E"``) with the cell's noise, medium and baseline."""
+    kind = settings.get("sensor") or "E"
+    if kind not in SENSORS:
+        raise ValueError(f"sensor must be one of {list(SENSORS)}; got {kind!r}")
+    noise, noise_g = params.get("noise"), params.get("noise_g")
+    if kind == "E":
+        sea = None
+        if settings.get("sea_depth") is not None:  # the layered sea of core.model.sea (z is depth)
+            sea = core.Sea(settings["sea_depth"], settings.get("seabed_sigma", 0.0))
+        return core.Sensor("E", noise, params["sigma"], sea, settings.get("model", "exact"))
+    if settings.get("sea_depth") is not None or settings.get("model", "exact") != "exact":
+        raise ValueError(f"sensor {kind!r} is magnetic: --sea-depth and --model are electric options")
+    nb, ng = core.MAGNETIC_NOISE
+    value = {"B": noise, "G": noise_g, "BG": (nb if noise is None else noise,
+                                              ng if noise_g is None else noise_g)}[kind]
+    baseline = params.get("baseline") or None
+    return core.Sensor(kind, value, baseline=baseline if kind != "B" else None)
+
+
+def scenario(params, settings=None):
+    """Target state and Γ options from a full parameter dict (see :data:`PARAMETERS`): the
+    state (7,) ``[x, y, z, vx, vy, Ph, Pv]`` of the electric kind, (8,) ``[…, mx, my, mz]`` of
+    the magnetic kinds (``settings["sensor"]``), and ``{"T": …, "sensor": core.Sensor}``."""
+    settings = {} if settings is None else settings
+    sensor = sensor_of(params, settings)
     vx, vy = core.velocity_from_heading(params["speed"], params["heading"])
-    state = np.array([params["x"], params["y"], params["z"], vx, vy, ph, params["Pv"]])
-    return state, {"T": params["T"], "sigma": params["sigma"]}
+    if sensor.magnetic:
+        moments = [params["mx"], params["my"], params["mz"]]
+    else:
+        ph = params["Ph"] if params.get("ratio") is None else params["ratio"] * params["Pv"]
+        moments = [ph, params["Pv"]]
+    state = np.array([params["x"], params["y"], params["z"], vx, vy, *moments])
+    return state, {"T": params["T"], "sensor": sensor}
 
 
 def evaluate(params, settings):
     """The measure for one cell; raises ValueError on invalid parameters (e.g. d ≤ 0)."""
-    state, opts = scenario(params)
+    state, opts = scenario(params, settings)
     stations = core.station_layout(settings["layout"], settings["stations"], d=params["d"],
                                    h=params["h"])
-    measure, steps, model = settings["measure"], settings["steps"], settings["model"]
-    opts["model"] = model
-    if settings.get("sea_depth") is not None:  # the layered sea of core.model.sea (z is depth)
-        opts["sea"] = core.Sea(settings["sea_depth"], settings.get("seabed_sigma", 0.0))
+    measure, steps = settings["measure"], settings["steps"]
     if SWEEP_MEASURES[measure][2]:
         (xr, yr, n) = settings["region"]
         region = core.Plane("xy", xr, yr, float(params["z"]), n)
-        return core.layout_criterion(stations, region, velocity=state[3:5], moments=state[5:7],
+        return core.layout_criterion(stations, region, velocity=state[3:5], moments=state[5:],
                                      criterion=measure, threshold=settings["threshold"],
-                                     noise=params["noise"], steps=steps, **opts).value
+                                     steps=steps, **opts).value
     dist = np.min(np.linalg.norm(stations - state[:3], axis=1))
     if dist < 1e-6:
         return math.nan  # target on a station: the field is singular there
@@ -168,9 +226,8 @@ def evaluate(params, settings):
     if measure == "rank":
         return float(core.observable_rank(state, stations, steps=steps, **opts))
     if measure == "d_optimal":
-        return float(core.fisher_measures(state, stations, noise=params["noise"], steps=steps,
-                                          **opts).d_optimal)
-    e = core.horizontal_error_ellipse(state, stations, noise=params["noise"], steps=steps, **opts)
+        return float(core.fisher_measures(state, stations, steps=steps, **opts).d_optimal)
+    e = core.horizontal_error_ellipse(state, stations, steps=steps, **opts)
     field = {"crlb_position": "position", "crlb_semi_major": "semi_major",
              "crlb_semi_minor": "semi_minor", "crlb_depth": "sigma_z",
              "crlb_speed": "sigma_speed"}[measure]
@@ -279,6 +336,9 @@ def build_parser():
     p.add_argument("--layout", default="line", choices=["line", "triangle", "square"],
                    help="station layout scaled by d (default: line, the paper's dual for N=2)")
     p.add_argument("--stations", type=int, default=2, help="number of stations N, 1..8 (default 2)")
+    p.add_argument("--sensor", default="E", choices=list(SENSORS),
+                   help="sensor kind: E electric (default), B magnetometer, G gradiometer, BG both "
+                        "(magnetic kinds: moments mx, my, mz in A·m², noise in nT, noise_g in nT/m)")
     p.add_argument("--model", default="exact", choices=["exact", "paper"])
     p.add_argument("--sea-depth", type=float, default=None, metavar="D",
                    help="layered sea of depth D (m; z is depth, stations and targets in 0..D); "
@@ -310,7 +370,13 @@ def main(argv=None):
             raise ValueError(f"--x and --y must be different parameters; both are {xaxis[0]!r}")
         if {"Ph", "ratio"} <= {xaxis[0], yaxis[0]}:
             raise ValueError("sweep Ph or ratio (= Ph/Pv), not both")
+        unused = unused_parameters(args.sensor)
+        for name in [xaxis[0], yaxis[0]] + [item.split("=", 1)[0].strip() for item in args.set]:
+            if name in unused:
+                raise ValueError(f"parameter {name} does not apply to --sensor {args.sensor} "
+                                 f"({'electric' if args.sensor == 'E' else 'magnetic'})")
         base = {k: v[0] for k, v in PARAMETERS.items()}
+        base.update(default_noise(args.sensor))
         for item in args.set:
             name, vals = parse_axis(item)
             if vals.size != 1:
@@ -323,7 +389,7 @@ def main(argv=None):
         if args.workers < 1:
             raise ValueError(f"--workers must be ≥ 1; got {args.workers}")
         settings = {"measure": args.measure, "layout": args.layout, "stations": args.stations,
-                    "model": args.model, "steps": args.steps, "sea_depth": args.sea_depth,
+                    "sensor": args.sensor, "model": args.model, "steps": args.steps, "sea_depth": args.sea_depth,
                     "seabed_sigma": args.seabed_sigma,
                     "region": parse_region(args.region), "threshold": args.threshold}
         # Check one cell here, so that bad input fails fast with its message, not in a worker.
@@ -348,10 +414,14 @@ def main(argv=None):
         if client is not None:
             client.close()
     write_csv(out / "sweep.csv", xaxis[0], xaxis[1], yaxis[0], yaxis[1], args.measure, values)
-    fixed = {k: v for k, v in base.items() if k not in (xaxis[0], yaxis[0]) and v is not None}
+    unused = unused_parameters(args.sensor)
+    fixed = {k: v for k, v in base.items()
+             if k not in (xaxis[0], yaxis[0]) and k not in unused and v is not None}
     if SWEEP_MEASURES[args.measure][2]:  # region measures do not use the target's x, y
         fixed = {k: v for k, v in fixed.items() if k not in ("x", "y")}
-    title = (f"{args.layout} layout, {args.stations} stations, {args.model} model\n"
+    what = (f"{args.model} model" if args.sensor == "E"
+            else f"sensor {args.sensor} ({core.KINDS[args.sensor][0]})")
+    title = (f"{args.layout} layout, {args.stations} stations, {what}\n"
              + ", ".join(f"{k}={v:g}" for k, v in fixed.items()))
     write_heatmap(out / "sweep.png", xaxis[0], xaxis[1], yaxis[0], yaxis[1], args.measure,
                   values, title)

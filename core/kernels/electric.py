@@ -34,6 +34,17 @@ import numba as nb
 #: The public functions raise ValueError; maps (and the kernels) give NaN there.
 ON_STATION = 1e-6
 
+#: State size of the electric target ``[x, y, z, vx, vy, Ph, Pv]`` and field components per
+#: station (Ex, Ey, Ez): :class:`core.Sensor` reads its counts of kind ``E`` from here, and every
+#: electric kernel and workspace is sized from them (numba freezes module globals as
+#: compile-time constants: the code is the one a literal would give).
+N_STATES = 7
+N_COMPONENTS = 3
+#: Workspace rows of one component: (E_i, ∂E_i/∂X) = 1 + N_STATES.
+ROW = 1 + N_STATES
+#: Workspace rows of one station: N_COMPONENTS rows of ROW.
+STATION_ROWS = N_COMPONENTS * ROW
+
 #: Floating-point licence of the compiled kernels: LLVM may contract to FMA and reassociate
 #: sums (measured ~2x faster, results within 1e-15 relative); NaN and inf keep their IEEE meaning.
 FASTMATH = {"contract", "reassoc", "nsz", "arcp"}
@@ -206,8 +217,9 @@ def _local_jacobian(rx, ry, rz, vx, vy, ph, pv, kappa, model):
 
 @nb.njit(inline="always", **JIT)
 def _store_rows(rows, e, jac):
-    """Write :func:`_local_jacobian`'s rows into ``e`` (3,) and ``jac`` (3, 7)."""
-    for i in range(3):
+    """Write :func:`_local_jacobian`'s rows into ``e`` (N_COMPONENTS,) and ``jac``
+    (N_COMPONENTS, N_STATES)."""
+    for i in range(N_COMPONENTS):
         row = rows[i]
         e[i] = row[0]
         jac[i, 0], jac[i, 1], jac[i, 2], jac[i, 3] = row[1], row[2], row[3], row[4]

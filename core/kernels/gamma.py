@@ -25,15 +25,27 @@ import math
 import numba as nb
 import numpy as np
 
-from .electric import JIT, ON_STATION, _local_jacobian, _store_rows
+from .electric import (
+    JIT,
+    N_COMPONENTS,
+    N_STATES,
+    ON_STATION,
+    ROW,
+    STATION_ROWS,
+    _local_jacobian,
+    _store_rows,
+)
 from .sea import PAIR_ROWS, SEA_ROWS, _load, layered_lanes, station_rows
 
 _BLOCK = 256
+#: State columns of the horizontal velocity (vx, vy): Φ^i adds i·T·∂/∂(x, y) to them.
+_VX, _VY = 3, 4
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
 def field_and_jacobian(states, stations, kappa, model, medium, e_out, j_out):
-    """E and ∂E/∂X: states (P, 7), stations (S, 3) -> e_out (P, S, 3), j_out (P, S, 3, 7).
+    """E and ∂E/∂X: states (P, N_STATES), stations (S, 3) -> e_out (P, S, N_COMPONENTS),
+    j_out (P, S, N_COMPONENTS, N_STATES).
     ``medium`` = [D, η, tol] of :func:`core.model.sea.medium` (D = 0: whole space)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
@@ -69,7 +81,8 @@ def _pairs_run(states, p0, lanes, stations, kappa, medium, e_out, j_out, counts)
 def layered_pairs(states, stations, kappa, medium, lanes, e_out, j_out, counts):
     """The layered series (medium[0] = D > 0) of every target–station pair, ``lanes`` (≤ LANES)
     consecutive targets side by side per station, as the map kernels run it (a short last run
-    repeats its first target): e_out (P, S, 3), j_out (P, S, 3, 7), images per pair counts (P, S)."""
+    repeats its first target): e_out (P, S, N_COMPONENTS), j_out (P, S, N_COMPONENTS, N_STATES),
+    images per pair counts (P, S)."""
     npts = states.shape[0]
     for b in nb.prange((npts + lanes - 1) // lanes):
         _pairs_run(states, b * lanes, lanes, stations, kappa, medium, e_out, j_out, counts)
@@ -77,13 +90,13 @@ def layered_pairs(states, stations, kappa, medium, lanes, e_out, j_out, counts):
 
 @nb.njit(**JIT)
 def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, w, g):
-    """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (7,).
+    """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x`` (N_STATES,).
     Returns False, with ``g`` incomplete, if the target comes within ON_STATION of a station.
 
     Rows are time-major, then station-major, then component (Ex, Ey, Ez): the paper's order.
     Row block of instant i is ``(∂h/∂X)(Φ^i x) · Φ^i``; Φ^i adds i·T·(∂/∂x, ∂/∂y) to the
-    velocity columns (constant-velocity motion, no vertical speed). ``e`` (3,), ``jac``
-    (3, 7) and ``w`` (the layered series' one-pair workspace) are scratch.
+    velocity columns (constant-velocity motion, no vertical speed). ``e`` (N_COMPONENTS,),
+    ``jac`` (N_COMPONENTS, N_STATES) and ``w`` (the layered series' one-pair workspace) are scratch.
     """
     n_s = stations.shape[0]
     row = 0
@@ -102,15 +115,15 @@ def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, 
                 return False
             _store_rows(station_rows(w, rx, ry, x[2], stations[s, 2], x[3], x[4], x[5], x[6], kappa,
                                      model, medium), e, jac)
-            for comp in range(3):
+            for comp in range(N_COMPONENTS):
                 if row >= n_rows:
                     break
                 for q in range(free.shape[0]):
                     col = free[q]
                     v = jac[comp, col]
-                    if col == 3:
+                    if col == _VX:
                         v += dt * jac[comp, 0]  # Φ^i: ∂x_{k+i}/∂vx_k = i·T
-                    elif col == 4:
+                    elif col == _VY:
                         v += dt * jac[comp, 1]  # Φ^i: ∂y_{k+i}/∂vy_k = i·T
                     g[row, q] = v
                 row += 1
@@ -120,11 +133,11 @@ def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, e, jac, 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
 def fill_gamma(states, stations, step, kappa, model, medium, free, n_rows, out):
-    """Γ for every state: states (P, 7) -> out (P, n_rows, n_free) (NaN on stations)."""
+    """Γ for every state: states (P, N_STATES) -> out (P, n_rows, n_free) (NaN on stations)."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        e = np.empty(3)
-        jac = np.empty((3, 7))
+        e = np.empty(N_COMPONENTS)
+        jac = np.empty((N_COMPONENTS, N_STATES))
         w = np.empty((PAIR_ROWS, 1))
         for p in range(b * _BLOCK, min(npts, (b + 1) * _BLOCK)):
             if not _gamma_point(states[p], stations, step, kappa, model, medium, free, n_rows, e, jac,
@@ -141,21 +154,29 @@ LANES = 128
 #: Work items of a map kernel's parallel loop, each a run of groups with one workspace: enough
 #: for the scheduler to balance any likely thread count.
 _CHUNKS = 64
-# Workspace rows (each LANES wide): states, the current station's rows (E_i, ∂E_i/∂X) × 3,
-# Γ (7 × 7, row-major; R in the Fisher kernel), squared column norms, a row of Γ (Fisher),
-# per-lane scalars, the layered series.
-_X, _J, _G, _SQ, _T = 0, 7, 31, 80, 87
-_NORM2, _DET, _BETA, _DOT, _BAD = 95, 96, 97, 98, 99
+# Workspace rows (each LANES wide), sized from the state and component counts: states
+# (N_STATES), the current station's rows (E_i, ∂E_i/∂X) × N_COMPONENTS, Γ (N_STATES × N_STATES,
+# row-major; R in the Fisher kernel), squared column norms, a row of Γ (Fisher; ROW wide),
+# per-lane scalars, the layered series. (For the electric counts: 0, 7, 31, 80, 87, 95 … 99.)
+_X = 0
+_J = _X + N_STATES
+_G = _J + STATION_ROWS
+_SQ = _G + N_STATES * N_STATES
+_T = _SQ + N_STATES
+_NORM2 = _T + ROW
+_DET, _BETA, _DOT, _BAD = _NORM2 + 1, _NORM2 + 2, _NORM2 + 3, _NORM2 + 4
+#: Row stride of the square matrices in the workspace, and the step along their diagonal.
+_N, _DIAG = N_STATES, N_STATES + 1
 # The layered series' rows (core.kernels.sea.SEA_ROWS: a pair's inputs and its previous group), its
 # outputs going straight to w[_J…]. In the Fisher kernel they share rows with the Givens and
 # R⁻¹ scratch, which is dead while a station's rows are being computed.
-_SEA = 100
+_SEA = _BAD + 1
 _ROWS = _SEA + SEA_ROWS
 
 
 @nb.njit(inline="always", **JIT)
 def _put_row(w, r0, lane, row):
-    """w[r0 : r0 + 8, lane] = row (one component's (E_i, ∂E_i/∂X))."""
+    """w[r0 : r0 + ROW, lane] = row (one component's (E_i, ∂E_i/∂X))."""
     w[r0, lane], w[r0 + 1, lane], w[r0 + 2, lane], w[r0 + 3, lane] = row[0], row[1], row[2], row[3]
     w[r0 + 4, lane], w[r0 + 5, lane], w[r0 + 6, lane], w[r0 + 7, lane] = row[4], row[5], row[6], row[7]
 
@@ -163,7 +184,7 @@ def _put_row(w, r0, lane, row):
 @nb.njit(inline="always", **JIT)
 def _jacobian_lanes(w, dt, stations, s, kappa, model, medium):
     """Rows (E_i, ∂E_i/∂X) of station ``s`` at time offset ``dt`` for the LANES states in
-    w[_X:_X+7], into w[_J:_J+24]. w[_BAD] = 1 where a target comes within ON_STATION of the
+    w[_X:_X+N_STATES], into w[_J:_J+STATION_ROWS]. w[_BAD] = 1 where a target comes within ON_STATION of the
     station (its offset is replaced by a harmless one; the caller masks the result).
 
     A layered sea (medium[0] = D > 0) runs the image series on the LANES pairs side by side
@@ -192,8 +213,8 @@ def _jacobian_lanes(w, dt, stations, s, kappa, model, medium):
         rows = _local_jacobian(1.0 if near else rx, ry, rz, w[_X + 3, lane], w[_X + 4, lane],
                                w[_X + 5, lane], w[_X + 6, lane], kappa, model)
         _put_row(w, _J, lane, rows[0])
-        _put_row(w, _J + 8, lane, rows[1])
-        _put_row(w, _J + 16, lane, rows[2])
+        _put_row(w, _J + ROW, lane, rows[1])
+        _put_row(w, _J + 2 * ROW, lane, rows[2])
 
 
 @nb.njit(inline="always", **JIT)
@@ -202,9 +223,9 @@ def _gamma_row_lanes(w, dst, comp, dt, free):
     free columns q. Φ^i adds i·T·(∂/∂x, ∂/∂y) to the velocity columns."""
     for q in range(free.shape[0]):
         col = free[q]
-        src = _J + 8 * comp + 1 + col
-        if col == 3 or col == 4:  # Φ^i: ∂(x, y)_{k+i}/∂(vx, vy)_k = i·T
-            pos = _J + 8 * comp + col - 2
+        src = _J + ROW * comp + 1 + col
+        if col == _VX or col == _VY:  # Φ^i: ∂(x, y)_{k+i}/∂(vx, vy)_k = i·T
+            pos = _J + ROW * comp + 1 + col - _VX
             for lane in range(LANES):
                 w[dst + q, lane] = w[src, lane] + dt * w[pos, lane]
         else:
@@ -214,12 +235,12 @@ def _gamma_row_lanes(w, dst, comp, dt, free):
 
 @nb.njit(inline="always", **JIT)
 def _load_lanes(w, states, p0):
-    """States p0 … p0 + LANES − 1 into w[_X:_X+7] (a short last group repeats its first point);
+    """States p0 … p0 + LANES − 1 into w[_X:_X+N_STATES] (a short last group repeats its first point);
     clears w[_BAD]. Returns the number of real points."""
     count = min(LANES, states.shape[0] - p0)
     for lane in range(LANES):
         p = p0 + lane if lane < count else p0
-        for k in range(7):
+        for k in range(N_STATES):
             w[_X + k, lane] = states[p, k]
         w[_BAD, lane] = 0.0
     return count
@@ -228,7 +249,7 @@ def _load_lanes(w, states, p0):
 @nb.njit(inline="always", **JIT)
 def _assemble_lanes(w, stations, step, kappa, model, medium, free):
     """Γ (paper rule: the first n_free rows, time-major, then station, then component) of the
-    LANES states into w[_G + 7 r + q]."""
+    LANES states into w[_G + _N r + q]."""
     n = free.shape[0]
     row = 0
     i = 0
@@ -237,10 +258,10 @@ def _assemble_lanes(w, stations, step, kappa, model, medium, free):
             if row >= n:
                 break
             _jacobian_lanes(w, i * step, stations, s, kappa, model, medium)
-            for comp in range(3):
+            for comp in range(N_COMPONENTS):
                 if row >= n:
                     break
-                _gamma_row_lanes(w, _G + 7 * row, comp, i * step, free)
+                _gamma_row_lanes(w, _G + _N * row, comp, i * step, free)
                 row += 1
         i += 1
 
@@ -253,11 +274,11 @@ def _qr_abs_det_lanes(w, n):
     for lane in range(LANES):
         w[_DET, lane] = 1.0
     for k in range(n):
-        kk = _G + 8 * k
+        kk = _G + _DIAG * k
         for lane in range(LANES):
             w[_NORM2, lane] = 0.0  # ‖column k below the diagonal‖²
         for r in range(k, n):
-            rk = _G + 7 * r + k
+            rk = _G + _N * r + k
             for lane in range(LANES):
                 w[_NORM2, lane] += w[rk, lane] * w[rk, lane]
         for lane in range(LANES):
@@ -273,13 +294,13 @@ def _qr_abs_det_lanes(w, n):
             for lane in range(LANES):
                 w[_DOT, lane] = 0.0
             for r in range(k, n):
-                rk, rc = _G + 7 * r + k, _G + 7 * r + c
+                rk, rc = _G + _N * r + k, _G + _N * r + c
                 for lane in range(LANES):
                     w[_DOT, lane] += w[rk, lane] * w[rc, lane]
             for lane in range(LANES):
                 w[_DOT, lane] *= w[_BETA, lane]
             for r in range(k, n):
-                rk, rc = _G + 7 * r + k, _G + 7 * r + c
+                rk, rc = _G + _N * r + k, _G + _N * r + c
                 for lane in range(LANES):
                     w[rc, lane] -= w[_DOT, lane] * w[rk, lane]
         for lane in range(LANES):
@@ -290,7 +311,7 @@ def _qr_abs_det_lanes(w, n):
 def _rinv_scaled_frobenius2_lanes(w, n):
     """w[_NORM2] = ‖R_s⁻¹‖_F² = Σ_i ‖Γ_i‖² Σ_k (R⁻¹)_ik² for the R in w[_G…] (upper triangle)
     and the squared column norms in w[_SQ…], one column of R⁻¹ at a time (back substitution
-    into the free rows w[_J:_J+7]). inf or NaN where an R_jj is 0."""
+    into the free rows w[_J:_J+N_STATES]). inf or NaN where an R_jj is 0."""
     for lane in range(LANES):
         w[_NORM2, lane] = 0.0
     for k in range(n):
@@ -299,10 +320,10 @@ def _rinv_scaled_frobenius2_lanes(w, n):
             for lane in range(LANES):
                 w[xi, lane] = 1.0 if i == k else 0.0
             for j in range(i + 1, k + 1):
-                ij, xj = _G + 7 * i + j, _J + j
+                ij, xj = _G + _N * i + j, _J + j
                 for lane in range(LANES):
                     w[xi, lane] -= w[ij, lane] * w[xj, lane]
-            ii, si = _G + 8 * i, _SQ + i
+            ii, si = _G + _DIAG * i, _SQ + i
             for lane in range(LANES):
                 w[xi, lane] /= w[ii, lane]
                 w[_NORM2, lane] += w[si, lane] * w[xi, lane] * w[xi, lane]
@@ -333,7 +354,7 @@ def _square_groups(states, first, last, stations, step, kappa, model, medium, fr
             for lane in range(LANES):
                 w[_SQ + j, lane] = 0.0
             for r in range(n):
-                rj = _G + 7 * r + j
+                rj = _G + _N * r + j
                 for lane in range(LANES):
                     w[_SQ + j, lane] += w[rj, lane] * w[rj, lane]
         _qr_abs_det_lanes(w, n)
@@ -374,18 +395,19 @@ def square_measures(states, stations, step, kappa, model, medium, free, log_det,
                        model, medium, free, log_det, log_eta, log_rcond)
 
 
-# Workspace rows of fisher_measures beyond the shared ones: R (7 × 7 at _G), the incoming row
-# of Γ (at _T), Givens cosines/sines, R⁻¹ (7 × 7).
-_COS, _SIN, _RINV, _FISHER_ROWS = 100, 101, 102, 151
+# Workspace rows of fisher_measures beyond the shared ones: R (N_STATES × N_STATES at _G), the
+# incoming row of Γ (at _T), Givens cosines/sines, R⁻¹ (N_STATES × N_STATES).
+_COS, _SIN, _RINV = _BAD + 1, _BAD + 2, _BAD + 3
+_FISHER_ROWS = _RINV + N_STATES * N_STATES
 
 
 @nb.njit(inline="always", **JIT)
 def _givens_update(w, n):
-    """Fold the row w[_T:_T+n] into the upper-triangular R (w[_G + 7 j + k]) by Givens
+    """Fold the row w[_T:_T+n] into the upper-triangular R (w[_G + _N j + k]) by Givens
     rotations: R ← the R of QR([R; row]), R_jj ≥ 0. Backward stable (forming ΓᵀΓ is not: it
     would square the round-off of an exactly singular Γ)."""
     for j in range(n):
-        jj, tj = _G + 8 * j, _T + j
+        jj, tj = _G + _DIAG * j, _T + j
         for lane in range(LANES):
             a, b = w[jj, lane], w[tj, lane]
             r = math.sqrt(a * a + b * b)
@@ -394,7 +416,7 @@ def _givens_update(w, n):
             w[_SIN, lane] = b / r if nonzero else 0.0
             w[jj, lane] = r
         for k in range(j + 1, n):
-            jk, tk = _G + 7 * j + k, _T + k
+            jk, tk = _G + _N * j + k, _T + k
             for lane in range(LANES):
                 rk, xk, c, s = w[jk, lane], w[tk, lane], w[_COS, lane], w[_SIN, lane]
                 w[jk, lane] = c * rk + s * xk
@@ -403,18 +425,18 @@ def _givens_update(w, n):
 
 @nb.njit(inline="always", **JIT)
 def _inverse_lanes(w, n):
-    """R⁻¹ (upper triangular) into w[_RINV + 7 i + k] by back substitution; inf/NaN where an
+    """R⁻¹ (upper triangular) into w[_RINV + _N i + k] by back substitution; inf/NaN where an
     R_jj is 0 (the caller masks those lanes)."""
     for k in range(n):
         for i in range(k, -1, -1):
-            ik = _RINV + 7 * i + k
+            ik = _RINV + _N * i + k
             for lane in range(LANES):
                 w[ik, lane] = 1.0 if i == k else 0.0
             for j in range(i + 1, k + 1):
-                ij, jk = _G + 7 * i + j, _RINV + 7 * j + k
+                ij, jk = _G + _N * i + j, _RINV + _N * j + k
                 for lane in range(LANES):
                     w[ik, lane] -= w[ij, lane] * w[jk, lane]
-            ii = _G + 8 * i
+            ii = _G + _DIAG * i
             for lane in range(LANES):
                 w[ik, lane] /= w[ii, lane]
 
@@ -428,14 +450,14 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, medium, fr
     for group in range(first, last):
         p0 = group * LANES
         count = _load_lanes(w, states, p0)
-        for r in range(_G, _G + 49):
+        for r in range(_G, _G + N_STATES * N_STATES):
             w[r] = 0.0
         for j in range(n):
             w[_SQ + j] = 0.0
-        for i in range(n_rows // (3 * stations.shape[0])):
+        for i in range(n_rows // (N_COMPONENTS * stations.shape[0])):
             for s in range(stations.shape[0]):
                 _jacobian_lanes(w, i * step, stations, s, kappa, model, medium)
-                for comp in range(3):
+                for comp in range(N_COMPONENTS):
                     _gamma_row_lanes(w, _T, comp, i * step, free)
                     for j in range(n):
                         for lane in range(LANES):
@@ -454,7 +476,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, medium, fr
             log_r = 0.0
             singular = False
             for j in range(n):
-                sq, rjj = w[_SQ + j, lane], w[_G + 8 * j, lane]
+                sq, rjj = w[_SQ + j, lane], w[_G + _DIAG * j, lane]
                 norms += 0.5 * math.log10(sq) if sq > 0.0 else -np.inf
                 if rjj > 0.0:
                     log_r += math.log10(rjj)
@@ -467,7 +489,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, medium, fr
             for i in range(n):
                 acc = 0.0
                 for k in range(i, n):
-                    v = w[_RINV + 7 * i + k, lane]
+                    v = w[_RINV + _N * i + k, lane]
                     acc += v * v
                 # (ΓᵀΓ)⁻¹ = R⁻¹ R⁻ᵀ: its diagonal is the row sums of (R⁻¹)²
                 inv_diag[p, i] = np.inf if singular else acc
@@ -478,7 +500,7 @@ def _fisher_groups(states, first, last, stations, step, kappa, model, medium, fr
 @nb.njit(parallel=True, nogil=True, **JIT)
 def fisher_measures(states, stations, step, kappa, model, medium, free, n_rows,
                     log_eta, log_norm_sum, inv_diag, log_rcond):
-    """All-rows Γ (n_rows × n_free, N = n_rows / 3S instants) reduced through its QR
+    """All-rows Γ (n_rows × n_free, N = n_rows / (N_COMPONENTS · S) instants) reduced through its QR
     factorisation, LANES points at a time, without storing Γ.
 
     Per point: ``log_eta`` = log10 η, η = sqrt(det Γ_sᵀΓ_s) = Π|R_jj| of the unit-column Γ_s;
@@ -499,7 +521,7 @@ def grid_states(template, u, v, v_index, out):
     Serial: it is memory-bound, and a thread team costs more than it saves."""
     for i in range(v.shape[0]):
         for j in range(u.shape[0]):
-            for k in range(7):
+            for k in range(template.shape[0]):
                 out[i, j, k] = template[k]
             out[i, j, 0] = u[j]
             out[i, j, v_index] = v[i]

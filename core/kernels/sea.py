@@ -11,7 +11,16 @@ import math
 import numba as nb
 import numpy as np
 
-from .electric import JIT, _local_jacobian, add_sums, image_sums, sums_field, sums_rows
+from .electric import (
+    JIT,
+    ROW,
+    STATION_ROWS,
+    _local_jacobian,
+    add_sums,
+    image_sums,
+    sums_field,
+    sums_rows,
+)
 
 #: Image groups summed at most (a safeguard; reached only for η within ~1e-4 of −1).
 MAX_GROUPS = 100_000
@@ -52,8 +61,8 @@ def _group(rho2, z, sz, kw, shift):
 #: inputs (rx, ry, z, sz, vx, vy, Ph, Pv; the series replaces vx, vy by cos θ, sin θ), the
 #: previous group's field G_{m−1} (3), 1/|v|.
 SEA_ROWS = 12
-#: Rows of a one-pair workspace (:func:`station_rows`): the series' rows, then its 24 output rows.
-PAIR_ROWS = SEA_ROWS + 24
+#: Rows of a one-pair workspace (:func:`station_rows`): the series' rows, then its STATION_ROWS (24) output rows.
+PAIR_ROWS = SEA_ROWS + STATION_ROWS
 
 
 @nb.njit(inline="always", **JIT)
@@ -70,8 +79,8 @@ def _load_row(w, r0, lane):
 
 @nb.njit(inline="always", **JIT)
 def _load(w, r0, lane):
-    """The three rows (E_i, ∂E_i/∂X) of one lane from w[r0 : r0 + 24]."""
-    return (_load_row(w, r0, lane), _load_row(w, r0 + 8, lane), _load_row(w, r0 + 16, lane))
+    """The three rows (E_i, ∂E_i/∂X) of one lane from w[r0 : r0 + STATION_ROWS]."""
+    return (_load_row(w, r0, lane), _load_row(w, r0 + ROW, lane), _load_row(w, r0 + 2 * ROW, lane))
 
 
 @nb.njit(inline="always", **JIT)
@@ -82,10 +91,10 @@ def _store_row(w, r0, lane, row):
 
 @nb.njit(inline="always", **JIT)
 def _store(w, r0, lane, rows):
-    """w[r0 : r0 + 24, lane] = the three rows (E_i, ∂E_i/∂X)."""
+    """w[r0 : r0 + STATION_ROWS, lane] = the three rows (E_i, ∂E_i/∂X)."""
     _store_row(w, r0, lane, rows[0])
-    _store_row(w, r0 + 8, lane, rows[1])
-    _store_row(w, r0 + 16, lane, rows[2])
+    _store_row(w, r0 + ROW, lane, rows[1])
+    _store_row(w, r0 + 2 * ROW, lane, rows[2])
 
 
 @nb.njit(inline="always", **JIT)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import gamma as kernels
+from ..kernels.electric import N_COMPONENTS, N_STATES
 from . import sea as sea_module
 from . import validation
 
@@ -22,7 +23,8 @@ MODELS = ("exact", "paper")
 
 
 def _field_and_jacobian(states, stations, sigma, model, sea):
-    """Validated front end: returns E (..., S, 3) and ∂E/∂X (..., S, 3, 7)."""
+    """Validated front end: returns E (..., S, 3) and ∂E/∂X (..., S, 3, 7) (N_COMPONENTS,
+    N_STATES of :mod:`core.kernels.electric`)."""
     states, stations, lead = validation.states_and_stations(states, stations)
     sigma = validation.positive("sigma", sigma, "S/m")
     code = validation.model_code(model, MODELS)
@@ -30,10 +32,10 @@ def _field_and_jacobian(states, stations, sigma, model, sea):
     sea_module.check_column(sea, states, stations, model)
     validation.no_target_on_station(states, stations)
     n_s = stations.shape[0]
-    e = np.empty((states.shape[0], n_s, 3))
-    jac = np.empty((states.shape[0], n_s, 3, 7))
+    e = np.empty((states.shape[0], n_s, N_COMPONENTS))
+    jac = np.empty((states.shape[0], n_s, N_COMPONENTS, N_STATES))
     kernels.field_and_jacobian(states, stations, 1.0 / (4.0 * np.pi * sigma), code, medium, e, jac)
-    return e.reshape(lead + (n_s, 3)), jac.reshape(lead + (n_s, 3, 7))
+    return e.reshape(lead + (n_s, N_COMPONENTS)), jac.reshape(lead + (n_s, N_COMPONENTS, N_STATES))
 
 
 def dipole_field(states, stations, *, sigma=4.0, model="exact", sea=None):

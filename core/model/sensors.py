@@ -21,18 +21,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernels.electric import N_COMPONENTS as ELECTRIC_COMPONENTS
+from ..kernels.electric import N_STATES as ELECTRIC_STATES
+from ..kernels.magnetic import N_STATE as MAGNETIC_STATES
 from . import magnetic, validation
-from .fields import MODELS
+from .fields import MODELS, field_jacobian
 from .sea import Sea
 
 __all__ = ["KINDS", "MAGNETIC_NOISE", "Sensor", "sensor_model"]
 
-#: Sensor kinds: name -> (what it measures, components per station, noise unit).
+#: Sensor kinds: name -> (what it measures, components per station, noise unit). The counts
+#: come from the kernels that compute them (:data:`core.kernels.electric.N_COMPONENTS`, the
+#: magnetic components of :mod:`core.model.magnetic`): 3, 3, 5, 8.
 KINDS = {
-    "E": ("electric field (Ex, Ey, Ez)", 3, "V/m"),
-    "B": ("magnetic field (Bx, By, Bz)", 3, "nT"),
-    "G": ("gradient tensor (Gxx, Gxy, Gxz, Gyy, Gyz)", 5, "nT/m"),
-    "BG": ("magnetic field and gradient tensor", 8, "nT and nT/m"),
+    "E": ("electric field (Ex, Ey, Ez)", ELECTRIC_COMPONENTS, "V/m"),
+    "B": ("magnetic field (Bx, By, Bz)", len(magnetic.MAGNETIC_COMPONENTS["B"]), "nT"),
+    "G": ("gradient tensor (Gxx, Gxy, Gxz, Gyy, Gyz)", len(magnetic.MAGNETIC_COMPONENTS["G"]),
+          "nT/m"),
+    "BG": ("magnetic field and gradient tensor", len(magnetic.MAGNETIC_COMPONENTS["BG"]),
+           "nT and nT/m"),
 }
 #: Default noise of the magnetic kinds: (magnetometer nT, gradiometer nT/m). Seed 003's
 #: gradiometer noise is 0.01 (nT/m assumed); the magnetometer's is taken equal in nT.
@@ -107,7 +114,7 @@ class Sensor:
     @property
     def n_states(self):
         """State size: 7 (electric ``[x, y, z, vx, vy, Ph, Pv]``) or 8 (``[…, mx, my, mz]``)."""
-        return 8 if self.magnetic else 7
+        return MAGNETIC_STATES if self.magnetic else ELECTRIC_STATES
 
     @property
     def state_names(self):
@@ -124,10 +131,52 @@ class Sensor:
                 raise ValueError(f"noise of kind 'BG' must be (nT, nT/m); got {self.noise!r}")
             nb = validation.positive("noise (B)", pair[0], "nT")
             ng = validation.positive("noise (G)", pair[1], "nT/m")
-            return (nb,) * 3 + (ng,) * 5
+            n_b = len(magnetic.MAGNETIC_COMPONENTS["B"])
+            return (nb,) * n_b + (ng,) * (self.n_components - n_b)
         default = {"E": ELECTRIC_NOISE, "B": MAGNETIC_NOISE[0], "G": MAGNETIC_NOISE[1]}[self.kind]
         value = validation.positive("noise", default if self.noise is None else self.noise, unit)
         return (value,) * self.n_components
+
+    def measure(self, states, stations):
+        """Noise-free measurement h(X) and its Jacobian ∂h/∂X at ``states``: the one
+        measurement model of maps, bounds and filters.
+
+        Parameters
+        ----------
+        states : array_like, shape (..., n)
+            n = :attr:`n_states` (7 electric, 8 magnetic).
+        stations : array_like, shape (S, 3)
+
+        Returns
+        -------
+        h : ndarray, shape (..., S, C)
+            C = :attr:`n_components`; V/m, nT, nT/m.
+        H : ndarray, shape (..., S, C, n)
+
+        Notes
+        -----
+        Electric: :func:`core.field_jacobian`, and h from its moment columns (the field is
+        linear in (Ph, Pv) at fixed position and heading, in any linear medium: exact, checked
+        against :func:`core.dipole_field` in the tests). Magnetic:
+        :func:`core.magnetic_jacobian`.
+
+        Examples
+        --------
+        >>> import core
+        >>> h, H = core.Sensor("G").measure([3, 4, 5, 1, 0, 10, 20, 30], [[0, 0, 0]])
+        >>> h.shape, H.shape
+        ((1, 5), (1, 5, 8))
+        """
+        if self.magnetic:
+            return magnetic.magnetic_jacobian(states, stations, sensor=self.kind,
+                                              baseline=self.baseline)
+        states = np.asarray(states, dtype=float)
+        kw = dict(sigma=self.sigma, model=self.model)
+        if self.sea is not None:  # only when given: the whole-space core needs no sea argument
+            kw["sea"] = self.sea
+        J = field_jacobian(states, stations, **kw)  # (..., S, 3, 7)
+        h = J[..., 5] * states[..., None, None, 5] + J[..., 6] * states[..., None, None, 6]
+        return h, J
 
     def free_columns(self, known):
         """Indices of the unknown states, given the names of the known ones."""

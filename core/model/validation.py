@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels.electric import ON_STATION  # the kernels' bound, checked here
+from ..kernels.electric import N_STATES, ON_STATION  # the kernels' bound and size, checked here
 
-#: Order of the state vector ``X = [x, y, z, vx, vy, Ph, Pv]``.
+#: Order of the state vector ``X = [x, y, z, vx, vy, Ph, Pv]`` (N_STATES entries).
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "Ph", "Pv")
 
 
@@ -28,14 +28,15 @@ def _array(name, value):
 
 
 def states(value):
-    """Return states as a contiguous (P, 7) float64 array and the leading shape."""
+    """Return electric states as a contiguous (P, 7) float64 array and the leading shape."""
     arr = _array("states", value)
-    if arr.ndim < 1 or arr.shape[-1] != 7:
+    if arr.ndim < 1 or arr.shape[-1] != N_STATES:
         raise ValueError(
-            f"states must have shape (..., 7) = [x, y, z, vx, vy, Ph, Pv]; got shape {arr.shape}"
+            f"states must have shape (..., {N_STATES}) = [x, y, z, vx, vy, Ph, Pv]; got shape "
+            f"{arr.shape}"
         )
     _finite("states", arr)
-    flat = np.ascontiguousarray(arr.reshape(-1, 7))
+    flat = np.ascontiguousarray(arr.reshape(-1, N_STATES))
     if np.any((flat[:, 3] == 0.0) & (flat[:, 4] == 0.0)):
         raise ValueError(
             "target speed must be > 0: the horizontal dipole points along the heading "

@@ -87,7 +87,7 @@ def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model
     """
     free = validation.free_columns(known)
     npts, n = states.shape[0], free.size
-    cov = np.zeros((npts, 7, 7))
+    cov = np.zeros((npts, sensors.ELECTRIC_STATES, sensors.ELECTRIC_STATES))
     block = np.full((npts, n, n), np.nan)
     block[:, np.arange(n), np.arange(n)] = np.inf
     idx = np.flatnonzero(observable)
@@ -148,16 +148,17 @@ def crlb_covariance(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
     if sensor.magnetic:
         m, block, lead = magnetic_fisher(states, stations, sensor, T, steps, known)
         free = sensor.free_columns(known)
-        cov = np.zeros((block.shape[0], 8, 8))
+        n = sensor.n_states
+        cov = np.zeros((block.shape[0], n, n))
         cov[:, free[:, None], free[None, :]] = block
-        return cov.reshape(lead + (8, 8)), m.observable.reshape(lead)
+        return cov.reshape(lead + (n, n)), m.observable.reshape(lead)
     sigma, model, sea, noise = sensor.sigma, sensor.model, sensor.sea, sensor.noise_vector[0]
     m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
                         model=model, sea=sea, known=known)  # validates everything, flags observability
     flat, lead = validation.states(states)
     cov = _covariance_flat(flat, validation.stations(stations), m.observable.reshape(-1),
                            float(noise), steps, T, sigma, model, sea, known)
-    return cov.reshape(lead + (7, 7)), m.observable
+    return cov.reshape(lead + (sensor.n_states,) * 2), m.observable
 
 
 @dataclass(frozen=True)
@@ -271,7 +272,7 @@ def _plane_states(plane, velocity, moments, sensor=None):
         return magnetic_plane_states(plane, velocity, moments)
     template, _ = validation.states([0.0, 0.0, 0.0, *_pair("velocity", velocity),
                                      *_pair("moments", moments)])  # checks speed > 0
-    return plane.states(template[0, 3:5], template[0, 5:7]).reshape(-1, 7)
+    return plane.states(template[0, 3:5], template[0, 5:]).reshape(-1, template.shape[-1])
 
 
 def magnetic_plane_states(plane, velocity, moments, rows=slice(None)):
@@ -281,15 +282,8 @@ def magnetic_plane_states(plane, velocity, moments, rows=slice(None)):
     mom = np.asarray(moments, dtype=np.float64) if np.ndim(moments) == 1 else None
     if mom is None or mom.shape != (3,) or not np.all(np.isfinite(mom)):
         raise ValueError(f"moments of a magnetic kind must be (mx, my, mz) in A·m², finite; got {moments!r}")
-    u, v = plane.axes
-    v = v[rows]
-    out = np.empty((v.size, u.size, 8))
-    out[..., 0] = u[None, :]
-    out[..., 1] = v[:, None] if plane.kind == "xy" else plane.fixed
-    out[..., 2] = plane.fixed if plane.kind == "xy" else v[:, None]
-    out[..., 3:5] = vel
-    out[..., 5:8] = mom
-    return out.reshape(-1, 8)
+    out = plane.states(vel, mom, rows)  # the grid of any state size (compiled grid_states)
+    return out.reshape(-1, out.shape[-1])
 
 
 def magnetic_clear(states, stations, sensor, steps, T):

@@ -66,9 +66,10 @@ def _options(stations, T, sigma, model, known, steps, sea=None):
     sigma = validation.positive("sigma", sigma, "S/m")
     code = validation.model_code(model, MODELS)
     medium = sea_module.medium(sea, sigma)
-    sea_module.check_column(sea, np.zeros((0, 7)), stations, model)
+    sea_module.check_column(sea, np.zeros((0, sensors.ELECTRIC_STATES)), stations, model)
     free = validation.free_columns(known)
-    n_rows = free.size if steps is None else 3 * stations.shape[0] * validation.steps(steps, 1)
+    n_rows = (free.size if steps is None
+              else sensors.ELECTRIC_COMPONENTS * stations.shape[0] * validation.steps(steps, 1))
     return (stations, step, 1.0 / (4.0 * np.pi * sigma), code, medium, free), n_rows
 
 

@@ -70,10 +70,11 @@ class Plane:
         return ("x", self.kind[1])
 
     def states(self, velocity, moments, rows=slice(None)):
-        """Target states on the grid (or on a slice of its rows): shape (rows, n, 7)."""
+        """Target states on the grid (or on a slice of its rows): shape (rows, n, 5 + moments),
+        (rows, n, 7) for the electric (Ph, Pv), 8 for a magnetic moment vector."""
         u, v = self.axes
         v = v[rows]
         template = np.array([0.0, self.fixed, self.fixed, *velocity, *moments], dtype=np.float64)
-        out = np.empty((v.size, u.size, 7))
+        out = np.empty((v.size, u.size, template.size))
         kernels.grid_states(template, u, v, 1 if self.kind == "xy" else 2, out)
         return out

@@ -97,7 +97,7 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     rows_per_chunk = max(1, CHUNK_POINTS // n)
     for r0 in range(0, n, rows_per_chunk):
         rows = slice(r0, min(n, r0 + rows_per_chunk))
-        states = plane.states(template[0, 3:5], template[0, 5:7], rows).reshape(-1, 7)
+        states = plane.states(template[0, 3:5], template[0, 5:], rows).reshape(-1, template.shape[-1])
         eta = log_eta[rows].reshape(-1)  # views: the kernels write straight into the map
         out = value[rows].reshape(-1)
         if square:

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.measurement import SensorModel
+from ..model.sensors import ELECTRIC_STATES
 from .filters import run_filters
 
 __all__ = ["BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "bank_hypotheses",
@@ -106,7 +107,7 @@ def hypothesis_states(r, p, psi, centre, depth, speed):
     """States (…, H, 7) of hypotheses at range r (…, H), strength p (H,), bearing ψ (H,):
     position centre + r (cos ψ, sin ψ) at ``depth``, inbound heading ψ + π at ``speed``."""
     r = np.asarray(r, float)
-    out = np.empty(r.shape + (7,))
+    out = np.empty(r.shape + (ELECTRIC_STATES,))
     out[..., 0] = centre[0] + r * np.cos(psi)
     out[..., 1] = centre[1] + r * np.sin(psi)
     out[..., 2] = depth
@@ -167,14 +168,14 @@ def bank_hypotheses(y0, sensors, *, depth, strengths=BANK_STRENGTHS, bearings=BA
     p = np.repeat(strengths, bearings.size)
     psi = np.tile(bearings, strengths.size)
     x0 = hypothesis_states(ranges, p, psi, c, depth, speed)
-    std = np.empty(ranges.shape + (7,))
+    std = np.empty(ranges.shape + (ELECTRIC_STATES,))
     std[..., 0] = std[..., 1] = position_frac * ranges
     std[..., 2] = depth_std
     std[..., 3] = std[..., 4] = speed_std
     std[..., 5] = strength_frac * p
     std[..., 6] = pv_std
-    P0 = np.zeros(ranges.shape + (7, 7))
-    idx = np.arange(7)
+    P0 = np.zeros(ranges.shape + (ELECTRIC_STATES, ELECTRIC_STATES))
+    idx = np.arange(ELECTRIC_STATES)
     P0[..., idx, idx] = std**2
     return x0, P0, ranges
 
@@ -247,6 +248,11 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     """
     if not isinstance(sensors, SensorModel):
         raise ValueError(f"sensors must be a core.SensorModel; got {type(sensors).__name__}")
+    if sensors.sensor.magnetic:
+        raise ValueError(
+            "the filter bank is seed 001's: its hypotheses are electric source strengths (Ph); "
+            f"sensor kind {sensors.kind!r} is magnetic: run core.run_filters (EKF / PUEKF) instead"
+        )
     ys = np.asarray(ys, dtype=float)
     if ys.ndim != 3 or ys.shape[2] != sensors.n_meas:
         raise ValueError(f"ys must have shape (R, K, {sensors.n_meas}); got {ys.shape}")
@@ -257,11 +263,12 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     n_h = x0.shape[1]
     # (R, H, ...) -> (R·H, ...): every filter of every run in one stack
     flat_truth = None if truth is None else np.repeat(np.asarray(truth, float), n_h, axis=0)
-    run = run_filters(x0.reshape(-1, 7), P0.reshape(-1, 7, 7), np.repeat(ys, n_h, axis=0),
+    n = ELECTRIC_STATES
+    run = run_filters(x0.reshape(-1, n), P0.reshape(-1, n, n), np.repeat(ys, n_h, axis=0),
                       sensors, F, Q, n_pu=n_pu, truth=flat_truth, progress=progress)
     ll = run.loglik.reshape(n_runs, n_h, k_steps)
     selected = np.argmax(ll, axis=1)  # (R, K); a dead filter has −inf
-    x_all = run.x.reshape(n_runs, n_h, k_steps, 7)
+    x_all = run.x.reshape(n_runs, n_h, k_steps, n)
     r_i = np.arange(n_runs)[:, None]
     k_i = np.arange(k_steps)[None, :]
     x = x_all[r_i, selected, k_i]  # (R, K, 7)

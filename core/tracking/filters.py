@@ -1,8 +1,13 @@
 """Extended Kalman filters on the core's measurement model: EKF and PUEKF (seed 001 §2.3).
 
 Every function works on a *stack* of N independent filters (leading axis N: Monte-Carlo runs ×
-bank hypotheses), so one time step is one :func:`core.field_jacobian` call on an (N, 7) array
-and a few batched 7 × 7 / m × m products and solves.
+bank hypotheses), so one time step is one measurement call (:meth:`core.Sensor.measure`) on an
+(N, n) array and a few batched n × n / m × m products and solves.
+
+The filters are generic over the measurement model: h(X) and ∂h/∂X come from the sensors'
+:class:`core.Sensor` (any kind: electric E with n = 7 states, magnetic B, G, BG with n = 8), the
+noise of each component from its ``noise_vector`` (R diagonal, B in nT and G in nT/m side by
+side); the compiled Kalman algebra reads n and m from the arrays.
 
 Progressive update (PUEKF, seed 001 eq. (16)): the update at step k is split into N_pu
 sub-updates, each relinearised at the current estimate and each with the noise covariance
@@ -31,7 +36,7 @@ from ..kernels.filters import (
     _predict_kernel,
     _update_kernel,
 )
-from ..model.measurement import SensorModel
+from ..model.measurement import tracking_sensors
 
 __all__ = ["MIN_SPEED", "MIN_STATION_DISTANCE", "FilterRun", "ekf_predict", "ekf_update",
            "run_filters"]
@@ -42,14 +47,14 @@ def ekf_predict(x, P, F, Q):
 
     Parameters
     ----------
-    x : ndarray, shape (N, 7)
-    P : ndarray, shape (N, 7, 7)
-    F, Q : ndarray, shape (7, 7)
+    x : ndarray, shape (N, n)
+    P : ndarray, shape (N, n, n)
+    F, Q : ndarray, shape (n, n)
         From :func:`core.dwna_model`.
 
     Returns
     -------
-    x, P : ndarray, shapes (N, 7), (N, 7, 7)
+    x, P : ndarray, shapes (N, n), (N, n, n)
     """
     P = np.ascontiguousarray(P, dtype=float)
     out = np.empty_like(P)
@@ -77,24 +82,27 @@ def _guard(x, sensors):
     return g
 
 
-def ekf_update(x, P, y, sensors, *, n_pu=1):
+def ekf_update(x, P, y, sensors, *, n_pu=1, sensor=None):
     """Measurement update of N filters, progressive (PUEKF) with ``n_pu`` sub-updates.
 
     Parameters
     ----------
-    x : ndarray, shape (N, 7)
-        Predicted states.
-    P : ndarray, shape (N, 7, 7)
+    x : ndarray, shape (N, n)
+        Predicted states (n = 7 electric, 8 magnetic).
+    P : ndarray, shape (N, n, n)
         Predicted covariances.
     y : ndarray, shape (N, m)
-        Measurements (V/m), in the order of :class:`core.SensorModel`.
-    sensors : core.SensorModel
+        Measurements (V/m, nT, nT/m), in the order of :class:`core.SensorModel`.
+    sensors : core.SensorModel or array_like (S, 3)
+        The sensors, or station positions together with ``sensor``.
     n_pu : int
         Number of progressive sub-updates N_pu ≥ 1 (1 = EKF).
+    sensor : core.Sensor or str, optional
+        The measurement model when ``sensors`` are station positions (3 axes per station).
 
     Returns
     -------
-    x, P : ndarray, shapes (N, 7), (N, 7, 7)
+    x, P : ndarray, shapes (N, n), (N, n, n)
         Updated states and covariances (new arrays; NaN for a filter whose innovation
         covariance was not positive definite).
     loglik : ndarray, shape (N,)
@@ -104,19 +112,25 @@ def ekf_update(x, P, y, sensors, *, n_pu=1):
     Notes
     -----
     The Kalman algebra runs in a compiled kernel (Cholesky of S per filter); measurement values
-    and Jacobians come from :meth:`core.SensorModel.h_and_jacobian`, i.e. the core's field.
+    and Jacobians come from :meth:`core.SensorModel.h_and_jacobian`, i.e. the sensor's
+    measurement model. R = diag(noise_vector²) is passed as a scale (the first component's
+    variance) times per-component weights, so that equal noise (every electric sensor) runs
+    the arithmetic of a scalar R = σ² I.
     """
+    sensors = tracking_sensors(sensors, sensor)
     x = np.array(x, dtype=float)
     P = np.array(P, dtype=float)
     y = np.ascontiguousarray(y, dtype=float)
-    r = sensors.noise**2
+    var = sensors.noise_vector**2
+    r = float(var[0])
+    weight = np.ascontiguousarray(var / r)
     like = np.empty(x.shape[0])
     for i in range(n_pu):
         g = _guard(x, sensors)
-        h, H = sensors.h_and_jacobian(g)  # (N, m), (N, m, 7)
+        h, H = sensors.h_and_jacobian(g)  # (N, m), (N, m, n)
         nu = y - h - np.einsum("nri,ni->nr", H, x - g)  # innovation, linearised at the guard
         _update_kernel(x, P, np.ascontiguousarray(nu), np.ascontiguousarray(H), n_pu * r, r,
-                       i == 0, like)
+                       weight, i == 0, like)
     return x, P, like
 
 
@@ -126,15 +140,15 @@ class FilterRun:
 
     Attributes
     ----------
-    x : ndarray, shape (N, K, 7)
-        Posterior estimates at every step.
+    x : ndarray, shape (N, K, n)
+        Posterior estimates at every step (n = 7 electric, 8 magnetic).
     position_var : ndarray, shape (N, K)
         Trace of the position block of the posterior covariance (m²).
     loglik : ndarray, shape (N, K)
         Accumulated log-likelihood of the measurements up to each step; −inf once dead.
     nees : ndarray, shape (N, K), or None
-        Normalised estimation error squared (x̂ − x)ᵀ P⁻¹ (x̂ − x) over the 7 states, when the
-        true states were given; NaN once dead.
+        Normalised estimation error squared (x̂ − x)ᵀ P⁻¹ (x̂ − x) over the n states (its mean
+        is n for a consistent filter), when the true states were given; NaN once dead.
     alive : ndarray of bool, shape (N,)
         False for filters that became non-finite.
     """
@@ -146,7 +160,7 @@ class FilterRun:
     alive: np.ndarray
 
 
-def run_filters(x0, P0, ys, sensors, F, Q, *, n_pu=1, truth=None, progress=None):
+def run_filters(x0, P0, ys, sensors, F, Q, *, n_pu=1, truth=None, progress=None, sensor=None):
     """Run N independent (PU)EKFs over K steps of their own measurements.
 
     At step 0 each filter updates its prior (x0, P0) with ys[:, 0]; from step 1 on it predicts
@@ -154,51 +168,76 @@ def run_filters(x0, P0, ys, sensors, F, Q, *, n_pu=1, truth=None, progress=None)
 
     Parameters
     ----------
-    x0 : array_like, shape (N, 7)
-        Prior means at step 0.
-    P0 : array_like, shape (N, 7, 7) or (7, 7)
+    x0 : array_like, shape (N, n)
+        Prior means at step 0; n = the sensor's state size (7 electric, 8 magnetic).
+    P0 : array_like, shape (N, n, n) or (n, n)
         Prior covariances.
     ys : array_like, shape (N, K, m)
-        Measurements of every filter at every step (V/m).
-    sensors : core.SensorModel
-    F, Q : array_like, shape (7, 7)
-        From :func:`core.dwna_model`.
+        Measurements of every filter at every step (V/m, nT, nT/m).
+    sensors : core.SensorModel or array_like (S, 3)
+        The sensors, or station positions together with ``sensor``.
+    F, Q : array_like, shape (n, n)
+        From :func:`core.dwna_model` (``n_states=n``).
     n_pu : int
         Progressive sub-updates (1 = EKF).
-    truth : array_like, shape (N, K, 7), optional
+    truth : array_like, shape (N, K, n), optional
         True states, for the NEES.
     progress : callable, optional
         Called with 1 after every step (e.g. ``tqdm.update``).
+    sensor : core.Sensor or str, optional
+        The measurement model when ``sensors`` are station positions (3 axes per station).
 
     Returns
     -------
     FilterRun
+
+    Examples
+    --------
+    A magnetometer + gradiometer (``"BG"``) at one station, 8 states:
+
+    >>> import numpy as np, core
+    >>> F, Q = core.dwna_model(1.0, 0.01, 1.0, n_states=8)
+    >>> truth = core.straight_track([-20, 10, 5], 0.0, 2.0, 20, moments=(2e3, -1e3, 3e3))
+    >>> sensors = core.SensorModel([[0, 0, 0]], sensor=core.Sensor("BG", noise=(0.01, 0.01)))
+    >>> ys = sensors.h(truth)[None]  # noise-free here
+    >>> P0 = np.diag([2.0, 2.0, 1.0, 0.3, 0.3, 300.0, 300.0, 300.0]) ** 2
+    >>> run = core.run_filters(truth[None, 0] + 0.5, P0, ys, sensors, F, Q)
+    >>> run.x.shape, bool(np.abs(run.x[0, -1, :3] - truth[-1, :3]).max() < 0.1)
+    ((1, 20, 8), True)
     """
-    if not isinstance(sensors, SensorModel):
-        raise ValueError(f"sensors must be a core.SensorModel; got {type(sensors).__name__}")
+    sensors = tracking_sensors(sensors, sensor)
+    n_x = sensors.n_states
     x = np.array(x0, dtype=float)
     ys = np.asarray(ys, dtype=float)
-    if x.ndim != 2 or x.shape[1] != 7:
-        raise ValueError(f"x0 must have shape (N, 7); got {x.shape}")
+    if x.ndim != 2 or x.shape[1] != n_x:
+        raise ValueError(f"x0 must have shape (N, {n_x}) (the state size of sensor kind "
+                         f"{sensors.kind!r}); got {x.shape}")
     n = x.shape[0]
     if ys.ndim != 3 or ys.shape[0] != n or ys.shape[2] != sensors.n_meas:
         raise ValueError(
             f"ys must have shape (N, K, m) = ({n}, K, {sensors.n_meas}) for these sensors; got {ys.shape}"
         )
     if not np.all(np.isfinite(ys)):
-        raise ValueError("ys must be finite (V/m)")
-    P = np.broadcast_to(np.asarray(P0, dtype=float), (n, 7, 7)).copy()
+        raise ValueError("ys must be finite (V/m, nT, nT/m)")
+    try:
+        P = np.broadcast_to(np.asarray(P0, dtype=float), (n, n_x, n_x)).copy()
+    except ValueError:
+        raise ValueError(f"P0 must have shape ({n_x}, {n_x}) or (N, {n_x}, {n_x}); got "
+                         f"{np.shape(P0)}") from None
     if not np.all(np.isfinite(x)) or not np.all(np.isfinite(P)):
         raise ValueError("x0 and P0 must be finite")
     if isinstance(n_pu, bool) or not isinstance(n_pu, (int, np.integer)) or n_pu < 1:
         raise ValueError(f"n_pu must be an integer ≥ 1 (progressive sub-updates); got {n_pu!r}")
     F, Q = np.asarray(F, float), np.asarray(Q, float)
+    if F.shape != (n_x, n_x) or Q.shape != (n_x, n_x):
+        raise ValueError(f"F and Q must be {n_x} × {n_x} (core.dwna_model(..., n_states={n_x})); "
+                         f"got {F.shape} and {Q.shape}")
     if truth is not None:
         truth = np.asarray(truth, dtype=float)
-        if truth.shape != (n, ys.shape[1], 7):
-            raise ValueError(f"truth must have shape {(n, ys.shape[1], 7)}; got {truth.shape}")
+        if truth.shape != (n, ys.shape[1], n_x):
+            raise ValueError(f"truth must have shape {(n, ys.shape[1], n_x)}; got {truth.shape}")
     k_steps = ys.shape[1]
-    xs = np.empty((n, k_steps, 7))
+    xs = np.empty((n, k_steps, n_x))
     pos_var = np.empty((n, k_steps))
     ll = np.empty((n, k_steps))
     nees = np.empty((n, k_steps)) if truth is not None else None

@@ -18,6 +18,13 @@ Cases (our frame: x, y, z = depth positive down; seed 001's z-up frame is mapped
     σb = 0.4 S/m, two **2-axis** sensors on the seabed at (0, ±5 m, 8.4 m), source 0.2 m deep,
     10 A × 10 m = 100 A·m. Simulated measurements (the trial's recordings are not published).
 
+Any sensor kind: a :class:`TrackCase` takes ``sensor=`` (a :class:`core.Sensor` or a kind name;
+its old keywords ``noise``, ``sigma``, ``sea_depth``, ``seabed_sigma`` build the electric one) and,
+for the magnetic kinds, the moment vector ``moments=(mx, my, mz)`` (A·m²) and an 8-entry
+``prior_std``; :func:`monte_carlo` takes ``sensor=`` too (it replaces the case's). The EKF and
+PUEKF run on it unchanged (the filters are generic over the measurement model); the bank is
+seed 001's electric one.
+
 Truth: the nominal straight track (``truth_noise=False``, as seed 001's simulated straight
 course), or DWNA tracks sampled with the filter's own Q. The EKF and PUEKF start from a mean drawn
 from N(truth₀, P₀) with covariance P₀ (PCRLB prior J₀ = P₀⁻¹); the bank starts from its
@@ -32,6 +39,7 @@ in ``workers`` spawned processes (both cores), or on a Dask scheduler (``schedul
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing as mp
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -62,7 +70,8 @@ DEFAULT_N_PU = 3
 class TrackCase:
     """A tracking scenario: sensors, medium, true track, filter model and priors.
 
-    Lengths in m (z = depth), angles in rad (our frame), moments in A·m, noise in V/m.
+    Lengths in m (z = depth), angles in rad (our frame), moments in A·m, noise in V/m (electric;
+    with ``sensor=`` the noise, medium and units are the Sensor's: nT, nT/m, A·m²).
     """
 
     name: str
@@ -88,29 +97,54 @@ class TrackCase:
     bank_depth_std: float = 1.0
     bank_pv_std: float = 10.0
     description: str = field(default="", compare=False)
+    #: The measurement model (a core.Sensor or a kind name); None: the electric one of
+    #: ``noise``, ``sigma``, ``sea_depth``, ``seabed_sigma``.
+    sensor: object = None
+    #: The moment entries of the true state instead of (Ph, Pv): (mx, my, mz) in A·m² for a
+    #: magnetic sensor.
+    moments: tuple | None = None
 
     def sensors(self):
         """The :class:`core.SensorModel` of the case (a :class:`core.Sea` where it has one)."""
+        stations = np.array(self.stations, float)
+        if self.sensor is not None:
+            return SensorModel(stations, axes=self.axes, sensor=self.sensor)
         sea = None if self.sea_depth is None else Sea(self.sea_depth, self.seabed_sigma)
-        return SensorModel(np.array(self.stations, float), axes=self.axes, noise=self.noise,
-                           sigma=self.sigma, sea=sea)
+        return SensorModel(stations, axes=self.axes, noise=self.noise, sigma=self.sigma, sea=sea)
 
     def nominal_track(self):
-        """The straight true track, (steps, 7)."""
+        """The straight true track, (steps, n): n = 7 electric, 8 with magnetic ``moments``."""
+        if self.moments is not None:
+            return straight_track(self.start, self.heading, self.speed, self.steps, T=self.T,
+                                  moments=self.moments)
         return straight_track(self.start, self.heading, self.speed, self.steps, T=self.T,
                               Ph=self.Ph, Pv=self.Pv)
 
     def prior_cov(self):
-        """Prior covariance of the EKF / PUEKF start (7, 7)."""
+        """Prior covariance of the EKF / PUEKF start (n, n)."""
         return np.diag(np.asarray(self.prior_std, float) ** 2)
 
     def bank_prior_info(self):
         """What every bank hypothesis knows a priori, as information (7, 7): the depth (ξ_z)
         and Pv; flat in x, y, velocity and Ph (those are what the hypotheses guess)."""
-        info = np.zeros((7, 7))
+        n = self.sensors().n_states
+        info = np.zeros((n, n))
         info[2, 2] = 1.0 / self.bank_depth_std**2
         info[6, 6] = 1.0 / self.bank_pv_std**2
         return info
+
+    def check(self):
+        """ValueError unless the track, the prior and the sensor have one state size."""
+        n = self.sensors().n_states
+        n_track = self.nominal_track().shape[-1]
+        if n_track != n:
+            raise ValueError(
+                f"case {self.name!r}: sensor kind {self.sensors().kind!r} has {n} states but the "
+                f"track has {n_track}: give moments=(mx, my, mz) (A·m²) for a magnetic sensor"
+            )
+        if len(self.prior_std) != n:
+            raise ValueError(f"case {self.name!r}: prior_std must have {n} entries (one per "
+                             f"state); got {len(self.prior_std)}")
 
 
 _SEED_GEOMETRY = dict(
@@ -166,21 +200,22 @@ def _run_seed(seed, run):
 
 
 def _truths_and_x0(case, filter_name, run_ids, seed, truth_noise):
-    """True tracks (n, K, 7) and filter start means (n, 7) of the given runs.
+    """True tracks (n, K, n_x) and filter start means (n, n_x) of the given runs.
 
     Every run's truth starts at the nominal start; an EKF / PUEKF starts from a mean drawn from
     N(truth₀, P₀) (so that P₀ is its honest prior and the PCRLB's J₀ = P₀⁻¹), kept in the water.
     """
     nominal = case.nominal_track()
-    F, Q = dwna_model(case.T, case.sigma_a, case.alpha)
-    lo, hi = (0.0, case.sea_depth) if case.sea_depth is not None else (-np.inf, np.inf)
-    truths = np.empty((len(run_ids), case.steps, 7))
-    x0 = np.broadcast_to(nominal[0], (len(run_ids), 7)).copy()
+    n_x = nominal.shape[-1]
+    F, Q = dwna_model(case.T, case.sigma_a, case.alpha, n_states=n_x)
+    lo, hi = case.sensors().depth_range
+    truths = np.empty((len(run_ids), case.steps, n_x))
+    x0 = np.broadcast_to(nominal[0], (len(run_ids), n_x)).copy()
     root = np.asarray(case.prior_std, float)
     for n, r in enumerate(run_ids):
         rng = _run_seed(seed, r)
         if filter_name != "bank":
-            x0[n] += root * rng.standard_normal(7)
+            x0[n] += root * rng.standard_normal(n_x)
             x0[n, 2] = np.clip(x0[n, 2], lo, hi)
         truths[n] = sample_tracks(nominal[0], F, Q, case.steps, rng) if truth_noise else nominal
     return truths, x0
@@ -190,14 +225,14 @@ def _measurements(case, sensors, truths, run_ids, seed):
     h = sensors.h(truths)  # (n, K, m)
     for n, r in enumerate(run_ids):
         rng = _run_seed(seed + 1_000_003, r)  # a stream of its own, independent of the truth's
-        h[n] += case.noise * rng.standard_normal(h[n].shape)
+        h[n] += sensors.noise_vector * rng.standard_normal(h[n].shape)
     return h
 
 
 def _chunk(case, filter_name, run_ids, seed, n_pu, truth_noise, keep_tracks=0, progress=None):
     """Simulate and filter a chunk of runs; returns plain arrays (picklable for workers)."""
     sensors = case.sensors()
-    F, Q = dwna_model(case.T, case.sigma_a, case.alpha)
+    F, Q = dwna_model(case.T, case.sigma_a, case.alpha, n_states=sensors.n_states)
     truths, x0 = _truths_and_x0(case, filter_name, run_ids, seed, truth_noise)
     ys = _measurements(case, sensors, truths, run_ids, seed)
     out = {"run_ids": np.asarray(run_ids)}
@@ -256,7 +291,8 @@ class MonteCarloResult:
 
 
 def monte_carlo(case="seed001-sim", *, filter="bank", runs=100, seed=0, n_pu=None, workers=1,
-                scheduler=None, chunks=None, truth_noise=False, keep_tracks=5, progress=None):
+                scheduler=None, chunks=None, truth_noise=False, keep_tracks=5, progress=None,
+                sensor=None):
     """Monte-Carlo runs of a filter on a case: TRMSE against the PCRLB.
 
     Parameters
@@ -284,12 +320,18 @@ def monte_carlo(case="seed001-sim", *, filter="bank", runs=100, seed=0, n_pu=Non
     progress : tqdm-like, optional
         A progress bar (``reset(total=)``, ``update(n)``, ``close()``; the command line passes a
         ``tqdm``), advanced per chunk or per step and closed at the end; None: silent.
+    sensor : core.Sensor or str, optional
+        The measurement model, replacing the case's (a magnetic one needs a case with
+        ``moments`` and an 8-entry ``prior_std``; the bank is electric only).
 
     Returns
     -------
     MonteCarloResult
     """
     case = _case(case)
+    if sensor is not None:
+        case = dataclasses.replace(case, sensor=sensor)
+    case.check()
     if filter not in FILTERS:
         raise ValueError(f"filter must be one of {list(FILTERS)}; got {filter!r}")
     for name, v, lo in (("runs", runs, 1), ("workers", workers, 1), ("seed", seed, 0)):
@@ -390,7 +432,7 @@ def _collect(case, filter_name, n_pu, seed, runs, truth_noise, sensors, results,
         "diverged": float(diverged.mean()),
         "diverged_rule": "final position error > max(5 × final PCRLB, 10 m)",
         "nees": float(np.mean(nees[finite])) if finite.any() else None,
-        "nees_dof": 7,
+        "nees_dof": int(sensors.n_states),
         "nees_finite_share": float(finite.mean()),
         "trmse_final_m": float(trmse[-1]),
         "trmse_mean_m": float(np.mean(trmse)),

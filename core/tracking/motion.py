@@ -29,6 +29,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import validation
+from ..model.sensors import Sensor
+
+#: State sizes of the sensor kinds: electric (7) and magnetic (8).
+STATE_SIZES = (Sensor("E").n_states, Sensor("B").n_states)
+#: Kinematic states ``[x, y, z, vx, vy]`` before the moments.
+_KINEMATIC = 5
 
 __all__ = ["dwna_model", "sample_tracks", "straight_track"]
 
@@ -43,7 +49,7 @@ def _nonnegative(name, value, unit):
     return v
 
 
-def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=7):
+def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=STATE_SIZES[0]):
     """Transition matrix F and process-noise covariance Q of the DWNA model.
 
     Parameters
@@ -57,7 +63,8 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=7):
         Variance of the moment random walk per step ((A·m)²), ≥ 0, on ``Ph`` and ``Pv``
         (seed 001: 0.001); on the moment vector (mx, my, mz) in (A·m²)² for magnetic states.
     n_states : {7, 8}
-        7: the electric ``[x, y, z, vx, vy, Ph, Pv]``; 8: the magnetic ``[…, mx, my, mz]``.
+        7: the electric ``[x, y, z, vx, vy, Ph, Pv]``; 8: the magnetic ``[…, mx, my, mz]``
+        (``core.Sensor(kind).n_states``).
 
     Returns
     -------
@@ -77,8 +84,9 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=7):
     T = validation.positive("T", T, "s")
     sa2 = _nonnegative("sigma_a", sigma_a, "m/s²") ** 2
     alpha = _nonnegative("alpha", alpha, "(A·m)² per step")
-    if n_states not in (7, 8):
-        raise ValueError(f"n_states must be 7 (electric) or 8 (magnetic); got {n_states!r}")
+    if n_states not in STATE_SIZES:
+        raise ValueError(f"n_states must be {STATE_SIZES[0]} (electric) or {STATE_SIZES[1]} "
+                         f"(magnetic); got {n_states!r}")
     F = np.eye(n_states)
     F[0, 3] = F[1, 4] = T
     Q = np.zeros((n_states, n_states))
@@ -86,7 +94,7 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=7):
         Q[p, p] = sa2 * T**4 / 4.0
         Q[p, v] = Q[v, p] = sa2 * T**3 / 2.0
         Q[v, v] = sa2 * T**2
-    for k in range(5, n_states):
+    for k in range(_KINEMATIC, n_states):
         Q[k, k] = alpha
     return F, Q
 
@@ -97,7 +105,7 @@ def _steps(value):
     return int(value)
 
 
-def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0):
+def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0, moments=None):
     """States along a straight constant-velocity track.
 
     Parameters
@@ -113,18 +121,23 @@ def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0):
     T : float
         Sample interval (s), > 0.
     Ph, Pv : float
-        Moments (A·m), constant along the track.
+        Moments (A·m), constant along the track (electric states).
+    moments : sequence of float, optional
+        The moment entries of the state instead of (Ph, Pv): ``(mx, my, mz)`` (A·m²) for the
+        magnetic state ``[x, y, z, vx, vy, mx, my, mz]``, or ``(Ph, Pv)``.
 
     Returns
     -------
-    ndarray, shape (steps, 7)
-        ``X_k = F^k X_0`` for k = 0 … steps − 1.
+    ndarray, shape (steps, n)
+        ``X_k = F^k X_0`` for k = 0 … steps − 1; n = 5 + the number of moments (7 or 8).
 
     Examples
     --------
     >>> import core
     >>> core.straight_track([0, 0, 5], 0.0, 2.0, 3)[:, 0].tolist()
     [0.0, 2.0, 4.0]
+    >>> core.straight_track([0, 0, 5], 0.0, 2.0, 3, moments=(1.0, 2.0, 3.0)).shape
+    (3, 8)
     """
     start = validation._array("start", start)
     if start.shape != (3,):
@@ -136,16 +149,25 @@ def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0):
     speed = validation.positive("speed", speed, "m/s")
     steps = _steps(steps)
     T = validation.positive("T", T, "s")
-    for name, v in (("Ph", Ph), ("Pv", Pv)):
-        if not np.isfinite(float(v)):
-            raise ValueError(f"{name} must be a finite moment (A·m); got {v!r}")
+    if moments is None:
+        for name, v in (("Ph", Ph), ("Pv", Pv)):
+            if not np.isfinite(float(v)):
+                raise ValueError(f"{name} must be a finite moment (A·m); got {v!r}")
+        mom = np.array([float(Ph), float(Pv)])
+    else:
+        mom = validation._array("moments", moments)
+        if mom.ndim != 1 or _KINEMATIC + mom.size not in STATE_SIZES:
+            raise ValueError("moments must be (Ph, Pv) in A·m or (mx, my, mz) in A·m²; got "
+                             f"shape {mom.shape}")
+        validation._finite("moments", mom)
     t = T * np.arange(steps)
     vx, vy = speed * np.cos(heading), speed * np.sin(heading)
-    out = np.empty((steps, 7))
+    out = np.empty((steps, _KINEMATIC + mom.size))
     out[:, 0] = start[0] + vx * t
     out[:, 1] = start[1] + vy * t
     out[:, 2] = start[2]
-    out[:, 3], out[:, 4], out[:, 5], out[:, 6] = vx, vy, float(Ph), float(Pv)
+    out[:, 3], out[:, 4] = vx, vy
+    out[:, _KINEMATIC:] = mom
     return out
 
 
@@ -154,9 +176,9 @@ def sample_tracks(x0, F, Q, steps, rng):
 
     Parameters
     ----------
-    x0 : array_like, shape (..., 7)
-        States at step 0 (one track per leading index).
-    F, Q : array_like, shape (7, 7)
+    x0 : array_like, shape (..., n)
+        States at step 0 (one track per leading index); n = 7 electric, 8 magnetic.
+    F, Q : array_like, shape (n, n)
         From :func:`dwna_model`; Q symmetric positive semi-definite.
     steps : int
         Number of instants, ≥ 1.
@@ -164,23 +186,24 @@ def sample_tracks(x0, F, Q, steps, rng):
 
     Returns
     -------
-    ndarray, shape (..., steps, 7)
+    ndarray, shape (..., steps, n)
     """
     x0 = validation._array("x0", x0)
-    if x0.ndim < 1 or x0.shape[-1] != 7:
-        raise ValueError(f"x0 must have shape (..., 7); got shape {x0.shape}")
+    if x0.ndim < 1 or x0.shape[-1] not in STATE_SIZES:
+        raise ValueError(f"x0 must have shape (..., n), n in {STATE_SIZES}; got shape {x0.shape}")
+    n = x0.shape[-1]
     F, Q = np.asarray(F, float), np.asarray(Q, float)
-    if F.shape != (7, 7) or Q.shape != (7, 7):
-        raise ValueError(f"F and Q must be 7 × 7; got {F.shape} and {Q.shape}")
+    if F.shape != (n, n) or Q.shape != (n, n):
+        raise ValueError(f"F and Q must be {n} × {n}; got {F.shape} and {Q.shape}")
     steps = _steps(steps)
     # Q may be singular (z, or σa = 0): factor by eigen-decomposition instead of Cholesky.
     w, V = np.linalg.eigh(0.5 * (Q + Q.T))
     if w.min() < -1e-12 * max(w.max(), 1.0):
         raise ValueError("Q must be positive semi-definite")
-    root = V * np.sqrt(np.clip(w, 0.0, None))  # (7, 7): root @ rootᵀ = Q
-    out = np.empty(x0.shape[:-1] + (steps, 7))
+    root = V * np.sqrt(np.clip(w, 0.0, None))  # (n, n): root @ rootᵀ = Q
+    out = np.empty(x0.shape[:-1] + (steps, n))
     out[..., 0, :] = x0
-    noise = rng.standard_normal(x0.shape[:-1] + (steps - 1, 7)) @ root.T
+    noise = rng.standard_normal(x0.shape[:-1] + (steps - 1, n)) @ root.T
     for k in range(1, steps):
         out[..., k, :] = out[..., k - 1, :] @ F.T + noise[..., k - 1, :]
     return out

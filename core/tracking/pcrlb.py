@@ -7,7 +7,8 @@ D²² = Q⁻¹ + E[HᵀR⁻¹H])
     J_0     = J_prior + E[H_0ᵀ R⁻¹ H_0]
     J_{k+1} = (Q + F J_k⁻¹ Fᵀ)⁻¹ + E[H_{k+1}ᵀ R⁻¹ H_{k+1}],
 
-with H_k = ∂h/∂X at the true state X_k (:class:`core.SensorModel`, i.e. :func:`core.field_jacobian`)
+with H_k = ∂h/∂X at the true state X_k (:class:`core.SensorModel`, i.e. the measurement model of
+its :class:`core.Sensor`: :func:`core.field_jacobian` or :func:`core.magnetic_jacobian`)
 and E over the true tracks. Given one track, E is that track (the usual "nominal track"
 bound); given M sampled tracks (:func:`core.sample_tracks`), E is their mean.
 
@@ -29,7 +30,7 @@ import numpy as np
 
 from ..kernels.pcrlb import _recursion
 from ..model import validation
-from ..model.measurement import SensorModel
+from ..model.measurement import tracking_sensors
 from .motion import dwna_model
 
 __all__ = ["SINGULAR_TOL", "PcrlbResult", "linearisation_breaks", "pcrlb"]
@@ -67,7 +68,7 @@ class PcrlbResult:
     observable: np.ndarray
 
 
-def _tracks(track, n=7):
+def _tracks(track, n):
     arr = validation._array("track", track)
     if arr.ndim not in (2, 3) or arr.shape[-1] != n:
         raise ValueError(
@@ -87,14 +88,14 @@ def _matrix(name, value, shape):
 
 
 def measurement_information(tracks, sensors):
-    """E[Hᵀ R⁻¹ H] at every step: (M, steps, 7) true states → (steps, 7, 7)."""
+    """E[Hᵀ R⁻¹ H] at every step: (M, steps, n) true states → (steps, n, n)."""
     H = sensors.jacobian(tracks) / sensors.noise_vector[:, None]  # R^-½ H: (M, steps, m, n)
     return np.einsum("nkri,nkrj->kij", H, H) / tracks.shape[0]
 
 
 def _invert(J):
-    """Covariances and the singular flag of a stack of information matrices (K, 7, 7)."""
-    d = np.sqrt(np.clip(np.einsum("kii->ki", J), 0.0, None))  # (K, 7)
+    """Covariances and the singular flag of a stack of information matrices (K, n, n)."""
+    d = np.sqrt(np.clip(np.einsum("kii->ki", J), 0.0, None))  # (K, n)
     with np.errstate(divide="ignore"):
         s = np.where(d > 0.0, 1.0 / d, 0.0)
     Js = J * s[:, :, None] * s[:, None, :]
@@ -107,7 +108,8 @@ def _invert(J):
     return cov, ok
 
 
-def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, prior_info=None):
+def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, prior_info=None,
+          sensor=None):
     """Posterior Cramér–Rao bound at every step of a track.
 
     Parameters
@@ -117,9 +119,9 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, pr
         ``[x, y, z, vx, vy, mx, my, mz]`` (n = 8) for a magnetic sensor kind: one nominal
         track (e.g. :func:`core.straight_track`) or M sampled ones (:func:`core.sample_tracks`),
         over which the measurement information is averaged.
-    sensors : core.SensorModel
-        Stations, sensor kind (``kind``: E, B, G, BG), axes (3 or 2), noise per component,
-        medium (``sea``).
+    sensors : core.SensorModel or array_like (S, 3)
+        Stations, axes (3 or 2) and the :class:`core.Sensor` (kind E, B, G, BG, noise per
+        component, medium); or station positions (m) together with ``sensor``.
     T, sigma_a, alpha : float
         Sample interval (s), DWNA acceleration σ (m/s²), moment random walk ((A·m)² per step)
         of :func:`core.dwna_model`. ``sigma_a = alpha = 0``: a deterministic track.
@@ -130,6 +132,9 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, pr
         The prior as an information matrix instead (1 / state units squared), symmetric
         positive *semi*-definite: zero rows are states with a flat prior (e.g. a filter bank that
         knows only the depth and Pv roughly). Not together with ``prior_cov``.
+    sensor : core.Sensor or str, optional
+        The measurement model (or a kind name) when ``sensors`` are station positions (3 axes
+        per station); None there is the electric default.
 
     Returns
     -------
@@ -148,9 +153,12 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, pr
     >>> b = core.pcrlb(track, sensors, prior_cov=None)
     >>> bool(b.observable[0]), bool(b.observable[-1]), b.position_std.shape
     (False, True, (50,))
+    >>> mag = core.straight_track([-60, 15, 10], 0.0, 2.0, 50, moments=(2e3, -1e3, 3e3))
+    >>> bg = core.pcrlb(mag, [[0, 0, 0]], sensor="BG")
+    >>> bg.cov.shape, bool(bg.observable[-1])
+    ((50, 8, 8), True)
     """
-    if not isinstance(sensors, SensorModel):
-        raise ValueError(f"sensors must be a core.SensorModel; got {type(sensors).__name__}")
+    sensors = tracking_sensors(sensors, sensor)
     n = sensors.n_states
     tracks = _tracks(track, n)
     F, Q = dwna_model(T, sigma_a, alpha, n_states=n)
@@ -171,7 +179,7 @@ def pcrlb(track, sensors, *, T=1.0, sigma_a=0.1, alpha=0.001, prior_cov=None, pr
         except np.linalg.LinAlgError:
             raise ValueError("prior_cov must be symmetric positive definite (state units²)") from None
         J = np.linalg.inv(P0)
-    info = measurement_information(tracks, sensors)  # (steps, 7, 7)
+    info = measurement_information(tracks, sensors)  # (steps, n, n)
     Finv = np.linalg.inv(F)
     out = _recursion(Finv, np.ascontiguousarray(Finv.T), Q, J, info)
     cov, ok = _invert(out)
