@@ -47,6 +47,12 @@ def pool(name, workers=2):
 def schedule(doc, coroutine_function):
     """Run ``coroutine_function()`` on the event loop of ``doc``'s session (``doc``: the session's
     document, None outside a server), whichever thread calls this."""
+    if doc is None or doc.session_context is None:  # no server: run it here, to the end
+        try:
+            asyncio.get_running_loop()
+        except RuntimeError:  # (Panel would leave a new event loop open for each call)
+            asyncio.run(coroutine_function())
+            return
     with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
         pn.state.execute(coroutine_function)
 

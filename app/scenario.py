@@ -554,10 +554,11 @@ class Scenario(param.Parameterized):
             kind = "a whole number" if is_int else "a number"
             return f"{label} must be {kind}; got {str(value)[:40]!r}"
         if name in DEPTHS and value < 0:
-            return (f"{label} = {value:g} is above the sea surface: depths are measured down from "
+            return (f"{label} = {value:.10g} is above the sea surface: depths are measured down from "
                     f"the surface, {lo:g} … {hi:g} {unit}")
         if not lo <= value <= hi:
-            return f"{label} = {value:g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
+            # the value to 10 digits: "100000" for 100000.1 read as if the bound had been refused
+            return f"{label} = {value:.10g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
         return None
 
     def apply_preset(self, name):
