@@ -165,3 +165,29 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
     finally:
         on_thread(close_client, uploader)
         on_thread(close_client, other)
+
+
+def test_the_readme_the_container_and_the_cluster_serve_with_the_same_threads():
+    """The README's serve command, the container's and app.cluster's replicas pass the same
+    ``--num-threads`` as the served app of these tests (tests.server): one way of serving."""
+    import inspect
+    import json
+    import shlex
+    from pathlib import Path
+
+    from app import cluster
+
+    root = Path(__file__).resolve().parents[1]
+
+    def threads(args):
+        args = list(args)
+        return args[args.index("--num-threads") + 1] if "--num-threads" in args else None
+
+    readme = next(line for line in (root / "README.md").read_text().splitlines()
+                  if "panel serve app" in line and line.lstrip().startswith("python3 -m venv"))
+    command = shlex.split(readme.split("&&")[-1])
+    docker = (root / "Dockerfile").read_text()
+    cmd = json.loads(docker[docker.index("\nCMD [") + 5:].split("]", 1)[0].replace("\\\n", "") + "]")
+    served = inspect.getsource(__import__("tests.server", fromlist=["served_app"]).served_app)
+    assert threads(command) == threads(cmd) == str(cluster.Cluster(replicas=1).num_threads) == "4"
+    assert '"--num-threads", "4"' in served
