@@ -127,12 +127,14 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
                 done["time"] = rtt
 
             worker = threading.Thread(target=send_upload)
+            sent = time.perf_counter()
             worker.start()
             # The server has the upload and computes it: A's page shows its busy indicator.
             deadline = time.perf_counter() + 30
             while time.perf_counter() < deadline and not busy(uploader.events[start:]):
                 time.sleep(0.01)
             busy_seen = time.perf_counter() < deadline
+            busy_after = time.perf_counter() - sent
             ph = 150.0 + attempt
             t0 = time.perf_counter()
             quick = other.change(other.ph, "value_throttled", ph, other.maps_done, timeout=60)
@@ -143,7 +145,7 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
             assert quick is not None, "B's slider change was not answered"
             events = uploader.events[start:]
             assert not busy(events, last=True), "the busy indicator was left on after the result"
-            print(f"attempt {attempt}: A's calibration {done['time']:.2f} s, B's change {quick * 1e3:.0f} ms "
+            print(f"attempt {attempt}: A's calibration {done['time']:.2f} s (busy after {busy_after:.2f} s), B's change {quick * 1e3:.0f} ms "
                   f"({'before' if quick_end < done['end'] else 'after'} A's result)")
             if quick < ANSWER_WITHIN and quick_end < done["end"]:
                 break
