@@ -351,10 +351,11 @@ def calibration_tab(scenario):
         error.object = _error_html(dict(error=f"Not computed: {type(exc).__name__}: {exc}"))
 
     def start(*_):
-        values = {f: getattr(scenario, f) for f in FIELDS}
-        data = upload.value
-        key = (tuple(sorted(values.items())), hashlib.sha1(data).hexdigest() if data else None)
-        task.start(key, partial(views, values, data), show, failed)
+        with task.lock:  # the values as they are when this decides (two watchers may race)
+            values = {f: getattr(scenario, f) for f in FIELDS}
+            data = upload.value
+            key = (tuple(sorted(values.items())), hashlib.sha1(data).hexdigest() if data else None)
+            task.start(key, partial(views, values, data), show, failed)
 
     scenario.param.watch(start, list(FIELDS))
     upload.param.watch(start, "value")

@@ -70,14 +70,18 @@ class Task:
         self.pool = pool(pool_name, workers)
         self.busy = tuple(busy)
         self.doc = pn.state.curdoc if doc is _NEW else doc
-        self._lock = threading.Lock()  # Panel may run two changes' watchers on two threads at once
+        #: Panel may run two changes' watchers on two threads at once: a caller that reads the
+        #: inputs to decide what to start holds this around the reading and ``start`` (re-entrant),
+        #: so each decision sees the values as they then are (not one thread's stale reading
+        #: started after another's newer one).
+        self.lock = threading.RLock()
         self._key = _NEW
         self._token = None
 
     def start(self, key, work, show, failed=None):
         """Compute ``work()`` off the loop and ``show(result)`` on it, unless ``key`` is the one
         being computed or shown (None: always compute). Returns the worker's future, or None."""
-        with self._lock:
+        with self.lock:
             if key is not None and key == self._key:
                 return None
             self._key = key
@@ -90,7 +94,7 @@ class Task:
     def cancel(self):
         """Drop the result being computed (the page keeps what it shows) and forget the key: the
         next start computes, whatever its key. For inputs refused before any computation."""
-        with self._lock:
+        with self.lock:
             self._key, self._token = _NEW, None
         self._loading(False)
 

@@ -440,14 +440,15 @@ def _build(scenario):
         say(f"Not computed: {type(exc).__name__}: {exc}")
 
     def start(*_):
-        key = key_of(scenario)
-        try:
-            case_of(dict(key))
-        except ValueError as exc:  # each value accepted, not together: said, last plots stay
-            say(f"Not computed: {exc}. The plots show the last computed pass.")
-            task.cancel()
-            return
-        task.start(key, partial(views, key), show, failed)
+        with task.lock:  # the values as they are when this decides (two watchers may race)
+            key = key_of(scenario)
+            try:
+                case_of(dict(key))
+            except ValueError as exc:  # each value accepted, not together: said, last plots stay
+                say(f"Not computed: {exc}. The plots show the last computed pass.")
+                task.cancel()
+                return
+            task.start(key, partial(views, key), show, failed)
 
     scenario.param.watch(start, list(PARAMS))
     start()

@@ -278,14 +278,15 @@ def _outputs(scenario: Scenario):
             else f"Track not computed: {type(exc).__name__}: {exc}")
 
     def start(*_):
-        key = _key(scenario)
-        try:
-            case_of(_Values(dict(key)))
-        except ValueError as exc:
-            say(f"Track not computed: {exc}. The plots show the last computed track.")
-            task.cancel()
-            return
-        task.start(key, partial(outputs_of, key), show, failed)
+        with task.lock:  # the values as they are when this decides (two watchers may race)
+            key = _key(scenario)
+            try:
+                case_of(_Values(dict(key)))
+            except ValueError as exc:
+                say(f"Track not computed: {exc}. The plots show the last computed track.")
+                task.cancel()
+                return
+            task.start(key, partial(outputs_of, key), show, failed)
 
     scenario.param.watch(start, list(INPUTS))
     start()
