@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import html
+from functools import partial
 
 import holoviews as hv
 import numpy as np
@@ -17,6 +18,9 @@ import pandas as pd
 import panel as pn
 
 from core import calibration as cal
+
+from . import offloop
+from .maps import refusal
 
 hv.extension("bokeh", logo=False)  # as app/views.py: the tab also serves on its own (tests)
 
@@ -63,7 +67,12 @@ _BP_NAMES = cal.COEFFICIENTS[9:]
 
 
 def parse_headings(text):
-    """Headings (deg) from comma- or space-separated text; ValueError saying what is wrong."""
+    """Headings (deg) from comma- or space-separated text, each within ±360°, returned wrapped
+    to (−180°, 180°] (360° is north, as 0°); ValueError saying what is wrong.
+
+    Wrapped, as core's random attitudes are: core takes angles up to 2π rad in magnitude, and
+    a heading of ±360° plus the simulated angle error would exceed it ("radians?") although the
+    tab accepted it."""
     parts = [p for p in str(text).replace(",", " ").split() if p]
     try:
         vals = [float(p.replace("−", "-")) for p in parts]
@@ -71,7 +80,7 @@ def parse_headings(text):
         raise ValueError(f"Headings must be numbers in degrees separated by commas; got {str(text)[:60]!r}") from None
     if not vals or len(vals) > 72 or not all(np.isfinite(vals)) or max(map(abs, vals)) > 360:
         raise ValueError("Headings must be 1 to 72 numbers in degrees, each within ±360")
-    return vals
+    return [180.0 - (180.0 - v) % 360.0 for v in vals]
 
 
 def compute(values, upload=None):
@@ -237,16 +246,31 @@ def convergence_plot(res, which):
         logx=True, **_OPTS)
 
 
+#: Most attitudes a plot draws: a real log has tens of thousands, which the browser need not get
+#: (every attitude is in the numbers above; the plots show an even selection and say so).
+MAX_PLOT_POINTS = 2000
+
+
+def _shown(n):
+    """(indices, title note) of the attitudes 0…n−1 a plot draws: all, or MAX_PLOT_POINTS evenly."""
+    if n <= MAX_PLOT_POINTS:
+        return np.arange(n), ""
+    return (np.unique(np.linspace(0, n - 1, MAX_PLOT_POINTS).round().astype(int)),
+            f" ({MAX_PLOT_POINTS:,} of {n:,} attitudes shown)")
+
+
 def be_error_plot(res):
     """Per attitude, the error of the geomagnetic solution Be = (KA)⁻¹(B − Bp), Kalman K and Bp."""
     title = "Geomagnetic solution error (Kalman K, Bp)"
     ylabel = "Be error (nT)"
     if res["error"] or res.get("be_err_kal") is None:
         return _empty("Attitude n", ylabel, title)
-    e = res["be_err_kal"]
+    idx, shown = _shown(res["be_err_kal"].shape[0])
+    e = res["be_err_kal"][idx]
+    title += shown
     kd = hv.Dimension("attitude", label="Attitude n")
     vd = hv.Dimension("error", label=ylabel)
-    n = np.arange(1, e.shape[0] + 1)
+    n = idx + 1
     layers = []
     for i, lab in enumerate(("north", "east", "down")):
         layers += [hv.Curve((n, e[:, i]), kd, vd, label=lab),
@@ -259,9 +283,11 @@ def manoeuvre_plot(res):
     title = "Manoeuvre: attitudes"
     if res["error"]:
         return _empty("Heading ψ (°)", "Roll θ (°)", title)
-    a = np.rad2deg(res["attitudes"])
+    idx, shown = _shown(res["attitudes"].shape[0])
+    title += shown
+    a = np.rad2deg(res["attitudes"][idx])
     df = pd.DataFrame({"heading": np.mod(a[:, 0], 360), "roll": a[:, 1], "pitch": a[:, 2],
-                       "n": np.arange(1, a.shape[0] + 1)})
+                       "n": idx + 1})
     return hv.Scatter(df, hv.Dimension("heading", label="Heading ψ (°)"),
                       [hv.Dimension("roll", label="Roll θ (°)"), hv.Dimension("pitch", label="Pitch φ (°)"),
                        hv.Dimension("n", label="Attitude n")]).opts(
@@ -283,8 +309,20 @@ def _load(scenario, name):
         scenario.param.update(PRESETS[name])
 
 
+def views(values, upload=None):
+    """Everything the tab draws for the cal_ ``values`` and the ``upload``ed bytes: dict of the
+    error HTML, the summary markdown, the coefficient table and the four plots (built on a
+    worker thread, :mod:`app.offloop`; drawn on the event loop)."""
+    res = compute(values, upload)
+    return dict(error=_error_html(res), summary=summary(res), table=coefficient_table(res),
+                K=convergence_plot(res, "K"), Bp=convergence_plot(res, "Bp"),
+                be=be_error_plot(res), manoeuvre=manoeuvre_plot(res))
+
+
 def calibration_tab(scenario):
-    """The tab's layout for one session's ``scenario`` (its ``cal_`` parameters)."""
+    """The tab's layout for one session's ``scenario`` (its ``cal_`` parameters). A change of
+    the inputs or an upload computes off the event loop (:class:`app.offloop.Task`, ~3 s for a
+    50,000-reading log), a spinner over the results and plots meanwhile."""
     upload = pn.widgets.FileInput(accept=".csv", css_classes=["w-cal-upload"])
 
     def uploaded(event):
@@ -292,17 +330,36 @@ def calibration_tab(scenario):
             scenario.cal_source = "Uploaded CSV"
 
     upload.param.watch(uploaded, "value")
-    memo = {}
+    error = pn.pane.HTML("", sizing_mode="stretch_width", css_classes=["w-cal-error"])
+    text = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-cal-summary"])
+    table = pn.pane.DataFrame(pd.DataFrame(), index=False, sizing_mode="stretch_width",
+                              css_classes=["w-cal-table"])
+    k_plot, bp_plot, be_plot, att_plot = (pn.pane.HoloViews(None, sizing_mode="stretch_width")
+                                          for _ in range(4))
+    results = pn.Column(refusal(scenario, FIELDS, "w-message-cal"), error, text, table, sizing_mode="stretch_width")
+    plots = pn.Column(pn.Row(k_plot, bp_plot, sizing_mode="stretch_width"),
+                      pn.Row(be_plot, att_plot, sizing_mode="stretch_width"),
+                      sizing_mode="stretch_width")
+    task = offloop.Task("calibration", busy=[results, plots])
 
-    def result(upload_bytes, **values):
-        key = (tuple(sorted(values.items())),
-               hashlib.sha1(upload_bytes).hexdigest() if upload_bytes else None)
-        if key not in memo:  # the views share one computation per change
-            memo.clear()
-            memo[key] = compute(values, upload_bytes)
-        return memo[key]
+    def show(shown):
+        error.object, text.object, table.object = shown["error"], shown["summary"], shown["table"]
+        k_plot.object, bp_plot.object = shown["K"], shown["Bp"]
+        be_plot.object, att_plot.object = shown["be"], shown["manoeuvre"]
 
-    res = pn.bind(result, upload.param.value, **{f: scenario.param[f] for f in FIELDS})
+    def failed(exc):  # compute says what is wrong with the inputs; anything else is said here
+        error.object = _error_html(dict(error=f"Not computed: {type(exc).__name__}: {exc}"))
+
+    def start(*_):
+        with task.lock:  # the values as they are when this decides (two watchers may race)
+            values = {f: getattr(scenario, f) for f in FIELDS}
+            data = upload.value
+            key = (tuple(sorted(values.items())), hashlib.sha1(data).hexdigest() if data else None)
+            task.start(key, partial(views, values, data), show, failed)
+
+    scenario.param.watch(start, list(FIELDS))
+    upload.param.watch(start, "value")
+    start()
     presets = pn.FlexBox(*[
         pn.widgets.Button(name=name, button_type="primary", button_style="outline",
                           css_classes=[f"w-cal-preset-{i}"],
@@ -321,20 +378,6 @@ def calibration_tab(scenario):
         pn.pane.Markdown(f"**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad; at most "
                          f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB)"), upload,
         width=320)
-    results = pn.Column(
-        pn.pane.HTML(pn.bind(_error_html, res), sizing_mode="stretch_width", css_classes=["w-cal-error"]),
-        pn.pane.Markdown(pn.bind(summary, res), sizing_mode="stretch_width", css_classes=["w-cal-summary"]),
-        pn.pane.DataFrame(pn.bind(coefficient_table, res), index=False, sizing_mode="stretch_width",
-                          css_classes=["w-cal-table"]),
-        sizing_mode="stretch_width")
-    plots = pn.Column(
-        pn.Row(pn.pane.HoloViews(pn.bind(convergence_plot, res, "K"), sizing_mode="stretch_width"),
-               pn.pane.HoloViews(pn.bind(convergence_plot, res, "Bp"), sizing_mode="stretch_width"),
-               sizing_mode="stretch_width"),
-        pn.Row(pn.pane.HoloViews(pn.bind(be_error_plot, res), sizing_mode="stretch_width"),
-               pn.pane.HoloViews(pn.bind(manoeuvre_plot, res), sizing_mode="stretch_width"),
-               sizing_mode="stretch_width"),
-        sizing_mode="stretch_width")
     return pn.Column(
         pn.pane.Markdown(HELP, sizing_mode="stretch_width"),
         pn.pane.Markdown("**Seed 004's cases and instructive manoeuvres** (one click loads one)"), presets,

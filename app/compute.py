@@ -18,6 +18,7 @@ import core
 from .scenario import (
     ACCEPTED,
     COMPARISONS,
+    NOT_MAP_INPUTS,
     CRITERIA,
     DIFFERENCES,
     PAPER_MAPS,
@@ -33,7 +34,7 @@ from .scenario import (
 KERNEL_LOCK = threading.Lock()
 
 #: Values that define the comparison maps; everything else in Scenario is presentation or design.
-FIELDS = tuple(sorted({n for n in ACCEPTED if not n.startswith("shape_")} - {"threshold"}
+FIELDS = tuple(sorted({n for n in ACCEPTED if not n.startswith(NOT_MAP_INPUTS)} - {"threshold"}
                      | {"plane", "layout", "comparison", "difference", "measure", "model",
                         "state_set", "sea_model", "sensor", "sensor_b"}))
 #: Values that define the layout-design tab.

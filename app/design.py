@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import holoviews as hv
 import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
-from . import compute, views
+from . import compute, offloop, views
 from .compute import DESIGN_FIELDS, RUNAWAY_LIMIT, Snapshot
 from .inputs import number_input
 from .maps import alert
@@ -27,7 +29,8 @@ N stations (or free positions, ~10 s) and makes it the custom layout.
 """.format(limit=RUNAWAY_LIMIT)
 
 #: Parameters of this tab whose refusal is shown here, next to their inputs.
-OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error_quantity")
+OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error_quantity", "ellipse_x",
+       "ellipse_y")
 
 
 def drawn_stations(data, old, h):
@@ -118,19 +121,32 @@ def design_tab(scenario, cache, widgets):
                                            scenario.param.message, scenario.param.refused),
                            sizing_mode="stretch_width", css_classes=["w-design-message"])
     run = pn.widgets.Button(name="Find best spacing", button_type="primary")
+    # The optimisers take ~1 s (best spacing) to ~10 s (free layouts): off the event loop
+    # (app.offloop), a spinner over what they will change meanwhile.
+    found = pn.Column(pn.pane.Markdown("Press *Find best spacing* (about a second)."),
+                      sizing_mode="stretch_width", min_height=60)
+    spacing_task = offloop.Task("design", busy=[found, run])
 
-    def spacing(clicks):
-        if not clicks:
-            return pn.pane.Markdown("Press *Find best spacing* (about a second).")
-        sp = cache.get(snap(), compute.best_spacing)
+    def spacing_views(snapshot):
+        sp = cache.get(snapshot, compute.best_spacing)
         clim = views.common_clim(sp.best, sp.paper)  # one scale: the comparison must not mislead
         best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m", clim=clim, size=260)
         paper = views.error_map(sp.paper, "Paper: d = 15 m", clim=clim, size=260)
-        return pn.FlexBox(pn.pane.HoloViews(views.spacing_plot(sp)),
-                          pn.pane.HoloViews(best * views.station_layer(sp.best.stations)),
-                          pn.pane.HoloViews(paper * views.station_layer(sp.paper.stations)),
-                          sizing_mode="stretch_width")
+        return (views.spacing_plot(sp), best * views.station_layer(sp.best.stations),
+                paper * views.station_layer(sp.paper.stations))
 
+    def spacing_shown(plots):
+        found[:] = [pn.FlexBox(*[pn.pane.HoloViews(p) for p in plots], sizing_mode="stretch_width")]
+
+    def spacing_failed(exc):
+        found[:] = [pn.pane.HTML(alert(f"Best spacing not found: {type(exc).__name__}: {exc}", "danger"),
+                                 sizing_mode="stretch_width")]
+
+    def spacing(event):
+        snapshot = snap()
+        spacing_task.start(snapshot, partial(spacing_views, snapshot), spacing_shown, spacing_failed)
+
+    run.on_click(spacing)
     criteria = pn.Column(
         pn.Param(scenario, parameters=["criterion"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
@@ -142,14 +158,19 @@ def design_tab(scenario, cache, widgets):
 
     outcome = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-optimise-result"])
 
+    optimise_task = offloop.Task("design", busy=[optimise, outcome])
+
+    def optimised(result, criterion):
+        scenario.stations = [[float(v) for v in st] for st in result.stations]
+        outcome.object = optimise_text(result, criterion)
+
+    def optimise_failed(exc):
+        outcome.object = f"**Not optimised**: {type(exc).__name__}: {exc}"
+
     def optimise_clicked(event):
-        optimise.loading = True
-        try:
-            result = cache.get(snap(), compute.optimised_layout)
-            scenario.stations = [[float(v) for v in st] for st in result.stations]
-            outcome.object = optimise_text(result, scenario.criterion)
-        finally:
-            optimise.loading = False
+        snapshot, criterion = snap(), scenario.criterion
+        optimise_task.start(None, partial(cache.get, snapshot, compute.optimised_layout),
+                            partial(optimised, criterion=criterion), optimise_failed)
 
     optimise.on_click(optimise_clicked)
     return pn.Column(
@@ -168,7 +189,7 @@ def design_tab(scenario, cache, widgets):
                                       sizing_mode="stretch_width"),
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), pn.panel(pn.bind(spacing, run.param.clicks)),
+        pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )

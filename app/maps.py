@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import asyncio
-import concurrent.futures
 import html
 from functools import partial
 
 import panel as pn
 from bokeh.layouts import row
-from panel.io.state import set_curdoc
 
-from . import map_figures, views
+from . import map_figures, offloop, views
 from .compute import FIELDS, RUNAWAY_LIMIT, Snapshot
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
@@ -24,7 +22,7 @@ PAPER_HEIGHT = 52
 URL_AFTER = 0.1
 
 #: Computes the maps of every session, off the event loop (core serialises the kernels anyway).
-_COMPUTE = concurrent.futures.ThreadPoolExecutor(max_workers=4, thread_name_prefix="maps")
+_COMPUTE = offloop.pool("maps", 4)
 
 #: Maps are drawn on the event loop one session at a time, in two steps with a turn of the loop
 #: between them. Maps computed at about the same time used to be drawn in one go (~10-20 ms of
@@ -70,6 +68,19 @@ def alert(text, kind):
     style = f"color:{fg};background:{bg};border:1px solid {fg}33;border-radius:6px;padding:8px 12px"
     return (f'<div class="alert alert-{kind}" role="alert" style="{style}">'
             f'{html.escape(text).replace(chr(10), "<br>")}</div>')
+
+
+def refusal(scenario, names, css):
+    """The Scenario's refusal message, shown here when it is about one of ``names`` (a tab's
+    inputs: the sidebar shows only its own)."""
+    def shows(message, refused):
+        return bool(message) and bool(set(refused) & set(names))
+
+    return pn.pane.HTML(
+        pn.bind(lambda m, r: alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
+                if shows(m, r) else "", scenario.param.message, scenario.param.refused),
+        visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
+        sizing_mode="stretch_width", css_classes=[css])
 
 
 def _notes(p):
@@ -130,8 +141,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             return
         latest[0] = snapshot
         computing = _COMPUTE.submit(lambda: map_figures.prepare(cache.get(snapshot)))
-        with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
-            pn.state.execute(partial(draw, snapshot, computing))
+        offloop.schedule(doc, partial(draw, snapshot, computing))  # app.offloop's pattern
 
     async def draw(snapshot, computing):
         try:

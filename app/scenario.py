@@ -15,6 +15,9 @@ import param
 
 import core
 
+#: Most stations a custom layout may have.
+MAX_STATIONS = 8
+
 #: Hard limits: name -> (lowest, highest, unit). Enforced by Scenario; sliders span less.
 #: Depths (spec §7: z positive down, the sea surface at z = 0) are never negative: there is no sea
 #: above the surface, whatever the field model.
@@ -68,7 +71,36 @@ ACCEPTED = {
     "shape_outlier_size": (0.0, 1e5, "σ"),
     "shape_runs": (1, 20, "passes"),
     "shape_seed": (0, 1_000_000, ""),
+    # the Layout design tab's own numbers (not map inputs: app.compute.FIELDS leaves them out)
+    "ellipse_x": (-5000.0, 5000.0, "m"),
+    "ellipse_y": (-5000.0, 5000.0, "m"),
+    "n_stations": (1, MAX_STATIONS, "stations"),
+    # the Track tab (app/track.py); not map inputs either. A track longer than
+    # app.track.MAX_STEPS steps (duration / T + 1) is refused by that tab, with a message.
+    "track_x0": (-5000.0, 5000.0, "m"),
+    "track_y0": (-5000.0, 5000.0, "m"),
+    "track_heading": (-180.0, 180.0, "°"),
+    "track_speed": (0.1, 50.0, "m/s"),
+    "track_duration": (2.0, 600.0, "s"),
+    "track_sigma_a": (0.0, 10.0, "m/s²"),
+    "track_alpha": (0.0, 100.0, "(A·m)²/step"),
+    "track_runs": (1, 20, "runs"),
+    # the Calibration tab (seed 004, app/calibration.py); its headings text is checked there
+    "cal_roll_deg": (0.0, 45.0, "°"),
+    "cal_pitch_deg": (0.0, 30.0, "°"),
+    "cal_n_attitudes": (1, 120, "attitudes"),
+    "cal_noise_nt": (0.1, 5000.0, "nT"),
+    "cal_angle_noise_deg": (0.0, 2.0, "°"),
+    "cal_be_n": (-1e5, 1e5, "nT"),
+    "cal_be_e": (-1e5, 1e5, "nT"),
+    "cal_be_d": (-1e5, 1e5, "nT"),
+    "cal_iterations": (1, 5000, "iterations"),
+    "cal_p0_bp_nt": (0.01, 1e6, "nT"),
+    "cal_seed": (0, 1_000_000, ""),
 }
+#: Prefixes of the parameters of the tabs that are not the maps' (their numbers are in ACCEPTED
+#: too, but no map is computed from them: app.compute.FIELDS leaves them out).
+NOT_MAP_INPUTS = ("shape_", "track_", "cal_", "ellipse_", "n_stations")
 
 MEASURE_LABELS = {
     "log10|det Γ| (paper)": "log10_det",
@@ -102,8 +134,6 @@ SENSORS = {"electric (E, V/m)": "E", "magnetometer (B, nT)": "B", "gradiometer (
 MAGNETIC_KNOWN = ("mx", "my", "mz")
 #: Measures that use the paper's square Γ (electric only): a magnetic kind moves off them.
 SQUARE_MEASURES = ("log10|det Γ| (paper)", "Observability index log10 η")
-#: Most stations a custom layout may have.
-MAX_STATIONS = 8
 #: Parameters that are depths below the sea surface (m): a negative value is above the surface.
 DEPTHS = ("h", "z", "z_min", "z_max")
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
@@ -215,12 +245,12 @@ class Scenario(param.Parameterized):
     layout_kind = param.Selector(objects=["line", "triangle", "square", "free"], default="square",
                                  label="Optimise: layout shape",
                                  doc="Shape of the N-station layout to optimise ('free': any positions, slow).")
-    n_stations = param.Integer(4, bounds=(1, 8), label="Optimise: stations N",
+    n_stations = param.Integer(4, softbounds=(1, 8), label="Optimise: stations N",
                                doc="Number of stations of the layout to optimise, 1 to 8.")
-    ellipse_x = param.Number(100.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+    ellipse_x = param.Number(100.0, softbounds=(-1000.0, 1000.0),
                              label="Error ellipse at x (m)",
                              doc="x of the target whose horizontal error ellipse is drawn, m.")
-    ellipse_y = param.Number(100.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+    ellipse_y = param.Number(100.0, softbounds=(-1000.0, 1000.0),
                              label="Error ellipse at y (m)",
                              doc="y of the target whose horizontal error ellipse is drawn, m.")
     threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
@@ -233,31 +263,31 @@ class Scenario(param.Parameterized):
     seabed_sigma = _num(1.0, (0, 10), "Seabed conductivity σb (S/m)",
                         "Conductivity of the seabed half-space, S/m (0: insulating).")
     # -- track tab (app/track.py): a straight track over the design tab's stations, at the
-    # target depth z, with the target's moments, the sensor noise, σ and T above. Hard bounds
-    # (param refuses anything outside); not in ACCEPTED, so the maps never recompute for them.
-    track_x0 = param.Number(-250.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+    # target depth z, with the target's moments, the sensor noise, σ and T above. Numbers are
+    # refused outside ACCEPTED with a message; not map inputs (app.compute.FIELDS leaves them out).
+    track_x0 = param.Number(-250.0, softbounds=(-1000.0, 1000.0),
                             label="Track start x (m)", doc="x of the track's start, m.")
-    track_y0 = param.Number(-120.0, bounds=(-5000.0, 5000.0), softbounds=(-1000.0, 1000.0),
+    track_y0 = param.Number(-120.0, softbounds=(-1000.0, 1000.0),
                             label="Track start y (m)", doc="y of the track's start, m.")
-    track_heading = param.Number(25.0, bounds=(-180.0, 180.0), label="Track heading (°)",
+    track_heading = param.Number(25.0, softbounds=(-180.0, 180.0), label="Track heading (°)",
                                  doc="Course of the straight track, degrees from +x towards +y.")
-    track_speed = param.Number(2.0, bounds=(0.1, 50.0), softbounds=(0.1, 20.0),
+    track_speed = param.Number(2.0, softbounds=(0.1, 20.0),
                                label="Track speed (m/s)", doc="Target speed along the track, m/s.")
-    track_duration = param.Number(250.0, bounds=(2.0, 600.0), softbounds=(10.0, 600.0),
+    track_duration = param.Number(250.0, softbounds=(10.0, 600.0),
                                   label="Track duration (s)",
                                   doc="Length of the track in time, s (one measurement every T).")
     track_axes = param.Selector(objects=[3, 2], default=3, label="Sensor axes",
                                 doc="3: every station measures Ex, Ey, Ez; 2: horizontal Ex, Ey only.")
-    track_sigma_a = param.Number(0.1, bounds=(0.0, 10.0), softbounds=(0.0, 1.0),
+    track_sigma_a = param.Number(0.1, softbounds=(0.0, 1.0),
                                  label="Acceleration noise σa (m/s²)",
                                  doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).")
-    track_alpha = param.Number(0.001, bounds=(0.0, 100.0), softbounds=(0.0, 0.1),
+    track_alpha = param.Number(0.001, softbounds=(0.0, 0.1),
                                label="Moment random walk α ((A·m)²/step)",
                                doc="Variance of the moments' random walk per step (seed 001: 0.001).")
     track_filter = param.Selector(objects=["bank", "ekf", "puekf"], default="bank", label="Tracker",
                                   doc="bank: seed 001's 12 filters, no prior, ML selection; ekf / "
                                       "puekf: one filter from a prior about the truth.")
-    track_runs = param.Integer(5, bounds=(1, 20), label="Monte-Carlo runs",
+    track_runs = param.Integer(5, softbounds=(1, 20), label="Monte-Carlo runs",
                                doc="Noise realisations shown and averaged in the TRMSE, 1 to 20.")
 
     # -- sensor kinds (issue 26, spec §11): what every station measures. Electric: the moments
@@ -337,37 +367,37 @@ class Scenario(param.Parameterized):
                          doc="The parameters the message is about (shown next to their inputs); "
                              "empty for a message about the page's link.")
 
-    # -- calibration tab (seed 004, app/calibration.py): every name starts with cal_. Hard bounds
-    # (the widgets cannot leave them); the headings text is parsed, and refused, by that tab.
+    # -- calibration tab (seed 004, app/calibration.py): every name starts with cal_. Numbers are
+    # refused outside ACCEPTED with a message; the headings text is parsed, and refused, by that tab.
     cal_source = param.Selector(
         objects=["Designed manoeuvre", "Seed 004 simulation", "Seed 004 Table 1", "Uploaded CSV"],
         default="Seed 004 simulation", label="Calibration data",
         doc="Designed or simulated manoeuvres use seed 004's simulated ship (K, Bp) as the truth.")
     cal_headings = param.String("0, 90, 180, 270", label="Headings (°)",
                                 doc="Designed manoeuvre: headings sailed in turn, degrees from north.")
-    cal_roll_deg = param.Number(10.0, bounds=(0.0, 45.0), label="Roll amplitude (°)",
+    cal_roll_deg = param.Number(10.0, softbounds=(0.0, 45.0), label="Roll amplitude (°)",
                                 doc="Designed manoeuvre: roll = amplitude · cos(2πn/N), degrees.")
-    cal_pitch_deg = param.Number(5.0, bounds=(0.0, 30.0), label="Pitch amplitude (°)",
+    cal_pitch_deg = param.Number(5.0, softbounds=(0.0, 30.0), label="Pitch amplitude (°)",
                                  doc="Designed manoeuvre: pitch = amplitude · sin(2πn/N), degrees.")
-    cal_n_attitudes = param.Integer(12, bounds=(1, 120), label="Attitudes N",
+    cal_n_attitudes = param.Integer(12, softbounds=(1, 120), label="Attitudes N",
                                     doc="Number of attitudes of a designed or simulated manoeuvre.")
-    cal_noise_nt = param.Number(100.0, bounds=(0.1, 5000.0), label="Reading error bound ± (nT)",
+    cal_noise_nt = param.Number(100.0, softbounds=(0.1, 5000.0), label="Reading error bound ± (nT)",
                                 doc="Uniform reading errors within ± this, nT; the filter and the CRLB "
                                     "use σ = bound/√3.")
-    cal_angle_noise_deg = param.Number(0.05, bounds=(0.0, 2.0), label="Angle error bound ± (°)",
+    cal_angle_noise_deg = param.Number(0.05, softbounds=(0.0, 2.0), label="Angle error bound ± (°)",
                                        doc="Uniform errors of each recorded angle within ± this, degrees.")
-    cal_be_n = param.Number(34000.0, bounds=(-1e5, 1e5), label="Be north (nT)",
+    cal_be_n = param.Number(34000.0, softbounds=(-1e5, 1e5), label="Be north (nT)",
                             doc="Geomagnetic field, north component, nT.")
-    cal_be_e = param.Number(2000.0, bounds=(-1e5, 1e5), label="Be east (nT)",
+    cal_be_e = param.Number(2000.0, softbounds=(-1e5, 1e5), label="Be east (nT)",
                             doc="Geomagnetic field, east component, nT.")
-    cal_be_d = param.Number(35000.0, bounds=(-1e5, 1e5), label="Be down (nT)",
+    cal_be_d = param.Number(35000.0, softbounds=(-1e5, 1e5), label="Be down (nT)",
                             doc="Geomagnetic field, down component, nT.")
-    cal_iterations = param.Integer(600, bounds=(1, 5000), label="Kalman iterations",
+    cal_iterations = param.Integer(600, softbounds=(1, 5000), label="Kalman iterations",
                                    doc="Filter steps; the readings are reused cyclically (seed 004).")
-    cal_p0_bp_nt = param.Number(3000.0, bounds=(0.01, 1e6), label="Prior σ of Bp in P(0) (nT)",
+    cal_p0_bp_nt = param.Number(3000.0, softbounds=(0.01, 1e6), label="Prior σ of Bp in P(0) (nT)",
                                 doc="Square root of P(0)'s Bp entry, nT (K entries: 1). Small values "
                                     "slow the filter down.")
-    cal_seed = param.Integer(4, bounds=(0, 1_000_000), label="Random seed",
+    cal_seed = param.Integer(4, softbounds=(0, 1_000_000), label="Random seed",
                              doc="Seed of the simulated attitudes and errors.")
 
     def __init__(self, **params):
@@ -524,10 +554,11 @@ class Scenario(param.Parameterized):
             kind = "a whole number" if is_int else "a number"
             return f"{label} must be {kind}; got {str(value)[:40]!r}"
         if name in DEPTHS and value < 0:
-            return (f"{label} = {value:g} is above the sea surface: depths are measured down from "
+            return (f"{label} = {value:.10g} is above the sea surface: depths are measured down from "
                     f"the surface, {lo:g} … {hi:g} {unit}")
         if not lo <= value <= hi:
-            return f"{label} = {value:g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
+            # the value to 10 digits: "100000" for 100000.1 read as if the bound had been refused
+            return f"{label} = {value:.10g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
         return None
 
     def apply_preset(self, name):

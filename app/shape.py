@@ -21,16 +21,12 @@ one at a time per kernel (``KERNEL_LOCK``), cached per set of inputs.
 
 from __future__ import annotations
 
-import asyncio
-import concurrent.futures
 import functools
-import threading
 from functools import partial
 
 import holoviews as hv
 import numpy as np
 import panel as pn
-from panel.io.state import set_curdoc
 
 from core.shape import Outliers, Pass, Target
 from core.shape.bound import shape_bound_curve
@@ -38,9 +34,10 @@ from core.shape.cases import CASES
 from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
 from core.shape.model import LAG
 
+from . import offloop
 from .compute import KERNEL_LOCK
 from .inputs import number_input
-from .maps import alert
+from .maps import alert, refusal
 from .scenario import Scenario
 
 hv.extension("bokeh", logo=False)
@@ -389,22 +386,6 @@ def views(key):
                 error=error_view(out), bound=bound_view(out))
 
 
-#: Computes the tab's outputs off the event loop.
-_COMPUTE = concurrent.futures.ThreadPoolExecutor(max_workers=2, thread_name_prefix="shape")
-
-
-def _message(scenario, names):
-    """The Scenario's refusal message, here, when it is about one of ``names``."""
-    def shows(message, refused):
-        return bool(message) and bool(set(refused) & set(names))
-
-    return pn.pane.HTML(
-        pn.bind(lambda m, r: alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
-                if shows(m, r) else "", scenario.param.message, scenario.param.refused),
-        visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
-        sizing_mode="stretch_width", css_classes=["w-message-shape"])
-
-
 def _input(scenario, name):
     if name in CHOICES:
         cls = pn.widgets.TextInput if name == "shape_outliers" else pn.widgets.Select
@@ -412,7 +393,7 @@ def _input(scenario, name):
     else:
         fmt = "0.[00000]" if name == "shape_noise" else "0.[00]"
         w = number_input(scenario, name, fmt=fmt, css_classes=[f"w-{name}"])
-    return pn.Column(w, _message(scenario, [name]), margin=0, sizing_mode="stretch_width")
+    return pn.Column(w, refusal(scenario, [name], "w-message-shape"), margin=0, sizing_mode="stretch_width")
 
 
 def _inputs(scenario):
@@ -452,47 +433,30 @@ def _build(scenario):
                         pn.Row(error, bound, sizing_mode="stretch_width"),
                         pn.pane.Markdown(CAPTION + HELP, sizing_mode="stretch_width"),
                         sizing_mode="stretch_width")
-    latest = [None]
-    doc = pn.state.curdoc
+    task = offloop.Task("shape", busy=[outputs])  # the worker threads, the spinner over the plots
 
     def say(text):
         problem.param.update(object=alert(text, "warning") if text else "", visible=bool(text))
 
-    lock = threading.Lock()  # Panel may run two changes' watchers on two threads at once
+    def show(shown):
+        say("")
+        verdict.object = shown["verdict"]
+        plan.object, side.object = shown["plan"], shown["side"]
+        error.object, bound.object = shown["error"], shown["bound"]
+
+    def failed(exc):  # said in the tab, and the plots kept
+        say(f"Not computed: {type(exc).__name__}: {exc}")
 
     def start(*_):
-        with lock:
+        with task.lock:  # the values as they are when this decides (two watchers may race)
             key = key_of(scenario)
-            if key == latest[0]:
-                return
             try:
                 case_of(dict(key))
             except ValueError as exc:  # each value accepted, not together: said, last plots stay
                 say(f"Not computed: {exc}. The plots show the last computed pass.")
+                task.cancel()
                 return
-            latest[0] = key
-            outputs.loading = True
-            computing = _COMPUTE.submit(views, key)
-        with set_curdoc(doc):
-            pn.state.execute(partial(finish, key, computing))
-
-    async def finish(key, computing):
-        try:
-            shown = await asyncio.wrap_future(computing)
-        except Exception as exc:  # noqa: BLE001 (said in the tab, and the plots kept)
-            if key == latest[0]:
-                outputs.loading = False
-                latest[0] = None
-                say(f"Not computed: {type(exc).__name__}: {exc}")
-            return
-        if key != latest[0]:  # a newer change draws its own
-            return
-        with pn.io.hold():
-            say("")
-            verdict.object = shown["verdict"]
-            plan.object, side.object = shown["plan"], shown["side"]
-            error.object, bound.object = shown["error"], shown["bound"]
-            outputs.loading = False
+            task.start(key, partial(views, key), show, failed)
 
     scenario.param.watch(start, list(PARAMS))
     start()

@@ -16,13 +16,14 @@ It shows
 - a line of numbers (diverged share, the bank's winner, NEES).
 
 Everything is computed by :mod:`core.track` (the same Monte-Carlo code as the command line),
-cached per set of inputs.
+cached per set of inputs, computed off the server's event loop (:mod:`app.offloop`).
 """
 
 from __future__ import annotations
 
 import functools
 import math
+from functools import partial
 
 import holoviews as hv
 import numpy as np
@@ -35,7 +36,8 @@ from core.tracking import montecarlo as core_track
 # The maps' lock on numba's parallel kernels (its workqueue layer must not be entered from two
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
-from . import views
+from . import offloop, views
+from .maps import refusal
 from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design, nearest_range
 from .scenario import Scenario
 
@@ -244,24 +246,56 @@ def summary_text(out):
     return "; ".join(parts) + "." + (f"\n\n{warning}" if warning else "")
 
 
-def _view(s, what):
-    try:
-        out = compute(s)
-    except ValueError as exc:  # e.g. a track through a station, or outside the sea
-        return pn.pane.Alert(f"Track not computed: {exc}", alert_type="warning")
-    return what(out)
+def outputs_of(key):
+    """The tab's outputs for the inputs ``key`` (:func:`_key`): the summary line and the two
+    HoloViews overlays (built on a worker thread, :mod:`app.offloop`; drawn on the event loop)."""
+    out = _compute(key)
+    return dict(summary=summary_text(out), plan=plan_view(out), error=error_view(out))
+
+
+def _outputs(scenario: Scenario):
+    """The summary, plan view and error plot, kept current off the event loop: a change of an
+    input starts the Monte-Carlo on a worker thread (:class:`app.offloop.Task`), a spinner over
+    them meanwhile; a case refused before computing (a track through a station, too many
+    steps) is said above them and the last plots stay."""
+    problem = pn.pane.Alert("", alert_type="warning", visible=False, sizing_mode="stretch_width",
+                            css_classes=["w-track-problem"])
+    summary = pn.pane.Markdown("", sizing_mode="stretch_width")
+    plan = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=560)
+    error = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=340)
+    outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width")
+    task = offloop.Task("track", busy=[outputs])
+
+    def say(text):
+        problem.param.update(object=text, visible=bool(text))
+
+    def show(shown):
+        say("")
+        summary.object, plan.object, error.object = shown["summary"], shown["plan"], shown["error"]
+
+    def failed(exc):  # e.g. a track outside the sea: said, the last plots stay
+        say(f"Track not computed: {exc}" if isinstance(exc, ValueError)
+            else f"Track not computed: {type(exc).__name__}: {exc}")
+
+    def start(*_):
+        with task.lock:  # the values as they are when this decides (two watchers may race)
+            key = _key(scenario)
+            try:
+                case_of(_Values(dict(key)))
+            except ValueError as exc:
+                say(f"Track not computed: {exc}. The plots show the last computed track.")
+                task.cancel()
+                return
+            task.start(key, partial(outputs_of, key), show, failed)
+
+    scenario.param.watch(start, list(INPUTS))
+    start()
+    return pn.Column(problem, outputs, sizing_mode="stretch_width")
 
 
 def track_tab(scenario: Scenario):
-    """The Track tab's layout for a shared :class:`Scenario` (a Panel layout)."""
-    deps = [scenario.param[name] for name in INPUTS]
-
-    def bound(what, **kw):
-        # lazy: not computed until the tab is first shown (each change of the maps' inputs
-        # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release)
-        return pn.panel(pn.bind(lambda *_: _view(scenario, what), *deps), lazy=True,
-                        loading_indicator=True, **kw)
-
+    """The Track tab's layout for a shared :class:`Scenario` (a Panel layout); its outputs are
+    built (and first computed) when the tab is first shown."""
     options = {name: {"throttled": True} for name in TRACK_PARAMS
                if isinstance(scenario.param[name], param.Number)}
     options["track_alpha"] = {"type": pn.widgets.FloatInput, "step": 1e-4, "format": "0.[0000]"}
@@ -275,12 +309,12 @@ def track_tab(scenario: Scenario):
         "station (the linearised bound does not predict there).",
         sizing_mode="stretch_width")
     return pn.Row(
-        pn.Column(widgets, width=320),
+        pn.Column(widgets, refusal(scenario, TRACK_PARAMS, "w-message-track"), width=320),
         pn.Column(
             note,
-            bound(summary_text, sizing_mode="stretch_width"),
-            bound(plan_view, sizing_mode="stretch_width", height=560),
-            bound(error_view, sizing_mode="stretch_width", height=340),
+            # lazy: not computed until the tab is first shown (each change of the maps' inputs
+            # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release)
+            pn.panel(lambda: _outputs(scenario), lazy=True, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         ),
         sizing_mode="stretch_width",  # stretch_both made Panel override the Tabs' sizing (logged)

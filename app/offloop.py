@@ -1,0 +1,123 @@
+"""Heavy work of a session off the server's event loop: the one pattern every tab uses.
+
+A computation a user starts from the page (maps, a calibration, Monte-Carlo tracks, the design
+optimisers, seed 003's passes) runs on a worker thread of a :func:`pool`; the server's event loop
+is only asked to *show* its result. :func:`schedule` puts a coroutine on the session's event loop
+(``pn.state.execute`` with the session's document as ``curdoc``), which awaits the worker's future
+(``asyncio.wrap_future``) and then changes the page. While it waits, the loop serves every other
+session. Outside a server (tests calling a tab's functions) the coroutine runs to completion at
+once, so the result is shown before :func:`schedule` returns.
+
+:class:`Task` is that pattern for one part of a page: ``start(key, work, show)`` submits
+``work()``, sets ``loading`` on the components it will change (Panel's spinner over them), and
+runs ``show(result)`` on the loop in one ``pn.io.hold()``; a newer start supersedes an older one
+(its result is dropped), and a start with the key being computed or shown does nothing. A failure
+of ``work`` goes to ``failed(exc)`` (shown on the page), never up into the server.
+
+Panel's own ``--num-threads`` pool (the README's command, the container and ``app.cluster`` all
+pass ``--num-threads 4``) runs the events' watchers; the pools here run the computations, so a
+long computation does not take one of the few threads that process other sessions' events.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import threading
+from functools import partial
+
+import panel as pn
+from panel.io.state import set_curdoc
+
+#: Pools by name: one per kind of work, so that a slow kind (a 5 s calibration) never queues a
+#: fast one (a 20 ms map) behind it.
+_POOLS: dict[str, concurrent.futures.ThreadPoolExecutor] = {}
+_POOLS_LOCK = threading.Lock()
+
+
+def pool(name, workers=2):
+    """The worker pool ``name`` (made on first use with ``workers`` threads)."""
+    with _POOLS_LOCK:
+        if name not in _POOLS:
+            _POOLS[name] = concurrent.futures.ThreadPoolExecutor(max_workers=workers,
+                                                                 thread_name_prefix=name)
+        return _POOLS[name]
+
+
+def schedule(doc, coroutine_function):
+    """Run ``coroutine_function()`` on the event loop of ``doc``'s session (``doc``: the session's
+    document, None outside a server), whichever thread calls this."""
+    if doc is None or doc.session_context is None:  # no server: run it here, to the end
+        try:
+            asyncio.get_running_loop()
+        except RuntimeError:  # (Panel would leave a new event loop open for each call)
+            asyncio.run(coroutine_function())
+            return
+    with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
+        pn.state.execute(coroutine_function)
+
+
+_NEW = object()
+
+
+class Task:
+    """One part of a page kept current by computations off the event loop (module docstring).
+
+    ``busy``: components whose ``loading`` is set while a computation runs; ``doc``: the
+    session's document (default: the current one, at construction)."""
+
+    def __init__(self, pool_name, busy=(), doc=_NEW, workers=2):
+        self.pool = pool(pool_name, workers)
+        self.busy = tuple(busy)
+        self.doc = pn.state.curdoc if doc is _NEW else doc
+        #: Panel may run two changes' watchers on two threads at once: a caller that reads the
+        #: inputs to decide what to start holds this around the reading and ``start`` (re-entrant),
+        #: so each decision sees the values as they then are (not one thread's stale reading
+        #: started after another's newer one).
+        self.lock = threading.RLock()
+        self._key = _NEW
+        self._token = None
+
+    def start(self, key, work, show, failed=None):
+        """Compute ``work()`` off the loop and ``show(result)`` on it, unless ``key`` is the one
+        being computed or shown (None: always compute). Returns the worker's future, or None."""
+        with self.lock:
+            if key is not None and key == self._key:
+                return None
+            self._key = key
+            token = self._token = object()
+            future = self.pool.submit(work)
+        self._loading(True)
+        schedule(self.doc, partial(self._finish, token, future, show, failed))
+        return future
+
+    def cancel(self):
+        """Drop the result being computed (the page keeps what it shows) and forget the key: the
+        next start computes, whatever its key. For inputs refused before any computation."""
+        with self.lock:
+            self._key, self._token = _NEW, None
+        self._loading(False)
+
+    def _loading(self, on):
+        for component in self.busy:
+            component.loading = on
+
+    async def _finish(self, token, future, show, failed):
+        try:
+            result = await asyncio.wrap_future(future)
+        except Exception as exc:  # noqa: BLE001 (said on the page; the server goes on)
+            if token is self._token:
+                self.cancel()
+                if failed is not None:
+                    failed(exc)
+            return
+        if token is not self._token:  # a newer start shows its own
+            return
+        with pn.io.hold():
+            try:
+                show(result)
+            finally:
+                self._loading(False)
+
+
+__all__ = ["Task", "pool", "schedule"]
