@@ -18,9 +18,9 @@ import core
 from .scenario import (
     ACCEPTED,
     COMPARISONS,
-    NOT_MAP_INPUTS,
     CRITERIA,
     DIFFERENCES,
+    NOT_MAP_INPUTS,
     PAPER_MAPS,
     SENSORS,
     Scenario,

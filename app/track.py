@@ -37,8 +37,8 @@ from core.tracking import montecarlo as core_track
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
 from . import offloop, views
-from .maps import refusal
 from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design, nearest_range
+from .maps import refusal
 from .scenario import Scenario
 
 hv.extension("bokeh", logo=False)

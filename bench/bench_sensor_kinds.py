@@ -18,7 +18,6 @@ over ``repeat`` calls after a warm-up call (compilation and caches excluded).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import subprocess
