@@ -24,7 +24,8 @@ and measures for each:
     websocket has been quiet for ``--quiet-ms`` (work the page triggers after it is shown). The
     new pages stay open until all ``--pages`` are measured (a closing session's cost would fall
     into the next page's window);
-(d) the number of Bokeh models in the page (``Bokeh.documents[0].all_models``) once it is settled.
+(d) the number of Bokeh models in the page (``Bokeh.documents[0].all_models``): a new session's
+    page once its websocket is quiet (and, in the JSON, the first page's after its changes).
 
 The table gives absolute values and ratios to the minimal Panel app, with the issue's targets:
 release → paint median ≤ 1.3×, CPU per update ≤ 1.5×, new page CPU ≤ 2×.
@@ -211,9 +212,9 @@ def measure_app(name, url, proc, browser, args):
             wall_total += t1 - t0
         print(f"  {name:8} {'warm-up' if warm else f'{k - args.warmup + 1:7d}'}  value {value:8.2f}  "
               f"drawn {r['drawn']:6.1f} ms  server CPU {1e3 * (c1 - c0):5.0f} ms", flush=True)
-    models = page.evaluate(MODELS_JS)
+    models_after = page.evaluate(MODELS_JS)
     # (c) new sessions' pages, kept open until all are measured
-    pages, new_ready, new_settled = [], [], []
+    pages, new_ready, new_settled, models = [], [], [], []
     for _ in range(args.pages):
         wait_quiet(page, args.quiet_ms)
         c0, t0 = cpu_s(proc), time.perf_counter()
@@ -222,10 +223,11 @@ def measure_app(name, url, proc, browser, args):
         wait_quiet(p, args.quiet_ms)
         c2, t2 = cpu_s(proc), time.perf_counter()
         pages.append(p)
+        models.append(p.evaluate(MODELS_JS))
         new_ready.append(1e3 * (c1 - c0 - idle * (t1 - t0)))
         new_settled.append(1e3 * (c2 - c0 - idle * (t2 - t0 - args.quiet_ms / 1e3)))
         print(f"  {name:8} new page: server CPU {new_ready[-1]:6.0f} ms until ready ({t1 - t0:.2f} s), "
-              f"{new_settled[-1]:6.0f} ms until quiet; {p.evaluate(MODELS_JS)} models", flush=True)
+              f"{new_settled[-1]:6.0f} ms until quiet; {models[-1]} models", flush=True)
     for p in pages:
         p.close()
     page.close()
@@ -233,7 +235,7 @@ def measure_app(name, url, proc, browser, args):
         print(f"  {name}: page errors: {errors}")
     return {"drawn_ms": drawn, "cpu_update_s": cpu_total, "cpu_wall_s": wall_total, "changes": len(drawn),
             "idle_cpu_per_s": idle, "new_page_ready_ms": new_ready, "new_page_settled_ms": new_settled,
-            "models": models, "errors": errors}
+            "models": models[0], "models_after_changes": models_after, "errors": errors}
 
 
 APPS = ("project", "panel", "bokeh")
