@@ -48,8 +48,20 @@ from pathlib import Path
 import numpy as np
 import psutil
 
-from bench.bench_browser import (COLLECT_JS, INIT_JS, INSTALL_JS, MAP_A_SUM_JS, PH_VALUE_JS, RESET_JS,
-                                 STATE_JS, analyse, drag_to, expected_map_a_sum, fractions, pct)
+from bench.bench_browser import (
+    COLLECT_JS,
+    INIT_JS,
+    INSTALL_JS,
+    MAP_A_SUM_JS,
+    PH_VALUE_JS,
+    RESET_JS,
+    STATE_JS,
+    analyse,
+    drag_to,
+    expected_map_a_sum,
+    fractions,
+    pct,
+)
 from tests.server import CHROMIUM, CHROMIUM_ARGS, ROOT, SERVER_ENV, free_port, served_app
 
 #: The issue's targets: ratio to the minimal Panel app, measured in the same run.
@@ -343,12 +355,12 @@ def main(argv=None):
     summary = summarise(raw)
     print()
     print(table(summary))
-    print(f"\nrun medians of release → painted (ms): " + "; ".join(
+    print("\nrun medians of release → painted (ms): " + "; ".join(
         f"{LABELS[a]} {', '.join(f'{x:.0f}' for x in summary[a]['release_paint_run_medians_ms'])}" for a in summary))
     print("server idle CPU (ms/s, subtracted): " + ", ".join(
         f"{LABELS[a]} {summary[a]['idle_cpu_ms_per_s']:.1f}" for a in summary))
     print("load average (1, 5, 15 min) at start and after each run: " + "; ".join(
-        " ".join(f"{x:.2f}" for x in l) for l in load))
+        " ".join(f"{x:.2f}" for x in avg) for avg in load))
     if args.out:
         Path(args.out).write_text(json.dumps({"started": started, "args": vars(args), "load": load,
                                               "summary": summary, "raw": raw}, indent=1))
