@@ -212,10 +212,10 @@ def _section(scenario, tabs, title, names, collapsed):
 #: What the Layout design and Track tabs say over their content for a magnetic sensor kind.
 DESIGN_SENSOR = ("Sensor: {name}. The Cramér–Rao maps, spacing and layouts below are for this "
                  "kind: moment m = ({mx:g}, {my:g}, {mz:g}) A·m², noise {noise}, point gradient tensor.")
-TRACK_SENSOR = ("The Track tab tracks the electric dipole only: its filters (seed 001's EKF bank, "
-                "EKF, PU-EKF) are written for the 7 electric states and the electric field. The "
-                "sensor chosen in the sidebar, {name}, is not used here: the track, PCRLB and "
-                "trackers below are for electric stations (P_h, P_v, noise in V/m).")
+TRACK_SENSOR = ("The track below is seen by the sidebar's sensor, {name}: a magnetic target of "
+                "moment m = ({mx:g}, {my:g}, {mz:g}) A·m² (8 states: position, horizontal velocity, "
+                "moment), noise {noise}. The EKF and PU-EKF run on it through the same measurement "
+                "model as the maps; seed 001's filter bank is for the electric dipole only.")
 
 
 def sensor_banner(scenario, tab):
@@ -226,12 +226,11 @@ def sensor_banner(scenario, tab):
         if kind == "E":
             return ""
         name = f"{KIND_NAMES[kind][0]} ({KIND_NAMES[kind][1]})"
-        if tab == TRACK_TAB:
-            return _alert(TRACK_SENSOR.format(name=name), "warning")
         noise = {"B": f"{scenario.noise_b:g} nT", "G": f"{scenario.noise_g:g} nT/m",
                  "BG": f"{scenario.noise_b:g} nT and {scenario.noise_g:g} nT/m"}[kind]
-        return _alert(DESIGN_SENSOR.format(name=name, mx=scenario.mx, my=scenario.my, mz=scenario.mz,
-                                           noise=noise), "info")
+        text = TRACK_SENSOR if tab == TRACK_TAB else DESIGN_SENSOR
+        return _alert(text.format(name=name, mx=scenario.mx, my=scenario.my, mz=scenario.mz,
+                                  noise=noise), "info")
 
     deps = [scenario.param[n] for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g")]
     return pn.pane.HTML(pn.bind(text, *deps), visible=pn.bind(lambda k, *_: SENSORS[k] != "E", *deps),

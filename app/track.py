@@ -3,8 +3,11 @@
 ``track_tab(scenario)`` returns the tab's layout, a pure function of the shared
 :class:`app.scenario.Scenario`: its ``track_*`` parameters (start, heading, speed, duration,
 sensor axes, process noise, tracker, runs) and, from the rest of the scenario, the design tab's
-``stations``, the target depth ``z``, the moments ``Ph``/``Pv``, ``noise``, ``sigma`` and ``T``
-and the sea (``sea_model``, ``sea_depth``, ``seabed_sigma``: :func:`sea_of`).
+``stations``, the target depth ``z``, ``T`` and the sensor kind (``sensor``): electric, the
+moments ``Ph``/``Pv``, ``noise``, ``sigma`` and the sea (``sea_model``, ``sea_depth``,
+``seabed_sigma``: :func:`sea_of`); magnetic (magnetometer, gradiometer or both), the moment
+``mx``/``my``/``mz`` (A·m²) and ``noise_b``/``noise_g`` — the same ``core.Sensor`` the maps use,
+through the same EKF and PU-EKF (seed 001's filter bank is electric only).
 
 It shows
 
@@ -39,7 +42,7 @@ from core.tracking import montecarlo as core_track
 from . import offloop, views
 from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design, nearest_range
 from .maps import refusal
-from .scenario import Scenario
+from .scenario import SENSORS, Scenario
 
 hv.extension("bokeh", logo=False)
 
@@ -48,7 +51,10 @@ TRACK_PARAMS = ("track_x0", "track_y0", "track_heading", "track_speed", "track_d
                 "track_axes", "track_sigma_a", "track_alpha", "track_filter", "track_runs")
 #: Everything the track's numbers depend on.
 INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T", "steps", "sea_model",
-                         "sea_depth", "seabed_sigma")
+                         "sea_depth", "seabed_sigma", "sensor", "mx", "my", "mz", "noise_b", "noise_g")
+#: Prior σ of the EKF/PU-EKF start for a magnetic target: position and velocity as the electric
+#: case's (x, y 20 m, z 0.5 m, v 0.5 m/s); each moment entry this share of |m| (at least 1 A·m²).
+MAGNETIC_PRIOR_SHARE = 0.2
 #: Most steps of a track the tab computes (the duration's bound over the smallest T).
 MAX_STEPS = 2001
 #: Points per side of the CRLB map beneath the track.
@@ -71,13 +77,30 @@ def _key(s):
                  for name in INPUTS)
 
 
+def magnetic_options(s):
+    """For a magnetic sensor kind: the TrackCase keywords of its ``core.Sensor``, moment and
+    prior; {} for the electric kind."""
+    kind = SENSORS[s.sensor]
+    if kind == "E":
+        return {}
+    noise = {"B": s.noise_b, "G": s.noise_g, "BG": (s.noise_b, s.noise_g)}[kind]
+    moments = (float(s.mx), float(s.my), float(s.mz))
+    sm = max(1.0, MAGNETIC_PRIOR_SHARE * float(np.linalg.norm(moments)))
+    return dict(sensor=core.Sensor(kind, noise), moments=moments,
+                prior_std=(20.0, 20.0, 0.5, 0.5, 0.5, sm, sm, sm))
+
+
 def case_of(s):
     """The :class:`core.track.TrackCase` of a scenario's values."""
     steps = int(round(s.track_duration / s.T)) + 1
     if steps > MAX_STEPS:
         raise ValueError(f"the track has {steps} steps (duration / T + 1); at most {MAX_STEPS}: "
                          "shorten it or lengthen T")
-    sea = sea_of(s)
+    magnetic = magnetic_options(s)
+    if magnetic and s.track_filter == "bank":
+        raise ValueError("the filter bank is seed 001's, for the electric dipole only: with a "
+                         "magnetic sensor choose the EKF or the PU-EKF")
+    sea = None if magnetic else sea_of(s)  # a static magnetic field does not see the sea
     return core_track.TrackCase(
         name="track tab", stations=tuple(map(tuple, s.stations)), axes=int(s.track_axes),
         start=(float(s.track_x0), float(s.track_y0), float(s.z)),
@@ -86,7 +109,7 @@ def case_of(s):
         sea_depth=None if sea is None else sea.depth,
         seabed_sigma=None if sea is None else sea.seabed_sigma,
         sigma_a=float(s.track_sigma_a), alpha=float(s.track_alpha), bank_depth=float(s.z),
-        bank_pv_std=max(30.0, 2.0 * abs(float(s.Pv))),
+        bank_pv_std=max(30.0, 2.0 * abs(float(s.Pv))), **magnetic,
     )
 
 
@@ -103,10 +126,11 @@ def _compute(key):
     breaks = core.linearisation_breaks(res.pcrlb_m, rng, limit=RUNAWAY_LIMIT)
     window = view_window(truth)
     plane = core.Plane("xy", window[0], window[1], float(s.z), MAP_POINTS)
+    medium = (dict(moments=case.moments, sensor=case.sensor) if case.sensor is not None else
+              dict(moments=(case.Ph, case.Pv), sigma=case.sigma, noise=case.noise, sea=sea_of(s)))
     with KERNEL_LOCK:  # the snapshot bound beneath the track: N instants at the track's velocity
-        errors = core.crlb_maps(plane, stations, velocity=tuple(truth[0, 3:5]),
-                                moments=(case.Ph, case.Pv), T=case.T, sigma=case.sigma,
-                                noise=case.noise, steps=int(s.steps), sea=sea_of(s))
+        errors = core.crlb_maps(plane, stations, velocity=tuple(truth[0, 3:5]), T=case.T,
+                                steps=int(s.steps), **medium)
     return dict(case=case, res=res, truth=truth, range_m=rng, breaks=breaks, stations=stations,
                 map=Design(plane=plane, stations=stations, errors=errors), window=window)
 
@@ -234,8 +258,9 @@ def summary_text(out):
              f"{s['pcrlb_final_m']:.3g} m"]
     warning = ""
     if s.get("nees") is not None:
-        parts.append(f"mean NEES {s['nees']:.3g} (7 states: 7 if consistent)")
-        warning = nees_check(s["nees"], s["runs"])
+        dof = int(s.get("nees_dof", 7))
+        parts.append(f"mean NEES {s['nees']:.3g} ({dof} states: {dof} if consistent)")
+        warning = nees_check(s["nees"], s["runs"], states=dof)
     if s["filter"] == "bank":
         best = max(s["winners"], key=s["winners"].get)
         parts.append(f"final ML winner most often: {best} ({s['winners'][best]} of {s['runs']})")

@@ -5,6 +5,7 @@ import time
 
 import pytest
 
+from tests.test_track_browser import _wait
 from tests.server import CHROMIUM, chromium_browser, served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
@@ -85,8 +86,16 @@ def test_choosing_gradiometer_then_both_redraws_with_the_kinds_captions_and_veil
     assert "noise 0.01 nT and 0.01 nT/m" in a["caption"].replace("\n", " ")
     assert a["bar"] == "CRLB 1σ (m), B + G (nT, nT/m), log scale"
 
-    # the Track tab's filters are electric: it says so rather than track with a magnetic kind
+    # the Track tab tracks with the chosen kind (issue 26): its banner says which; seed 001's
+    # electric bank (the tab's default tracker) is refused with a reason, the EKF runs
     page.get_by_text("Track", exact=True).click()
     banner = page.locator(".w-track-sensor").first
     banner.wait_for(state="visible", timeout=30_000)
-    assert "electric dipole only" in banner.locator(".alert").text_content()
+    assert "seen by the sidebar's sensor, magnetometer + gradiometer" in \
+        banner.locator(".alert").text_content()
+    problem = page.locator(".w-track-problem").filter(visible=True).first
+    problem.wait_for(timeout=60_000)
+    assert "electric dipole only" in problem.text_content()
+    page.locator("select:has(option[value='puekf'])").first.select_option("ekf")
+    _, text = _wait(page, lambda got, text: "ekf, 5 runs" in text and "mean NEES" in text, timeout=120)
+    assert "ML winner" not in text

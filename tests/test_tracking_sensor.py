@@ -221,3 +221,26 @@ def test_sweep_cli_with_sensor(tmp_path):
     np.testing.assert_allclose(vals[0], ref, rtol=1e-12)
     with pytest.raises(SystemExit):
         sweep.main(["--x", "Ph=1,2", "--y", "z=5,10", "--sensor", "B", "--out", str(out)])
+
+
+def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():
+    """The Track tab's case is the sidebar's sensor (issue 26 item 5): a magnetic kind gives an
+    8-state case with the scenario's moment and core.Sensor, its PCRLB and map from the same
+    model; the electric bank is refused for it with a reason."""
+    from app import track
+    from app.scenario import Scenario
+
+    s = Scenario()
+    s.param.update(sensor="magnetometer + gradiometer (BG)", track_filter="ekf", track_runs=2,
+                   track_duration=20.0)
+    case = track.case_of(s)
+    assert case.sensor.kind == "BG" and case.moments == (s.mx, s.my, s.mz)
+    assert case.sensors().n_states == 8 and len(case.prior_std) == 8
+    out = track.compute(s)
+    assert out["res"].summary["nees_dof"] == 8 and out["truth"].shape[1] == 8
+    direct = tr.monte_carlo(case, filter="ekf", runs=2, seed=0, workers=1)
+    np.testing.assert_allclose(out["res"].pcrlb_m, direct.pcrlb_m, rtol=1e-12)
+    assert "(8 states: 8 if consistent)" in track.summary_text(out)
+    s.track_filter = "bank"
+    with pytest.raises(ValueError, match="electric dipole only"):
+        track.case_of(s)
