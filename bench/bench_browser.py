@@ -231,12 +231,13 @@ def drag_to(page, fraction):
     page.mouse.up()
 
 
-def wait_settled(page, before_tags, before_text, quiet_ms, timeout=60.0):
+def wait_redrawn(page, before_tags, read, before, what, quiet_ms, timeout=60.0):
     """Wait until every plot has a new image that has been painted and the websocket has been
-    quiet for ``quiet_ms`` (so no later image is still on its way); then check that the text
-    box changed and that the plot views are still the ones hooked. Polls only the page's own
-    log in the meantime: DOM queries (Playwright's locators pierce every shadow root, ~10 ms on
-    this page) would run on the page's main thread inside the interval being measured."""
+    quiet for ``quiet_ms`` (so no later image is still on its way); then check that ``read(page)``
+    (the changed input's value) is no longer ``before`` and that the plot views are still the
+    ones hooked; returns the new value. Polls only the page's own log in the meantime: DOM
+    queries (Playwright's locators pierce every shadow root, ~10 ms on this page) would run on
+    the page's main thread inside the interval being measured."""
     deadline = time.time() + timeout
     while True:
         st = page.evaluate(STATE_JS)
@@ -249,12 +250,18 @@ def wait_settled(page, before_tags, before_text, quiet_ms, timeout=60.0):
             raise TimeoutError(f"change did not settle: state {st}; last websocket messages (ms, dir, bytes,"
                                f" text): " + "".join(f"\n  {m}" for m in recent))
         time.sleep(0.05)
-    text = page.locator(".w-Ph input").first.input_value()
-    if text == before_text:
-        raise RuntimeError(f"maps were redrawn but the P_h text box still shows {text!r}")
+    value = read(page)
+    if value == before:
+        raise RuntimeError(f"maps were redrawn but {what} still shows {value!r}")
     if page.evaluate("() => window.__bench.views().map(v => v.model.id)") != st["ids"]:
         raise RuntimeError("the plot views were replaced during the change; the hooks missed them")
-    return text
+    return value
+
+
+def wait_settled(page, before_tags, before_text, quiet_ms, timeout=60.0):
+    """:func:`wait_redrawn`, the P_h text box being the value that must change."""
+    return wait_redrawn(page, before_tags, lambda pg: pg.locator(".w-Ph input").first.input_value(),
+                        before_text, "the P_h text box", quiet_ms, timeout)
 
 
 def analyse(log):
