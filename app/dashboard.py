@@ -108,12 +108,11 @@ def _widgets():
 
 def sensor_kinds(s, tab):
     """The sensor kinds (core kinds E, B, G, BG) the inputs of tab ``tab`` feed: maps A's and B's
-    on the Maps tab, the scenario's on the Layout design tab, electric on the Track tab (its
-    filters are the electric ones)."""
-    if tab == MAPS_TAB:
-        kind = SENSORS[s.sensor]
-        return {kind, SENSORS[s.sensor_b]} if COMPARISONS[s.comparison] == "sensor_kinds" else {kind}
-    return {"E"} if tab == TRACK_TAB else {SENSORS[s.sensor]}
+    on the Maps tab, the scenario's on the Layout design and Track tabs."""
+    kind = SENSORS[s.sensor]
+    if tab == MAPS_TAB and COMPARISONS[s.comparison] == "sensor_kinds":
+        return {kind, SENSORS[s.sensor_b]}
+    return {kind}
 
 
 def applies(name, s, tab):

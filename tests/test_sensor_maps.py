@@ -129,12 +129,11 @@ def test_inputs_follow_the_kind():
     assert electric == {"Ph", "Pv", "noise", "sigma", "model", "sea_model"}
     assert not any(applies(n, s, MAPS_TAB) for n in ("mx", "my", "mz", "noise_b", "noise_g", "sensor_b"))
     s.sensor = GRADIOMETER
-    for tab in (MAPS_TAB, DESIGN_TAB):
+    # the Track tab tracks with the scenario's kind too (issue 26): its inputs follow it
+    for tab in (MAPS_TAB, DESIGN_TAB, TRACK_TAB):
         assert all(applies(n, s, tab) for n in ("mx", "my", "mz", "noise_g"))
         assert not any(applies(n, s, tab) for n in ("Ph", "Pv", "noise", "noise_b", "sigma", "model",
                                                     "sea_model"))
-    # the Track tab's filters are electric: its inputs stay the electric ones
-    assert applies("Ph", s, TRACK_TAB) and not applies("mx", s, TRACK_TAB)
     s.comparison = "Sensor kind B − A (seed 003)"  # G against B + G: both noises
     assert applies("noise_b", s, MAPS_TAB) and applies("noise_g", s, MAPS_TAB)
     assert applies("sensor_b", s, MAPS_TAB) and applies("layout", s, MAPS_TAB)
