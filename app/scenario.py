@@ -282,8 +282,9 @@ class Scenario(param.Parameterized):
                                  label="Acceleration noise σa (m/s²)",
                                  doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).")
     track_alpha = param.Number(0.001, softbounds=(0.0, 0.1),
-                               label="Moment random walk α ((A·m)²/step)",
-                               doc="Variance of the moments' random walk per step (seed 001: 0.001).")
+                               label="Moment random walk α (moment²/step)",
+                               doc="Variance of the moments' random walk per step: (A·m)² for the "
+                                   "electric dipole (seed 001: 0.001), (A·m²)² for a magnetic one.")
     track_filter = param.Selector(objects=["bank", "ekf", "puekf"], default="bank", label="Tracker",
                                   doc="bank: seed 001's 12 filters, no prior, ML selection; ekf / "
                                       "puekf: one filter from a prior about the truth.")
