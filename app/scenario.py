@@ -83,7 +83,7 @@ ACCEPTED = {
     "track_speed": (0.1, 50.0, "m/s"),
     "track_duration": (2.0, 600.0, "s"),
     "track_sigma_a": (0.0, 10.0, "m/s²"),
-    "track_alpha": (0.0, 100.0, "(A·m)²/step"),
+    "track_alpha": (0.0, 100.0, "moment²/step"),
     "track_runs": (1, 20, "runs"),
     # the Calibration tab (seed 004, app/calibration.py); its headings text is checked there
     "cal_roll_deg": (0.0, 45.0, "°"),

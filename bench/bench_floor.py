@@ -62,7 +62,7 @@ from bench.bench_browser import (
     pct,
     wait_redrawn,
 )
-from tests.server import CHROMIUM, CHROMIUM_ARGS, ROOT, SERVER_ENV, free_port, served_app
+from tests.server import CHROMIUM, CHROMIUM_ARGS, ROOT, SERVER_ENV, free_port, served_app, stop
 
 #: The issue's targets: ratio to the minimal Panel app, measured in the same run.
 TARGETS = {"release_paint_median_ms": 1.3, "cpu_per_update_ms": 1.5, "new_page_cpu_ms": 2.0}
@@ -121,12 +121,7 @@ def served_floor(kind, timeout=120):
                     time.sleep(0.3)
             yield url, proc
         finally:
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            stop(proc)
 
 
 def open_page(browser, url):

@@ -33,6 +33,18 @@ WARM = "[warm-up] all kernels ready"
 WARM_FAILED = "[warm-up] FAILED"
 
 
+def stop(proc, grace=10.0):
+    """Terminate a server process, kill it if it has not ended within ``grace`` seconds (a busy
+    machine: Tornado's shutdown can take longer), and reap it (a Popen left running warns,
+    ResourceWarning, in a later test)."""
+    proc.terminate()
+    try:
+        proc.wait(grace)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
 @contextlib.contextmanager
 def served_app(*extra, port=None, timeout=600, log=None):
     """Yield the base URL of a running dashboard; stop it afterwards. ``log``: a path that gets
@@ -66,12 +78,7 @@ def served_app(*extra, port=None, timeout=600, log=None):
                 page.read()
             yield url, proc
         finally:
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:  # a busy machine: Tornado's shutdown can take longer
-                proc.kill()
-                proc.wait()  # reaped: a Popen left running warns (ResourceWarning) in a later test
+            stop(proc)
             if log is None and not os.environ.get("QUIET_SERVER"):
                 sys.stderr.write(path.read_text(errors="replace"))
 

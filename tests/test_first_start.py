@@ -14,7 +14,7 @@ import panel as pn
 
 from app.warming import warming_page
 from app.warmup import STAGES, WARMING_MARK, Warmup
-from tests.server import ROOT, SERVER_ENV, chromium_browser, free_port
+from tests.server import ROOT, SERVER_ENV, chromium_browser, free_port, stop
 
 #: Seconds within which a cold server must answer /app (issue 29's bar: 15 s on this machine).
 ANSWER_WITHIN_S = 15.0
@@ -61,12 +61,7 @@ def test_a_cold_server_answers_at_once_with_the_warming_page_and_says_it_compile
         assert "ready in" not in text  # nothing of the default page can be compiled this fast
         print(f"cold server: /app answered in {answered:.1f} s")
     finally:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+        stop(proc)
 
 
 def test_the_warming_page_shows_progress_and_reloads_into_the_dashboard_when_ready():
