@@ -21,13 +21,14 @@ from core import calibration as cal
 
 from . import offloop
 from .maps import refusal
+from .scenario import Calibration
 
 hv.extension("bokeh", logo=False)  # as app/views.py: the tab also serves on its own (tests)
 
-#: The cal_ parameters of Scenario that the tab reads.
-FIELDS = ("cal_source", "cal_headings", "cal_roll_deg", "cal_pitch_deg", "cal_n_attitudes",
-          "cal_noise_nt", "cal_angle_noise_deg", "cal_be_n", "cal_be_e", "cal_be_d",
-          "cal_iterations", "cal_p0_bp_nt", "cal_seed")
+#: The parts (app.scenario.PARTS) the tab reads: its own.
+READS = ("calibration",)
+#: The tab's inputs.
+FIELDS = Calibration.names()
 
 _SIM_BE = dict(zip(("cal_be_n", "cal_be_e", "cal_be_d"), cal.SEED004_SIMULATION["be"]))
 _T1_BE = dict(zip(("cal_be_n", "cal_be_e", "cal_be_d"), cal.SEED004_TABLE1["be"]))
@@ -306,7 +307,7 @@ def _error_html(res):
 def _load(scenario, name):
     """A preset's values in one go: widgets, table and plots reach the browser together."""
     with pn.io.hold():
-        scenario.param.update(PRESETS[name])
+        scenario.update(PRESETS[name])
 
 
 def views(values, upload=None):
@@ -327,7 +328,7 @@ def calibration_tab(scenario):
 
     def uploaded(event):
         if event.new:
-            scenario.cal_source = "Uploaded CSV"
+            scenario.calibration.cal_source = "Uploaded CSV"
 
     upload.param.watch(uploaded, "value")
     error = pn.pane.HTML("", sizing_mode="stretch_width", css_classes=["w-cal-error"])
@@ -352,12 +353,12 @@ def calibration_tab(scenario):
 
     def start(*_):
         with task.lock:  # the values as they are when this decides (two watchers may race)
-            values = {f: getattr(scenario, f) for f in FIELDS}
+            values = scenario.values(READS)
             data = upload.value
             key = (tuple(sorted(values.items())), hashlib.sha1(data).hexdigest() if data else None)
             task.start(key, partial(views, values, data), show, failed)
 
-    scenario.param.watch(start, list(FIELDS))
+    scenario.watch(start, READS)
     upload.param.watch(start, "value")
     start()
     presets = pn.FlexBox(*[
@@ -373,7 +374,7 @@ def calibration_tab(scenario):
                    cal_iterations={"type": pn.widgets.IntInput, "css_classes": ["w-cal_iterations"]},
                    cal_seed={"type": pn.widgets.IntInput, "css_classes": ["w-cal_seed"]})
     controls = pn.Column(
-        pn.Param(scenario, parameters=list(FIELDS), widgets=widgets, show_name=False,
+        pn.Param(scenario.calibration, parameters=list(FIELDS), widgets=widgets, show_name=False,
                  sizing_mode="stretch_width"),
         pn.pane.Markdown(f"**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad; at most "
                          f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB)"), upload,

@@ -16,12 +16,11 @@ import numpy as np
 import core
 
 from .scenario import (
-    ACCEPTED,
     COMPARISONS,
     CRITERIA,
     DIFFERENCES,
-    NOT_MAP_INPUTS,
     PAPER_MAPS,
+    PART_OF,
     SENSORS,
     Scenario,
     ScenarioValues,
@@ -33,14 +32,15 @@ from .scenario import (
 #: so no session waits longer than one map for another (issue: server never blocks a session).
 KERNEL_LOCK = threading.Lock()
 
-#: Values that define the comparison maps; everything else in Scenario is presentation or design.
-FIELDS = tuple(sorted({n for n in ACCEPTED if not n.startswith(NOT_MAP_INPUTS)} - {"threshold"}
-                     | {"plane", "layout", "comparison", "difference", "measure", "model",
-                        "state_set", "sea_model", "sensor", "sensor_b"}))
-#: Values that define the layout-design tab.
-DESIGN_FIELDS = tuple(sorted(set(FIELDS) - {"comparison", "difference", "measure", "layout", "k", "Ph_b",
-                                            "Pv_b", "d_ref", "sensor_b", "mx_b", "my_b", "mz_b"} | {"stations", "criterion", "threshold",
-                                                                "layout_kind", "n_stations"}))
+#: The parts (app.scenario.PARTS) of the scene: a target in a sea, seen by sensors on stations,
+#: over a region. The Layout design tab's error map and ellipse are computed from these.
+SCENE = ("target", "stations", "medium", "sensor", "region")
+#: The parts the comparison maps are computed from.
+MAPS = (*SCENE, "maps")
+#: The parts the design's best spacing and optimised layouts are computed from.
+DESIGN = (*SCENE, "design")
+#: Every input the maps read.
+MAP_INPUTS = frozenset(n for n, part in PART_OF.items() if part in MAPS)
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
 SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
 #: Largest CRLB / range at which a linearised bound still predicts a tracker's error
@@ -54,13 +54,15 @@ def _frozen(value):
 
 @dataclass(frozen=True)
 class Snapshot:
-    """The scenario's values as a hashable tuple of (name, value) pairs."""
+    """The values of some of a scenario's parts as a hashable tuple of (name, value) pairs: the key
+    of every tab's computations in the one cache (:class:`PanelCache`)."""
 
     items: tuple
 
     @classmethod
-    def of(cls, scenario: Scenario, fields=FIELDS):
-        return cls(tuple((name, _frozen(getattr(scenario, name))) for name in fields))
+    def of(cls, scenario: Scenario, parts=MAPS):
+        """The values of the parts named ``parts`` (app.scenario.PARTS) of ``scenario``."""
+        return cls(tuple((name, _frozen(v)) for name, v in scenario.values(parts).items()))
 
     def scenario(self):
         """These values, with the methods that build core's inputs (not a live Scenario)."""
@@ -120,7 +122,7 @@ def moment_text(moments, kind):
     return "m = (" + ", ".join(f"{v:g}" for v in moments) + ") A·m²"
 
 
-def scenarios_ab(s: Scenario):
+def scenarios_ab(s: ScenarioValues):
     """(stations, moments, title, sensor kind) for A and B under the chosen comparison; moments
     are (P_h, P_v) A·m for the electric kind, (m_x, m_y, m_z) A·m² for a magnetic one."""
     single, dual = core.single_station(s.h), core.dual_station(s.h, s.d)
@@ -206,7 +208,7 @@ def _probe(s, st, moments):
                      s.z if on_xy else 0.5 * (s.z_min + s.z_max), *s.velocity(), *moments])
 
 
-def unobservable_note(s: Scenario, results, stations, moments, kinds=("E", "E")):
+def unobservable_note(s: ScenarioValues, results, stations, moments, kinds=("E", "E")):
     """Plain-text explanation where a map is mostly structurally unobservable, else ''.
     ``results``: ((title, core.MapResult), ...) of A and B; ``stations``, ``moments`` (A·m, or
     A·m² magnetic) and ``kinds`` (sensor kinds): each map's own (B's unobservable direction is
@@ -414,7 +416,7 @@ def compute(snapshot: Snapshot) -> Panels:
     note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b), (mom_a, mom_b),
                              (kind_a, kind_b))
     log_scale = measure == "crlb_position"  # metres over decades: coloured by log10 (as the design tab)
-    preset = preset_of(s, FIELDS) or ""
+    preset = preset_of(s, MAP_INPUTS) or ""
     p = Panels(
         plane=plane, a=a, b=b, diff=diff, titles=(title_a, title_b, "B vs A: " + diff_short),
         stations=(st_a, st_b), measure=measure, value_label=label, value_unit=unit,
@@ -437,11 +439,11 @@ def compute(snapshot: Snapshot) -> Panels:
                                far_note=runaway_note(((title_a, a), (title_b, b)), (ra, rb)))
 
 
-def _fisher_options(s: Scenario):
+def _fisher_options(s: ScenarioValues):
     return _core_options(s, None)
 
 
-def xy_region(s: Scenario, n):
+def xy_region(s: ScenarioValues, n):
     """The x–y plane at the target depth (for the design tab, whatever the map plane)."""
     return core.Plane("xy", (-s.extent, s.extent), (-s.extent, s.extent), s.z, n)
 
@@ -602,5 +604,5 @@ class PanelCache:
 SHARED = PanelCache()
 
 
-__all__ = ["DESIGN_FIELDS", "FIELDS", "PanelCache", "Panels", "SHARED", "Snapshot", "best_spacing", "compute",
+__all__ = ["DESIGN", "MAP_INPUTS", "MAPS", "SCENE", "PanelCache", "Panels", "SHARED", "Snapshot", "best_spacing", "compute",
            "design", "difference", "error_at"]

@@ -11,14 +11,15 @@ import gc
 import threading
 
 import panel as pn
+import param
 from bokeh.models.formatters import PrintfTickFormatter
 
 from . import maps, url
 from .calibration import calibration_tab
-from .compute import KIND_NAMES, SHARED
+from .compute import KIND_NAMES, MAP_INPUTS, SHARED
 from .design import design_tab
 from .inputs import number_input
-from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PRESETS, SENSORS, Scenario
+from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PART_OF, PRESETS, SENSORS, Scenario, parameter
 from .shape import shape_tab
 from .track import track_tab
 
@@ -84,10 +85,10 @@ def freeze_startup_objects():
 _alert = maps.alert
 
 
-#: Numbers typed or dragged (:func:`app.inputs.number_input`); the noise has a box only.
-NUMBERS = ("Ph", "Pv", "speed", "heading", "h", "z", "y", "d", "k", "Ph_b", "Pv_b", "d_ref", "T",
-           "sigma", "extent", "z_min", "z_max", "threshold", "sea_depth", "seabed_sigma", "steps",
-           "resolution", "mx", "my", "mz", "mx_b", "my_b", "mz_b", "noise_b", "noise_g")
+#: Numbers typed or dragged (:func:`app.inputs.number_input`): every number of the sidebar but the
+#: noise, which has a box only (a slider cannot span 1e-12 … 1e-2 V/m).
+NUMBERS = tuple(n for _, names, _ in SECTIONS for n in names
+                if isinstance(parameter(n), param.Number) and n != "noise")
 #: Number formats other than number_input's default (the magnetic noise is hundredths of nT).
 FORMATS = {"noise_b": "0.[0000]", "noise_g": "0.[0000]"}
 
@@ -100,9 +101,8 @@ def _widgets():
     # 1e-3 without a word): any number reaches the Scenario, which refuses it with a message.
     spec = {"noise": {"type": pn.widgets.FloatInput, "format": PrintfTickFormatter(format="%.2e"),
                       "start": None, "end": None, "step": 1e-8, "sizing_mode": "stretch_width"}}
-    for name in Scenario.param:
-        if name not in ("name", "message"):  # stable hooks for the browser tests
-            spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
+    for name in PART_OF:  # stable hooks for the browser tests
+        spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
     return spec
 
 
@@ -116,8 +116,9 @@ def sensor_kinds(s, tab):
 
 
 def applies(name, s, tab):
-    """Whether the input of parameter ``name`` applies to scenario ``s`` on tab ``tab`` (others
-    are hidden: Fixed y in x–y, target depth in x–z, the maps' controls on the design tab)."""
+    """Whether the input of parameter ``name`` applies to scenario values ``s`` (flat: a
+    :meth:`Scenario.snapshot`) on tab ``tab`` (others are hidden: Fixed y in x–y, target depth in
+    x–z, the maps' controls on the design tab)."""
     if tab in (CALIBRATION_TAB, SHAPE_TAB):  # problems with inputs of their own, in their tabs
         return False
     kind = COMPARISONS[s.comparison]
@@ -160,48 +161,37 @@ def applies(name, s, tab):
 MOVES = ("sea_model", "model", "sensor", "sensor_b")
 
 
-def _message_pane(scenario, names, css):
-    """The refusal message, shown here when it is about one of ``names`` (``None``: a message
-    about no input, e.g. the page's link)."""
-    def shows(message, refused):
-        return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
-
-    return pn.pane.HTML(
-        pn.bind(lambda m, r: _alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
-                if shows(m, r) else "", scenario.param.message,
-                scenario.param.refused),
-        visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
-        sizing_mode="stretch_width", css_classes=[css])
-
-
 def _section(scenario, tabs, title, names, collapsed):
     """A sidebar card of ``names``' inputs; an input that does not apply is hidden, and so is the
     card when none does. A refused value's message shows under its input."""
-    watched = [scenario.param.plane, scenario.param.comparison, scenario.param.measure,
-               scenario.param.layout, scenario.param.sea_model, scenario.param.sensor,
-               scenario.param.sensor_b, tabs.param.active]
+    watched = [*map(scenario.ref, ("plane", "comparison", "measure", "layout", "sea_model", "sensor",
+                                   "sensor_b")), tabs.param.active]
 
     def visible(name):
-        return pn.bind(lambda *_: applies(name, scenario, tabs.active), *watched)
+        return pn.bind(lambda *_: applies(name, scenario.snapshot(), tabs.active), *watched)
 
     def widget(name):
         if name in NUMBERS:
-            return number_input(scenario, name, css_classes=[f"w-{name}"], visible=visible(name),
+            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"], visible=visible(name),
                                 **({"fmt": FORMATS[name]} if name in FORMATS else {}))
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
-        return cls.from_param(scenario.param[name], visible=visible(name), **spec)
+        return cls.from_param(scenario.ref(name), visible=visible(name), **spec)
 
     def row(name):
         if name not in ACCEPTED and name not in MOVES:  # a selector: nothing it offers is refused
             return widget(name)
         # A refused value is said right under its input, where the user typed it (at the top of
         # the sidebar it was out of sight when typing in Stations or Advanced).
-        return pn.Column(widget(name), _message_pane(scenario, [name], f"w-message-{name}"),
+        return pn.Column(widget(name), maps.refusal(scenario, [name], f"w-message-{name}"),
                          visible=visible(name), sizing_mode="stretch_width", margin=0)
 
     rows = [row(name) for name in names]
-    any_visible = pn.bind(lambda *_: any(applies(n, scenario, tabs.active) for n in names), *watched)
+    def any_applies(*_):
+        s = scenario.snapshot()
+        return any(applies(n, s, tabs.active) for n in names)
+
+    any_visible = pn.bind(any_applies, *watched)
     card = pn.Card(*rows, title=title,
                    collapsed=collapsed, sizing_mode="stretch_width")
     # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
@@ -225,13 +215,14 @@ def sensor_banner(scenario, tab):
         if kind == "E":
             return ""
         name = f"{KIND_NAMES[kind][0]} ({KIND_NAMES[kind][1]})"
-        noise = {"B": f"{scenario.noise_b:g} nT", "G": f"{scenario.noise_g:g} nT/m",
-                 "BG": f"{scenario.noise_b:g} nT and {scenario.noise_g:g} nT/m"}[kind]
+        noise_b, noise_g = scenario.sensor.noise_b, scenario.sensor.noise_g
+        noise = {"B": f"{noise_b:g} nT", "G": f"{noise_g:g} nT/m",
+                 "BG": f"{noise_b:g} nT and {noise_g:g} nT/m"}[kind]
         text = TRACK_SENSOR if tab == TRACK_TAB else DESIGN_SENSOR
-        return _alert(text.format(name=name, mx=scenario.mx, my=scenario.my, mz=scenario.mz,
+        return _alert(text.format(name=name, mx=scenario.target.mx, my=scenario.target.my, mz=scenario.target.mz,
                                   noise=noise), "info")
 
-    deps = [scenario.param[n] for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g")]
+    deps = [scenario.ref(n) for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g")]
     return pn.pane.HTML(pn.bind(text, *deps), visible=pn.bind(lambda k, *_: SENSORS[k] != "E", *deps),
                         sizing_mode="stretch_width",
                         css_classes=["w-track-sensor" if tab == TRACK_TAB else "w-design-sensor"])
@@ -281,11 +272,11 @@ def create_app():
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,
-                                      waits=lambda names: bool(set(names) & set(maps.FIELDS))))
+                                      waits=lambda names: bool(set(names) & MAP_INPUTS)))
 
     def preset_button(name):
         style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
-                        *[scenario.param[k] for k in PRESETS[name]])
+                        *[scenario.ref(k) for k in PRESETS[name]])
         return pn.widgets.Button(name=name, button_type="primary", button_style=style,
                                  width=90 if len(name) <= 6 else 150,  # a seed's name is longer
                                  css_classes=[f"w-preset-{name[-1]}"],
@@ -308,7 +299,7 @@ def create_app():
         title="Dipole observability explorer",
         sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "
                                   "figure's map gets a red frame)"), presets,
-                 _message_pane(scenario, None, "w-message"), *sections,
+                 maps.refusal(scenario, None, "w-message"), *sections,
                  pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
         main=[tabs],

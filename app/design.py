@@ -10,10 +10,10 @@ import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
 from . import compute, offloop, views
-from .compute import DESIGN_FIELDS, RUNAWAY_LIMIT, Snapshot
+from .compute import DESIGN, RUNAWAY_LIMIT, SCENE, Snapshot
 from .inputs import number_input
-from .maps import alert
-from .scenario import MAX_STATIONS
+from .maps import alert, refusal
+from .scenario import MAX_STATIONS, PARTS, Design
 
 DESIGN_HELP = """
 **Layout design.** Click on the map to add a station (up to 8; it sits at the station depth h),
@@ -28,9 +28,8 @@ optimum with scipy; *Optimise N-station layout* does the same for a line, triang
 N stations (or free positions, ~10 s) and makes it the custom layout.
 """.format(limit=RUNAWAY_LIMIT)
 
-#: Parameters of this tab whose refusal is shown here, next to their inputs.
-OWN = ("stations", "criterion", "threshold", "layout_kind", "n_stations", "error_quantity", "ellipse_x",
-       "ellipse_y")
+#: Inputs of this tab whose refusal is shown here, next to their inputs.
+OWN = ("stations", *Design.names())
 
 
 def drawn_stations(data, old, h):
@@ -76,50 +75,48 @@ def optimise_text(result, criterion):
 def design_tab(scenario, cache, widgets):
     """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
     widget spec of pn.Param (the sidebar's)."""
-    snap = lambda: Snapshot.of(scenario, DESIGN_FIELDS)
-    watch = [f for f in DESIGN_FIELDS if f != "stations"]
-    points = hv.DynamicMap(lambda **_: views.station_layer(scenario.stations, editable=True),
-                           streams=[hv.streams.Params(scenario, ["stations"])])
+    snap = lambda: Snapshot.of(scenario, SCENE)  # what the error map and the ellipse read
+    st = scenario.stations  # the Stations part
+    points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True),
+                           streams=[hv.streams.Params(st, ["stations"])])
+    scene = [hv.streams.Params(getattr(scenario, a), list(PARTS[a].names())) for a in SCENE]
     # One more than allowed: a 9th click reaches the Scenario, which refuses it ("at most 8
     # stations") and restores the layout (with num_objects=8 the tool deleted the oldest silently)
-    draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS + 1, empty_value=scenario.h)
+    draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS + 1, empty_value=st.h)
 
     def drawn(data):
         if data is None or not len(data.get("x", [])):
             return
-        scenario.stations = drawn_stations(data, scenario.stations, scenario.h)
+        st.stations = drawn_stations(data, st.stations, st.h)
 
     draw.add_subscriber(drawn)
     errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), compute.design),
-                                                       "Custom layout: Cramér–Rao error", scenario.error_quantity),
-                           streams=[hv.streams.Params(scenario, watch + ["stations", "error_quantity"])])
+                                                       "Custom layout: Cramér–Rao error",
+                                                       scenario.design.error_quantity),
+                           streams=[*scene, hv.streams.Params(scenario.design, ["error_quantity"])])
     # The ellipse's point is an input of its own (a click on the map adds a station: it cannot
     # also move the ellipse)
-    tap = hv.streams.Params(scenario, ["ellipse_x", "ellipse_y"], rename={"ellipse_x": "x", "ellipse_y": "y"})
+    tap = hv.streams.Params(scenario.design, ["ellipse_x", "ellipse_y"], rename={"ellipse_x": "x", "ellipse_y": "y"})
 
     def ellipse(x, y, **_):
-        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent)[0]
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.region.extent)[0]
 
     def ellipse_text(x, y, *_):
-        rng = (float(compute.nearest_range([x, y, scenario.z], scenario.stations))
-               if len(scenario.stations) else None)
-        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.extent, rng)[1]
+        rng = (float(compute.nearest_range([x, y, scenario.target.z], st.stations))
+               if len(st.stations) else None)
+        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.region.extent, rng)[1]
 
-    ell = hv.DynamicMap(ellipse, streams=[tap, hv.streams.Params(scenario, watch + ["stations"])])
+    ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
     table = pn.widgets.Tabulator(
-        pn.bind(lambda st: pd.DataFrame(st, columns=["x (m)", "y (m)", "z (m)"]), scenario.param.stations),
+        pn.bind(lambda st: pd.DataFrame(st, columns=["x (m)", "y (m)", "z (m)"]), st.param.stations),
         show_index=False, sizing_mode="stretch_width", height=260, css_classes=["w-station-table"],
         formatters={c: NumberFormatter(format="0.0") for c in ("x (m)", "y (m)", "z (m)")})
 
     def edited(event):
-        scenario.stations = table.value.astype(float).values.tolist()
+        st.stations = table.value.astype(float).values.tolist()
 
     table.on_edit(edited)
-    message = pn.pane.HTML(pn.bind(lambda m, names: alert(m, "danger") if set(names) & set(OWN) else "",
-                                   scenario.param.message, scenario.param.refused),
-                           visible=pn.bind(lambda m, names: bool(m) and bool(set(names) & set(OWN)),
-                                           scenario.param.message, scenario.param.refused),
-                           sizing_mode="stretch_width", css_classes=["w-design-message"])
+    message = refusal(scenario, OWN, "w-design-message")
     run = pn.widgets.Button(name="Find best spacing", button_type="primary")
     # The optimisers take ~1 s (best spacing) to ~10 s (free layouts): off the event loop
     # (app.offloop), a spinner over what they will change meanwhile.
@@ -143,15 +140,15 @@ def design_tab(scenario, cache, widgets):
                                  sizing_mode="stretch_width")]
 
     def spacing(event):
-        snapshot = snap()
+        snapshot = Snapshot.of(scenario, DESIGN)
         spacing_task.start(snapshot, partial(spacing_views, snapshot), spacing_shown, spacing_failed)
 
     run.on_click(spacing)
     criteria = pn.Column(
-        pn.Param(scenario, parameters=["criterion"], show_name=False, widgets=widgets,
+        pn.Param(scenario.design, parameters=["criterion"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
-        number_input(scenario, "threshold", css_classes=["w-threshold"]),
-        pn.Param(scenario, parameters=["layout_kind", "n_stations"], show_name=False, widgets=widgets,
+        number_input(scenario.design, "threshold", css_classes=["w-threshold"]),
+        pn.Param(scenario.design, parameters=["layout_kind", "n_stations"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
         sizing_mode="stretch_width", margin=0)
     optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
@@ -161,14 +158,14 @@ def design_tab(scenario, cache, widgets):
     optimise_task = offloop.Task("design", busy=[optimise, outcome])
 
     def optimised(result, criterion):
-        scenario.stations = [[float(v) for v in st] for st in result.stations]
+        st.stations = [[float(v) for v in station] for station in result.stations]
         outcome.object = optimise_text(result, criterion)
 
     def optimise_failed(exc):
         outcome.object = f"**Not optimised**: {type(exc).__name__}: {exc}"
 
     def optimise_clicked(event):
-        snapshot, criterion = snap(), scenario.criterion
+        snapshot, criterion = Snapshot.of(scenario, DESIGN), scenario.design.criterion
         optimise_task.start(None, partial(cache.get, snapshot, compute.optimised_layout),
                             partial(optimised, criterion=criterion), optimise_failed)
 
@@ -176,15 +173,15 @@ def design_tab(scenario, cache, widgets):
     return pn.Column(
         pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
         pn.FlexBox(pn.pane.HoloViews(errors * points * ell),
-                   pn.Column(pn.Param(scenario, parameters=["error_quantity"], show_name=False, widgets=widgets),
+                   pn.Column(pn.Param(scenario.design, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
-                             number_input(scenario, "ellipse_x", css_classes=["w-ellipse_x"]),
-                             number_input(scenario, "ellipse_y", css_classes=["w-ellipse_y"]),
+                             number_input(scenario.design, "ellipse_x", css_classes=["w-ellipse_x"]),
+                             number_input(scenario.design, "ellipse_y", css_classes=["w-ellipse_y"]),
                              # lazy: computed when shown, not on every change of a map input
                              # while another tab is open (~0.1 s of Python per slider release)
-                             pn.panel(pn.bind(ellipse_text, scenario.param.ellipse_x,
-                                              scenario.param.ellipse_y,
-                                              *[scenario.param[f] for f in DESIGN_FIELDS]),
+                             pn.panel(pn.bind(ellipse_text, scenario.design.param.ellipse_x,
+                                              scenario.design.param.ellipse_y,
+                                              *[scenario.ref(n) for n in scenario.values(SCENE)]),
                                       lazy=True, css_classes=["w-ellipse-text"],
                                       sizing_mode="stretch_width"),
                              width=380),

@@ -10,7 +10,7 @@ import panel as pn
 from bokeh.layouts import row
 
 from . import map_figures, offloop, views
-from .compute import FIELDS, RUNAWAY_LIMIT, Snapshot
+from .compute import MAPS, RUNAWAY_LIMIT, Snapshot
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
@@ -71,10 +71,11 @@ def alert(text, kind):
 
 
 def refusal(scenario, names, css):
-    """The Scenario's refusal message, shown here when it is about one of ``names`` (a tab's
-    inputs: the sidebar shows only its own)."""
+    """The Scenario's refusal message, shown here when it is about one of ``names`` (an input, or
+    a tab's inputs: each shows only its own; ``None``: a message about no input, e.g. the page's
+    link)."""
     def shows(message, refused):
-        return bool(message) and bool(set(refused) & set(names))
+        return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
 
     return pn.pane.HTML(
         pn.bind(lambda m, r: alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
@@ -112,15 +113,15 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                          css_classes=["w-paper"])
     known = pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
                               css_classes=["w-remedy-known"],
-                              on_click=lambda e: scenario.param.update(state_set="moments known (5 states)",
+                              on_click=lambda e: scenario.update(state_set="moments known (5 states)",
                                                                        measure="D-optimal ½·log10 det F"))
     crlb = pn.widgets.Button(name="Show CRLB position error (m)", button_type="warning",
                              css_classes=["w-remedy-crlb"],
-                             on_click=lambda e: setattr(scenario, "measure", "CRLB position error (m)"))
+                             on_click=lambda e: setattr(scenario.maps, "measure", "CRLB position error (m)"))
 
     def remedies(p):
         """Which remedy buttons apply to maps ``p``: only where a map is veiled."""
-        return dict(known=bool(p.note) and not (scenario.state_set.startswith("moments known")
+        return dict(known=bool(p.note) and not (scenario.sensor.state_set.startswith("moments known")
                                                 and p.measure == "d_optimal"),
                     crlb=bool(p.note) and p.measure != "crlb_position")
 
@@ -178,7 +179,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                 now = remedies(p)
                 known.visible, crlb.visible = now["known"], now["crlb"]
 
-    scenario.param.watch(redraw, list(FIELDS))
+    scenario.watch(redraw, MAPS)
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
     tab = pn.Column(paper, plots, pn.pane.HTML(LEGEND, sizing_mode="stretch_width"), note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
@@ -188,7 +189,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
 
 def _current(scenario, cache):
-    return cache.get(Snapshot.of(scenario)), {f: getattr(scenario, f) for f in FIELDS}
+    return cache.get(Snapshot.of(scenario)), scenario.values(MAPS)
 
 
 def download_name(scenario, cache, ext):

@@ -21,7 +21,6 @@ one at a time per kernel (``KERNEL_LOCK``), cached per set of inputs.
 
 from __future__ import annotations
 
-import functools
 from functools import partial
 
 import holoviews as hv
@@ -35,15 +34,17 @@ from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
 from core.shape.model import LAG
 
 from . import offloop
-from .compute import KERNEL_LOCK
+from .compute import KERNEL_LOCK, SHARED, Snapshot
 from .inputs import number_input
 from .maps import alert, refusal
-from .scenario import Scenario
+from .scenario import Scenario, Shape
 
 hv.extension("bokeh", logo=False)
 
-#: The tab's parameters (every Scenario parameter named shape_*).
-PARAMS = tuple(n for n in Scenario.param if n.startswith("shape_"))
+#: The parts (app.scenario.PARTS) the tab reads: its own.
+READS = ("shape",)
+#: The tab's inputs.
+PARAMS = Shape.names()
 #: Selectors and text (the rest are numbers: a box and a slider).
 CHOICES = ("shape_type", "shape_window", "shape_outliers")
 #: The filter update: label -> lag of core.shape.experiment.Case (0: one sample).
@@ -144,8 +145,8 @@ def preset_of(values):
 
 
 def key_of(scenario):
-    """The tab's inputs as a hashable key: ((name, value), …)."""
-    return tuple((n, getattr(scenario, n)) for n in PARAMS)
+    """The tab's inputs as a hashable key (its parts' :class:`app.compute.Snapshot`)."""
+    return Snapshot.of(scenario, READS)
 
 
 def case_of(values):
@@ -194,11 +195,15 @@ def curve_cpas(target, cpa):
     return np.unique(np.r_[np.geomspace(lo, max(CURVE_MAX, 2 * lo), CURVE_POINTS), cpa])
 
 
-@functools.lru_cache(maxsize=8)
 def compute(key):
-    """Everything the tab shows for the inputs ``key`` (:func:`key_of`), cached: dict with the
-    case, the :class:`core.shape.experiment.CaseResult`, the bound at the pass and the curve."""
-    v = dict(key)
+    """Everything the tab shows for the inputs ``key`` (:func:`key_of`), from the one cache
+    (app.compute.SHARED): dict with the case, the :class:`core.shape.experiment.CaseResult`, the
+    bound at the pass and the curve."""
+    return SHARED.get(key, _compute)
+
+
+def _compute(key):
+    v = dict(key.items)
     case = case_of(v)
     with KERNEL_LOCK:  # numba's parallel kernels: one caller at a time (app.compute)
         res = run_case(case, runs=int(v["shape_runs"]), seed=int(v["shape_seed"]),
@@ -389,27 +394,27 @@ def views(key):
 def _input(scenario, name):
     if name in CHOICES:
         cls = pn.widgets.TextInput if name == "shape_outliers" else pn.widgets.Select
-        w = cls.from_param(scenario.param[name], css_classes=[f"w-{name}"], sizing_mode="stretch_width")
+        w = cls.from_param(scenario.shape.param[name], css_classes=[f"w-{name}"], sizing_mode="stretch_width")
     else:
         fmt = "0.[00000]" if name == "shape_noise" else "0.[00]"
-        w = number_input(scenario, name, fmt=fmt, css_classes=[f"w-{name}"])
+        w = number_input(scenario.shape, name, fmt=fmt, css_classes=[f"w-{name}"])
     return pn.Column(w, refusal(scenario, [name], "w-message-shape"), margin=0, sizing_mode="stretch_width")
 
 
 def _inputs(scenario):
     preset = pn.widgets.Select(name="Paper case (seed 003)", options=["(custom)", *PRESETS],
-                               value=preset_of({n: getattr(scenario, n) for n in PARAMS}) or "(custom)",
+                               value=preset_of(scenario.values(READS)) or "(custom)",
                                css_classes=["w-shape-preset"], sizing_mode="stretch_width")
 
     def chosen(event):
         if event.new in PRESETS:
-            scenario.param.update(PRESETS[event.new])
+            scenario.update(PRESETS[event.new])
 
     def follow(*_):
-        preset.value = preset_of({n: getattr(scenario, n) for n in PARAMS}) or "(custom)"
+        preset.value = preset_of(scenario.values(READS)) or "(custom)"
 
     preset.param.watch(chosen, ["value"])
-    scenario.param.watch(follow, list(PARAMS))
+    scenario.watch(follow, READS)
     groups = (("Target", ("shape_type", "shape_height", "shape_radius", "shape_inner_height",
                           "shape_inner_radius", "shape_roll", "shape_pitch", "shape_yaw",
                           "shape_mx", "shape_my", "shape_mz")),
@@ -451,14 +456,14 @@ def _build(scenario):
         with task.lock:  # the values as they are when this decides (two watchers may race)
             key = key_of(scenario)
             try:
-                case_of(dict(key))
+                case_of(dict(key.items))
             except ValueError as exc:  # each value accepted, not together: said, last plots stay
                 say(f"Not computed: {exc}. The plots show the last computed pass.")
                 task.cancel()
                 return
             task.start(key, partial(views, key), show, failed)
 
-    scenario.param.watch(start, list(PARAMS))
+    scenario.watch(start, READS)
     start()
     return pn.Row(_inputs(scenario),
                   pn.Column(problem, outputs, sizing_mode="stretch_width"),

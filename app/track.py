@@ -24,7 +24,6 @@ cached per set of inputs, computed off the server's event loop (:mod:`app.offloo
 
 from __future__ import annotations
 
-import functools
 import math
 from functools import partial
 
@@ -40,18 +39,14 @@ from core.tracking import montecarlo as core_track
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
 from . import offloop, views
-from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, Design, nearest_range
+from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, SHARED, Design, Snapshot, nearest_range
 from .maps import refusal
 from .scenario import SENSORS, Scenario
 
 hv.extension("bokeh", logo=False)
 
-#: Scenario parameters of this tab (the sidebar of the tab).
-TRACK_PARAMS = ("track_x0", "track_y0", "track_heading", "track_speed", "track_duration",
-                "track_axes", "track_sigma_a", "track_alpha", "track_filter", "track_runs")
-#: Everything the track's numbers depend on.
-INPUTS = TRACK_PARAMS + ("stations", "z", "Ph", "Pv", "noise", "sigma", "T", "steps", "sea_model",
-                         "sea_depth", "seabed_sigma", "sensor", "mx", "my", "mz", "noise_b", "noise_g")
+#: The parts (app.scenario.PARTS) the track's numbers are computed from.
+READS = ("target", "stations", "medium", "sensor", "track")
 #: Prior σ of the EKF/PU-EKF start for a magnetic target: position and velocity as the electric
 #: case's (x, y 20 m, z 0.5 m, v 0.5 m/s); each moment entry this share of |m| (at least 1 A·m²).
 MAGNETIC_PRIOR_SHARE = 0.2
@@ -70,11 +65,6 @@ def sea_of(s):
     if getattr(s, "sea_model", "whole space") != "layered":
         return None
     return core.Sea(float(s.sea_depth), float(s.seabed_sigma))
-
-
-def _key(s):
-    return tuple((name, tuple(map(tuple, getattr(s, name))) if name == "stations" else getattr(s, name))
-                 for name in INPUTS)
 
 
 def magnetic_options(s):
@@ -113,9 +103,9 @@ def case_of(s):
     )
 
 
-@functools.lru_cache(maxsize=16)
-def _compute(key):
-    s = _Values(dict(key))
+def _compute(snapshot: Snapshot):
+    """The tab's numbers for a snapshot of :data:`READS` (in the one cache, app.compute.SHARED)."""
+    s = snapshot.scenario()
     case = case_of(s)
     with KERNEL_LOCK:
         res = core_track.monte_carlo(case, filter=s.track_filter, runs=int(s.track_runs), seed=0,
@@ -142,17 +132,11 @@ def view_window(truth):
     return tuple((float(m - span / 2), float(m + span / 2)) for m in c)
 
 
-class _Values:
-    def __init__(self, values):
-        self.__dict__.update(values)
-        self.stations = [list(v) for v in values["stations"]]
-
-
-def compute(s):
+def compute(scenario: Scenario):
     """The tab's numbers for a scenario (cached): dict with the case, the
     :class:`core.track.MonteCarloResult`, the true track, range to the nearest station (m) and
     the linearisation flag at every step."""
-    return _compute(_key(s))
+    return SHARED.get(Snapshot.of(scenario, READS), _compute)
 
 
 def plan_view(out):
@@ -271,10 +255,10 @@ def summary_text(out):
     return "; ".join(parts) + "." + (f"\n\n{warning}" if warning else "")
 
 
-def outputs_of(key):
-    """The tab's outputs for the inputs ``key`` (:func:`_key`): the summary line and the two
-    HoloViews overlays (built on a worker thread, :mod:`app.offloop`; drawn on the event loop)."""
-    out = _compute(key)
+def outputs_of(snapshot):
+    """The tab's outputs for a snapshot of :data:`READS`: the summary line and the two HoloViews
+    overlays (built on a worker thread, :mod:`app.offloop`; drawn on the event loop)."""
+    out = SHARED.get(snapshot, _compute)
     return dict(summary=summary_text(out), plan=plan_view(out), error=error_view(out))
 
 
@@ -304,16 +288,16 @@ def _outputs(scenario: Scenario):
 
     def start(*_):
         with task.lock:  # the values as they are when this decides (two watchers may race)
-            key = _key(scenario)
+            key = Snapshot.of(scenario, READS)
             try:
-                case_of(_Values(dict(key)))
+                case_of(key.scenario())
             except ValueError as exc:
                 say(f"Track not computed: {exc}. The plots show the last computed track.")
                 task.cancel()
                 return
             task.start(key, partial(outputs_of, key), show, failed)
 
-    scenario.param.watch(start, list(INPUTS))
+    scenario.watch(start, READS)
     start()
     return pn.Column(problem, outputs, sizing_mode="stretch_width")
 
@@ -321,10 +305,11 @@ def _outputs(scenario: Scenario):
 def track_tab(scenario: Scenario):
     """The Track tab's layout for a shared :class:`Scenario` (a Panel layout); its outputs are
     built (and first computed) when the tab is first shown."""
-    options = {name: {"throttled": True} for name in TRACK_PARAMS
-               if isinstance(scenario.param[name], param.Number)}
+    own = list(scenario.track.names())
+    options = {name: {"throttled": True} for name in own
+               if isinstance(scenario.track.param[name], param.Number)}
     options["track_alpha"] = {"type": pn.widgets.FloatInput, "step": 1e-4, "format": "0.[0000]"}
-    widgets = pn.Param(scenario, parameters=list(TRACK_PARAMS), show_name=False, widgets=options)
+    widgets = pn.Param(scenario.track, parameters=own, show_name=False, widgets=options)
     note = pn.pane.Markdown(
         "A straight track over the design tab's stations at the target depth z, with the "
         "target's moments and the sensor noise set above. The PCRLB (Tichavský) is the best "
@@ -334,7 +319,7 @@ def track_tab(scenario: Scenario):
         "station (the linearised bound does not predict there).",
         sizing_mode="stretch_width")
     return pn.Row(
-        pn.Column(widgets, refusal(scenario, TRACK_PARAMS, "w-message-track"), width=320),
+        pn.Column(widgets, refusal(scenario, own, "w-message-track"), width=320),
         pn.Column(
             note,
             # lazy: not computed until the tab is first shown (each change of the maps' inputs

@@ -1,7 +1,7 @@
 """The scenario lives in the page URL: a pasted link reopens the view, a change is written back.
 
-What the link holds is derived, not listed: every parameter of :class:`Scenario` whose value
-differs from its default (so every input of every tab, including the ones a rule moved, such as
+What the link holds is derived, not listed: every input of every part of :class:`Scenario`
+(app.scenario.PARTS) whose value differs from its default (so every input of every tab, including the ones a rule moved, such as
 the station depth a layered sea puts on the seabed), written without float noise, and the tab
 shown (``tab=Track``; the first tab is the default).
 
@@ -18,23 +18,21 @@ from urllib.parse import parse_qsl, urlencode
 
 import param
 
-from .scenario import ACCEPTED, Scenario
+from .scenario import PART_OF, PARTS, Scenario, defaults, parameter
 
-#: Parameters that are feedback, not input: never in a link.
-FEEDBACK = ("name", "message", "refused")
 #: The query key of the tab shown.
 TAB = "tab"
 
 
 def names():
-    """Every parameter a link carries: all of :class:`Scenario`'s but the feedback."""
-    return tuple(n for n in Scenario.param if n not in FEEDBACK)
+    """Every input a link carries: every part's (the feedback is not a part's)."""
+    return tuple(PART_OF)
 
 
 def link_value(raw, name=None):
     """A query value as written by :func:`query`: JSON where it parses (numbers, lists), else the
     plain string; a String parameter ``name`` always takes the plain string."""
-    if name is not None and isinstance(Scenario.param[name], param.String):
+    if name is not None and isinstance(parameter(name), param.String):
         return raw
     try:
         return json.loads(raw)
@@ -63,8 +61,8 @@ def _rounded(value):
 def query(scenario, tab=None):
     """The query string ('?a=1&b=2', or '' for the defaults) of ``scenario`` on tab ``tab``
     (its title; None or the first tab's: not written)."""
-    pairs = [(n, link_text(getattr(scenario, n))) for n in names()
-             if getattr(scenario, n) != Scenario.param[n].default]
+    default = defaults()
+    pairs = [(n, link_text(v)) for n, v in scenario.values().items() if v != default[n]]
     if tab:
         pairs.append((TAB, tab))
     return "?" + urlencode(pairs) if pairs else ""
@@ -72,16 +70,15 @@ def query(scenario, tab=None):
 
 def link_problem(name, value):
     """None if a link's ``value`` for ``name`` is accepted on its own, else why: param's own type,
-    selector and bound checks (tried on a throw-away Scenario) and :data:`ACCEPTED`'s limits.
+    selector and bound checks (tried on a throw-away part) and the part's limits (:meth:`app.scenario.Part.problem`).
     Rules between values (z_min < z_max, depths in the water column) are checked on the link's
     values together, by :func:`read_link`."""
-    trial = Scenario()
+    trial = PARTS[PART_OF[name]]()  # a part on its own: no owner, no checks but param's
     try:
         setattr(trial, name, value)
     except Exception:  # param's own type and selector checks
-        return f"{name}: {trial.param[name].label} does not accept {str(value)[:40]!r}"
-    problem = (Scenario.problem(name, value) if name in ACCEPTED else
-               Scenario.stations_problem(value) if name == "stations" else None)
+        return f"{name}: {parameter(name).label} does not accept {str(value)[:40]!r}"
+    problem = Scenario.problem(name, value)
     return f"{name}: {problem}" if problem else None
 
 
@@ -101,7 +98,7 @@ def read_link(scenario, args):
             problem = link_problem(name, value)
             problems.update({name: problem} if problem else {})
             good.update({} if problem else {name: value})
-    scenario.param.update(good)
+    scenario.update(good)
     if scenario.message and scenario.refused != ["sea_model"]:  # a rule between the link's values
         why = scenario.message.removesuffix(" Kept the last good value.").rstrip(".")
         problems.update({name: f"{name}: {why}" for name in scenario.refused})
@@ -152,7 +149,7 @@ def sync_url(scenario, location, args, onload=None, tabs=None, titles=(), waits=
         if waits is None or not waits([e.name for e in events]):  # no maps to wait for
             flush()
 
-    scenario.param.watch(to_url, list(names()))
+    scenario.watch(to_url, PARTS)
     if tabs is not None:
         tabs.param.watch(to_url, ["active"])
     if problems:

@@ -56,8 +56,8 @@ def scenario(**values):
     from app.scenario import Scenario
 
     sc = Scenario()
-    sc.param.update(START)
-    sc.param.update(values)
+    sc.update(START)
+    sc.update(values)
     return sc
 
 #: Before any page script: log websocket traffic and the release, in the page's clock.
@@ -199,7 +199,7 @@ def expected_map_a_sum(ph):
 
 def server_update_inprocess(repeat=5):
     """Median time (ms) of one P_h change in the server's Python, without websocket or browser:
-    the app built into a bare Bokeh Document, ``scenario.Ph`` set (compute + HoloViews + Bokeh
+    the app built into a bare Bokeh Document, ``scenario.target.Ph`` set (compute + HoloViews + Bokeh
     model updates of the three maps)."""
     from bokeh.document import Document
 
@@ -209,12 +209,12 @@ def server_update_inprocess(repeat=5):
     template = create_app()
     template.server_doc(Document())
     sc = template.scenario
-    sc.param.update(START)
-    sc.Ph = 111.1  # warm-up
+    sc.update(START)
+    sc.target.Ph = 111.1  # warm-up
     times = []
     for i in range(repeat):
         t0 = time.perf_counter()
-        sc.Ph = 123.4 + 7.3 * i
+        sc.target.Ph = 123.4 + 7.3 * i
         times.append(time.perf_counter() - t0)
     return statistics.median(times) * 1e3
 

@@ -281,7 +281,7 @@ def map_time(repeat=7):
     compute(Snapshot.of(s))  # compile / load caches
     times = []
     for i in range(repeat):
-        s.Ph = 100.0 + i  # a new scenario each time
+        s.target.Ph = 100.0 + i  # a new scenario each time
         t0 = time.perf_counter()
         compute(Snapshot.of(s))
         times.append(time.perf_counter() - t0)

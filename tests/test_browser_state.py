@@ -89,17 +89,17 @@ def test_stations_added_by_clicks_keep_the_station_depth(page):
 def expected_readout(presets, x, y, z=None):
     """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
     from app import compute, views
-    from app.compute import DESIGN_FIELDS, Snapshot
+    from app.compute import SCENE, Snapshot
     from app.scenario import Scenario
 
     s = Scenario(resolution=21)
     for preset in presets:
         s.apply_preset(preset)
     if z is not None:
-        s.z = z
-    snap = Snapshot.of(s, DESIGN_FIELDS)
-    rng = float(compute.nearest_range([x, y, s.z], s.stations))
-    return views.error_ellipse(compute.error_at(snap, x, y), x, y, s.extent, rng)[1]
+        s.target.z = z
+    snap = Snapshot.of(s, SCENE)
+    rng = float(compute.nearest_range([x, y, s.target.z], s.stations.stations))
+    return views.error_ellipse(compute.error_at(snap, x, y), x, y, s.region.extent, rng)[1]
 
 
 def readout(pg):

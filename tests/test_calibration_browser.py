@@ -62,8 +62,8 @@ def test_calibration_tab_in_chromium(tmp_path):
         page.locator(".w-cal_source select").select_option("Uploaded CSV")
         page.locator(".w-cal-upload input[type=file]").set_input_files(str(table1))
         s = Scenario()
-        s.param.update(ac.PRESETS["Seed 004 Table 1"], cal_source="Uploaded CSV")
-        res = ac.compute({f: getattr(s, f) for f in ac.FIELDS}, table1.read_bytes())
+        s.update(ac.PRESETS["Seed 004 Table 1"], cal_source="Uploaded CSV")
+        res = ac.compute({f: s.value(f) for f in ac.FIELDS}, table1.read_bytes())
         rms = res["be_rms"]["kal"].rms_nt
         assert np.isfinite(rms)
         page.wait_for_selector(f"text=Kalman {rms:.1f} nT", timeout=SLOW)

@@ -21,8 +21,8 @@ import param
 import pytest
 
 from app import calibration, compute, shape, track
-from app.compute import DESIGN_FIELDS, Snapshot
-from app.scenario import ACCEPTED, MAX_STATIONS, Scenario
+from app.compute import SCENE, Snapshot
+from app.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
 
 # The tabs' widgets use ``name``, ``button_type`` and ``button_style`` (Panel 1.5.5, the lowest
 # declared version, has no ``label``, ``color`` or ``variant``); Panel 1.9 warns that they will be
@@ -63,7 +63,7 @@ def tab_of(name):
 def extremes(name):
     """(value, accepted?) pairs: the lowest and highest accepted and just beyond each."""
     lo, hi, _ = ACCEPTED[name]
-    if isinstance(Scenario.param[name], param.Integer):
+    if isinstance(parameter(name), param.Integer):
         return [(lo, True), (hi, True), (lo - 1, False), (hi + 1, False)]
     eps = 1e-6 * max(abs(lo), abs(hi), 1e-300)
     return [(float(lo), True), (float(hi), True), (lo - eps, False), (hi + eps, False)]
@@ -71,7 +71,7 @@ def extremes(name):
 
 def scenario_for(name):
     s = Scenario()
-    s.param.update(CONTEXT.get(name, {}))
+    s.update(CONTEXT.get(name, {}))
     s.param.update(message="", refused=[])
     return s
 
@@ -99,13 +99,13 @@ class Tab:
             p = compute.compute(Snapshot.of(s))
             return f"maps {p.titles}", ""
         if kind == "design":
-            snap = Snapshot.of(s, DESIGN_FIELDS)
+            snap = Snapshot.of(s, SCENE)
             d = compute.design(snap)
-            ell = compute.error_at(snap, s.ellipse_x, s.ellipse_y)
+            ell = compute.error_at(snap, s.design.ellipse_x, s.design.ellipse_y)
             extra = ""
-            if s.criterion.startswith("Area"):
+            if s.design.criterion.startswith("Area"):
                 extra = f", best d = {compute.best_spacing(snap).result.d:.3g} m"
-            if s.n_stations in (1, MAX_STATIONS):
+            if s.design.n_stations in (1, MAX_STATIONS):
                 extra += f", optimised {len(compute.optimised_layout(snap).stations)} stations"
             return f"design {np.nanmin(d.errors.position):.3g} m, ellipse {ell is not None}{extra}", ""
         if kind == "track":
@@ -120,18 +120,18 @@ class Tab:
 
 def check(s, tab, name, value, accepted):
     """Set ``name`` = ``value`` and check the outcome (module docstring)."""
-    before = getattr(s, name)
+    before = s.value(name)
     s.param.update(message="", refused=[])
     t0 = time.perf_counter()
-    setattr(s, name, value)  # must not raise
+    setattr(s.part_of(name), name, value)  # must not raise
     shown, said = tab.shown()
     took = time.perf_counter() - t0
     what = f"{name} = {value!r}"
     if "Kept the last good" in s.message and name in s.refused:  # refused by the Scenario: said,
-        assert getattr(s, name) == before, f"{what}: refused but not restored"  # last good kept
+        assert s.value(name) == before, f"{what}: refused but not restored"  # last good kept
         return "refused", s.message
     assert accepted, f"{what} is beyond the accepted range but was taken: {s.message!r}"
-    assert getattr(s, name) == value
+    assert s.value(name) == value
     if shown is None:  # refused by the tab (values accepted alone but not together): said there
         assert said, f"{what}: the tab shows neither a result nor a message"
         return "refused by the tab", said
@@ -156,7 +156,7 @@ def test_every_number_at_its_extremes_computes_or_is_refused_with_a_message(name
         if not accepted:
             assert outcomes[value][0] == "refused", f"{name} = {value!r}: {outcomes[value]}"
             lo, hi, unit = ACCEPTED[name]
-            assert Scenario.param[name].label in outcomes[value][1], outcomes[value]  # names the input
+            assert parameter(name).label in outcomes[value][1], outcomes[value]  # names the input
             assert f"{lo:g}" in outcomes[value][1] and f"{hi:g}" in outcomes[value][1], outcomes[value]
     print(name, outcomes)
 
@@ -176,16 +176,16 @@ def test_the_custom_layout_at_its_extremes():
              ([[0.0, math.nan, 100.0]], False)]
     for stations, accepted in cases:
         s.param.update(message="", refused=[])
-        before = s.stations
+        before = s.stations.stations
         t0 = time.perf_counter()
-        s.stations = stations
+        s.stations.stations = stations
         shown, _ = tab.shown()
         took = time.perf_counter() - t0
         if accepted:
-            assert s.stations == stations and not s.message, (stations, s.message)
+            assert s.stations.stations == stations and not s.message, (stations, s.message)
             assert shown and took <= WITHIN["design"], (stations, took)
         else:
-            assert s.stations == before and s.message and s.refused == ["stations"], (stations, s.message)
+            assert s.stations.stations == before and s.message and s.refused == ["stations"], (stations, s.message)
 
 
 def test_the_calibration_headings_at_their_extremes():
@@ -198,7 +198,7 @@ def test_the_calibration_headings_at_their_extremes():
             "359.99, -359.99"]
     for text in good:
         for noise in (0.0, 2.0):  # the largest angle error pushes a heading past ±360° before wrapping
-            s.cal_angle_noise_deg = noise
+            s.calibration.cal_angle_noise_deg = noise
             assert check(s, tab, "cal_headings", text, True)[0] == "computed", (text, noise)
     assert np.allclose(calibration.parse_headings("360, -360, 180, -180, 270, -270"), [0, 0, 180, 180, -90, 90])
     bad = ["", "north", "360.01", "-360.5", ", ".join(["0"] * 73), "nan", "1e400"]
@@ -213,7 +213,7 @@ def test_the_calibration_sources_and_the_shape_and_track_choices():
     for name in ("cal_source", "track_filter", "track_axes", "shape_type", "shape_window"):
         s = scenario_for(name)
         tab = Tab(s, tab_of(name))
-        for option in Scenario.param[name].objects:
+        for option in parameter(name).objects:
             outcome, said = check(s, tab, name, option, True)
             if option == "Uploaded CSV":  # nothing uploaded yet: the tab says what to upload
                 assert outcome == "refused by the tab" and "Upload a CSV" in said

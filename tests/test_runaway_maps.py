@@ -63,7 +63,7 @@ def test_maps_of_other_measures_carry_no_runaway_marks(measure):
 
 def test_the_layout_design_map_hatches_the_same_points():
     s = Scenario(resolution=31)
-    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    d = c.design(Snapshot.of(s, c.SCENE))
     far = _by_hand(d.plane, d.stations, d.errors.position, d.errors.observable)
     assert 0 < far.sum() < far.size
     layer = views.error_map(d, "t").get(2)  # image, veil, runaway hatching
@@ -75,14 +75,14 @@ def test_the_layout_design_map_hatches_the_same_points():
 
 def test_a_clicked_far_point_says_its_bound_does_not_predict_an_error():
     s = Scenario()
-    snap = Snapshot.of(s, c.DESIGN_FIELDS)
-    stations = np.array(s.stations, dtype=float)
+    snap = Snapshot.of(s, c.SCENE)
+    stations = np.array(s.stations.stations, dtype=float)
     near, far = (10.0, 10.0), (290.0, 290.0)
     texts = {}
     for x, y in (near, far):
         err = c.error_at(snap, x, y)
-        rng = float(np.min(np.linalg.norm(stations - [x, y, s.z], axis=1)))
-        texts[(x, y)] = (float(err.position) / rng, views.error_ellipse(err, x, y, s.extent, rng)[1])
+        rng = float(np.min(np.linalg.norm(stations - [x, y, s.target.z], axis=1)))
+        texts[(x, y)] = (float(err.position) / rng, views.error_ellipse(err, x, y, s.region.extent, rng)[1])
     assert texts[near][0] < 0.3 and "runaway" not in texts[near][1]
     assert texts[far][0] > 0.3 and "does not predict a tracker's error" in texts[far][1]
 
@@ -90,12 +90,12 @@ def test_a_clicked_far_point_says_its_bound_does_not_predict_an_error():
 def test_the_optimiser_is_not_capped_below_the_region_and_reports_a_bound_it_hits():
     # issue 16 defect 7: the app passed a 200 m cap; a square of 4 came back at 200 m, at_bound
     s = Scenario(layout_kind="square", n_stations=4)
-    r = c.optimised_layout(Snapshot.of(s, c.DESIGN_FIELDS))
-    assert 250.0 < r.d < 2 * s.extent and r.at_bound == ()  # free optimum: side ~298 m (issue 16)
+    r = c.optimised_layout(Snapshot.of(s, c.DESIGN))
+    assert 250.0 < r.d < 2 * s.region.extent and r.at_bound == ()  # free optimum: side ~298 m (issue 16)
     np.testing.assert_allclose(r.stations[:, :2].mean(axis=0), 0.0, atol=1e-9)  # centred
-    assert "spacing d = " in design.optimise_text(r, s.criterion)
+    assert "spacing d = " in design.optimise_text(r, s.design.criterion)
     capped = type(r)(**{**r.__dict__, "at_bound": ("d_max",)})
-    assert "largest spacing that fits in the region" in design.optimise_text(capped, s.criterion)
+    assert "largest spacing that fits in the region" in design.optimise_text(capped, s.design.criterion)
 
 
 def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
@@ -106,15 +106,15 @@ def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
     out = track.compute(s)
     d = out["map"]
     (x0, x1), (y0, y1) = out["window"]
-    assert d.plane.u == (x0, x1) and d.plane.v == (y0, y1) and d.plane.fixed == s.z
+    assert d.plane.u == (x0, x1) and d.plane.v == (y0, y1) and d.plane.fixed == s.target.z
     assert x0 <= out["truth"][:, 0].min() and out["truth"][:, 0].max() <= x1  # the track is on it
     # the map is the core's CRLB at the track's velocity, N instants (checked at one point)
     u, v = d.plane.axes
     i, j = 7, 11
-    state = [u[j], v[i], s.z, *out["truth"][0, 3:5], s.Ph, s.Pv]
-    one = core.crlb_maps(core.Plane("xy", (u[j], u[j] + 1), (v[i], v[i] + 1), s.z, 2),
-                           d.stations, velocity=tuple(state[3:5]), moments=(s.Ph, s.Pv), T=s.T,
-                           sigma=s.sigma, noise=s.noise, steps=s.steps)
+    state = [u[j], v[i], s.target.z, *out["truth"][0, 3:5], s.target.Ph, s.target.Pv]
+    one = core.crlb_maps(core.Plane("xy", (u[j], u[j] + 1), (v[i], v[i] + 1), s.target.z, 2),
+                           d.stations, velocity=tuple(state[3:5]), moments=(s.target.Ph, s.target.Pv), T=s.sensor.T,
+                           sigma=s.medium.sigma, noise=s.sensor.noise, steps=s.sensor.steps)
     assert d.errors.position[i, j] == pytest.approx(one.position[0, 0], rel=1e-9)
     layers = track.plan_view(out)
     image, hatch = layers.get(0), layers.get(1)

@@ -7,8 +7,8 @@ import pytest
 import xarray as xr
 
 from app import map_figures, views
-from app.compute import DESIGN_FIELDS, FIELDS, PanelCache, Snapshot, compute
-from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PRESETS, Scenario
+from app.compute import MAPS, SCENE, PanelCache, Snapshot, compute
+from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PRESETS, Scenario, parameter
 
 
 def test_presets_set_what_the_paper_says():
@@ -16,39 +16,39 @@ def test_presets_set_what_the_paper_says():
     for name in (n for n in PRESETS if n.startswith("Fig.")):  # the paper's figures
         s.apply_preset(name)
         # common parameters (spec §5)
-        assert (s.Ph, s.h, s.T) == (PRESETS[name]["Ph"], 100.0, 1.0)
-        vx, vy = s.velocity()
+        assert (s.target.Ph, s.stations.h, s.sensor.T) == (PRESETS[name]["Ph"], 100.0, 1.0)
+        vx, vy = s.snapshot().velocity()
         assert math.isclose(vx, 2.0) and math.isclose(vy, 2.0)
         assert s.message == ""
     s.apply_preset("Fig. 1")
-    assert (s.plane, s.z, s.layout, s.Pv, s.extent) == ("x–y", 120.0, "single", 20.0, 300.0)
+    assert (s.region.plane, s.target.z, s.stations.layout, s.target.Pv, s.region.extent) == ("x–y", 120.0, "single", 20.0, 300.0)
     s.apply_preset("Fig. 2")
-    assert (s.plane, s.y, s.z_min, s.z_max, s.Ph_b, s.Pv_b) == ("x–z", 50.0, 100.0, 400.0, 100.0, 100.0)
+    assert (s.region.plane, s.region.y, s.region.z_min, s.region.z_max, s.maps.Ph_b, s.maps.Pv_b) == ("x–z", 50.0, 100.0, 400.0, 100.0, 100.0)
     s.apply_preset("Fig. 3")
-    assert s.k == 10.0 and s.comparison.startswith("Moments ×k")
+    assert s.maps.k == 10.0 and s.maps.comparison.startswith("Moments ×k")
     s.apply_preset("Fig. 4")
-    assert (s.Ph, s.Pv, s.Ph_b, s.Pv_b) == (100.0, 0.0, 70.7, 70.7)
+    assert (s.target.Ph, s.target.Pv, s.maps.Ph_b, s.maps.Pv_b) == (100.0, 0.0, 70.7, 70.7)
     s.apply_preset("Fig. 5")
-    assert s.comparison.startswith("Dual − single") and s.d == 15.0
+    assert s.maps.comparison.startswith("Dual − single") and s.stations.d == 15.0
     s.apply_preset("Fig. 6")
-    assert (s.d, s.d_ref) == (50.0, 10.0)
+    assert (s.stations.d, s.maps.d_ref) == (50.0, 10.0)
 
 
 @pytest.mark.parametrize("name", sorted(ACCEPTED))
 def test_out_of_range_values_are_refused_with_a_message(name):
     s = Scenario()
-    before = getattr(s, name)
+    before = s.value(name)
     lo, hi, _ = ACCEPTED[name]
     for bad in (hi * 10 + 10, lo - abs(lo) - 10):
-        setattr(s, name, int(bad) if isinstance(before, int) else float(bad))
-        assert getattr(s, name) == before, "the last good value is kept"
+        setattr(s.part_of(name), name, int(bad) if isinstance(before, int) else float(bad))
+        assert s.value(name) == before, "the last good value is kept"
         why = "above the sea surface" if name in DEPTHS and bad < 0 else "outside the accepted range"
         assert why in s.message and s.refused == [name]
     if not isinstance(before, int):
-        setattr(s, name, float("nan"))
-        assert getattr(s, name) == before and "must be a number" in s.message
+        setattr(s.part_of(name), name, float("nan"))
+        assert s.value(name) == before and "must be a number" in s.message
     # a good value clears the message
-    setattr(s, name, before + 1 if before + 1 <= hi else before * 1.5)
+    setattr(s.part_of(name), name, before + 1 if before + 1 <= hi else before * 1.5)
     assert s.message == ""
 
 
@@ -62,8 +62,8 @@ def test_accepted_ranges_are_what_the_core_accepts():
 
 def test_depth_band_must_be_ordered():
     s = Scenario()
-    s.z_max = 50.0  # shallower than z_min = 100
-    assert s.z_max == 400.0 and "deeper" in s.message
+    s.region.z_max = 50.0  # shallower than z_min = 100
+    assert s.region.z_max == 400.0 and "deeper" in s.message
 
 
 def test_fig5_single_is_flagged_dual_is_observable():
@@ -74,11 +74,11 @@ def test_fig5_single_is_flagged_dual_is_observable():
     assert p.b.observable.mean() > 0.95
     assert "rank Γ = 6" in p.note and "round-off" in p.note
     # the one-click remedy: moments known and a measure that uses all rows
-    s.param.update(state_set="moments known (5 states)", measure="D-optimal ½·log10 det F")
+    s.update(state_set="moments known (5 states)", measure="D-optimal ½·log10 det F")
     p = compute(Snapshot.of(s))
     assert p.a.observable.mean() > 0.95 and p.b.observable.mean() > 0.95 and p.note == ""
     # the paper's square rule with known moments keeps only instant-k rows for two stations
-    s.measure = "log10|det Γ| (paper)"
+    s.maps.measure = "log10|det Γ| (paper)"
     assert "cannot see the speed" in compute(Snapshot.of(s)).note
 
 
@@ -100,7 +100,7 @@ def test_cache_computes_once_per_scenario(monkeypatch):
     for _ in range(3):
         cache.get(Snapshot.of(s))
     assert len(calls) == 1
-    s.Ph = 50.0
+    s.target.Ph = 50.0
     cache.get(Snapshot.of(s))
     assert len(calls) == 2
 
@@ -132,7 +132,7 @@ def test_the_cache_is_shared_computes_a_key_once_and_stays_within_its_bounds():
     with pytest.raises(ValueError, match="read-only"):
         results[0].a.value[0, 0] = 1.0
     for ph in (10.0, 20.0, 30.0, 40.0):  # entries beyond the size push the oldest out
-        first.Ph = ph
+        first.target.Ph = ph
         cache.get(Snapshot.of(first), slow)
     assert len(calls) == 5
     cache.get(Snapshot.of(second), slow)  # the default view was the least recently used
@@ -141,7 +141,7 @@ def test_the_cache_is_shared_computes_a_key_once_and_stays_within_its_bounds():
     nbytes = sum(a.nbytes for a in (one.a.value, one.b.value, one.diff))
     small = PanelCache(size=10, max_bytes=int(2.5 * nbytes))  # room for about two results
     for ph in (10.0, 20.0, 30.0):
-        first.Ph = ph
+        first.target.Ph = ph
         small.get(Snapshot.of(first))
     assert len(small) <= 2 and small.nbytes <= small.max_bytes
 
@@ -183,7 +183,7 @@ def test_downloads_carry_data_and_parameters():
 def test_maps_for_every_measure_and_plane():
     figs = map_figures.build()
     for plane in ("x–y", "x–z"):
-        for measure in Scenario.param.measure.objects:
+        for measure in parameter("measure").objects:
             s = Scenario(resolution=21, plane=plane, measure=measure)
             p = compute(Snapshot.of(s))
             maps, (xname, vname), clim, diff_range, _ = map_figures.contents(p)
@@ -206,22 +206,22 @@ def test_maps_for_every_measure_and_plane():
 ])
 def test_custom_layout_is_checked(bad, why):
     s = Scenario()
-    before = s.stations
-    s.stations = bad
-    assert s.stations == before and why in s.message
+    before = s.stations.stations
+    s.stations.stations = bad
+    assert s.stations.stations == before and why in s.message
 
 
 def test_design_maps_and_best_spacing():
     from app import compute as c
     s = Scenario(resolution=31, stations=[[0.0, 0.0, 100.0], [40.0, 20.0, 90.0], [-30.0, 10.0, 100.0]])
-    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    d = c.design(Snapshot.of(s, c.SCENE))
     assert d.errors.position.shape == (31, 31) and np.isfinite(d.errors.position).mean() > 0.95
-    e = c.error_at(Snapshot.of(s, c.DESIGN_FIELDS), 100.0, 50.0)
+    e = c.error_at(Snapshot.of(s, c.SCENE), 100.0, 50.0)
     assert float(e.semi_major) >= float(e.semi_minor) > 0
-    s.z = 100.0  # target depth = station depth: (0, 0) is on station 1
-    assert c.error_at(Snapshot.of(s, c.DESIGN_FIELDS), 0.0, 0.0) is None
-    s.z = 120.0
-    sp = c.best_spacing(Snapshot.of(s, c.DESIGN_FIELDS))
+    s.target.z = 100.0  # target depth = station depth: (0, 0) is on station 1
+    assert c.error_at(Snapshot.of(s, c.SCENE), 0.0, 0.0) is None
+    s.target.z = 120.0
+    sp = c.best_spacing(Snapshot.of(s, c.DESIGN))
     r = sp.result
     assert c.SPACING_RANGE[0] <= r.d <= c.SPACING_RANGE[1]
     assert r.value >= np.max(r.curve) - 1e-9  # the refined optimum is at least the scanned best
@@ -231,10 +231,10 @@ def test_design_maps_and_best_spacing():
 def test_optimised_layout_and_error_quantities():
     from app import compute as c
     s = Scenario(resolution=21, layout_kind="triangle", n_stations=3)
-    r = c.optimised_layout(Snapshot.of(s, c.DESIGN_FIELDS))
-    assert r.stations.shape == (3, 3) and 0 < r.d <= 2 * s.extent  # up to what fits in the region
-    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
-    for quantity in Scenario.param.error_quantity.objects:
+    r = c.optimised_layout(Snapshot.of(s, c.DESIGN))
+    assert r.stations.shape == (3, 3) and 0 < r.d <= 2 * s.region.extent  # up to what fits in the region
+    d = c.design(Snapshot.of(s, c.SCENE))
+    for quantity in parameter("error_quantity").objects:
         overlay = views.error_map(d, "t", quantity)
         assert overlay.get(0).vdims[0].unit in ("m", "m/s")
 
@@ -244,34 +244,34 @@ def test_a_snapshots_values_build_the_same_core_inputs_as_the_scenario(preset):
     # The maps are computed from plain values (building a Scenario per map cost ms under the GIL).
     s = Scenario()
     s.apply_preset(preset)
-    s.param.update(plane="x–z", stations=[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
-    for fields in (FIELDS, DESIGN_FIELDS):
+    s.update(plane="x–z", stations=[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    for fields in (MAPS, SCENE):
         v = Snapshot.of(s, fields).scenario()
-        assert (v.core_plane(), v.velocity(), v.core_options()) == (s.core_plane(), s.velocity(), s.core_options())
-        assert all(getattr(v, name) == getattr(s, name) for name in fields)
+        assert (v.core_plane(), v.velocity(), v.core_options()) == (s.snapshot().core_plane(), s.snapshot().velocity(), s.snapshot().core_options())
+        assert all(getattr(v, name) == value for name, value in s.values(fields).items())
 
 
 @pytest.mark.parametrize("name", DEPTHS)
 def test_a_depth_above_the_sea_surface_is_refused_in_every_model(name):
     # spec §7: z is depth, positive down, surface z = 0; no sea above it, whatever the model
-    for model in Scenario.param.model.objects:
+    for model in parameter("model").objects:
         s = Scenario(model=model)
-        before = getattr(s, name)
-        setattr(s, name, -5.0)
-        assert getattr(s, name) == before and "above the sea surface" in s.message
+        before = s.value(name)
+        setattr(s.part_of(name), name, -5.0)
+        assert s.value(name) == before and "above the sea surface" in s.message
         assert s.refused == [name]
-    assert Scenario(h=-5.0).h == Scenario().h  # given at construction: the default, and said so
+    assert Scenario(h=-5.0).value("h") == Scenario().value("h")  # given at construction: the default, and said so
     assert "above the sea surface" in Scenario(h=-5.0).message
 
 
 def test_a_station_above_the_sea_surface_is_refused():
     s = Scenario()
-    before = s.stations
-    s.stations = [[0.0, 0.0, 100.0], [10.0, 0.0, -5.0]]
-    assert s.stations == before and "Station 2" in s.message and "above the sea surface" in s.message
+    before = s.stations.stations
+    s.stations.stations = [[0.0, 0.0, 100.0], [10.0, 0.0, -5.0]]
+    assert s.stations.stations == before and "Station 2" in s.message and "above the sea surface" in s.message
     assert s.refused == ["stations"]
-    s.stations = [[0.0, 0.0, 0.0]]  # at the surface: accepted
-    assert s.stations == [[0.0, 0.0, 0.0]] and s.message == "" and s.refused == []
+    s.stations.stations = [[0.0, 0.0, 0.0]]  # at the surface: accepted
+    assert s.stations.stations == [[0.0, 0.0, 0.0]] and s.message == "" and s.refused == []
 
 
 def _fill(figs, **params):
@@ -381,9 +381,9 @@ def test_the_paper_figure_is_identified_and_the_png_is_named_after_the_scenario(
             assert ("(paper)" in figs.figures[which].title.text) == framed
             assert (figs.figures[which].outline_line_color == "#b03a2e") == framed
             assert figs.saves[which].filename.startswith(f"fig_{name[-1]}_")
-            assert f"h = {s.h:g} m" in figs.captions[which].text
+            assert f"h = {s.stations.h:g} m" in figs.captions[which].text
             assert figs.figures[which].border_fill_color == "white"  # an opaque PNG
-    s.Ph = 123.0  # no longer a paper figure
+    s.target.Ph = 123.0  # no longer a paper figure
     assert compute(Snapshot.of(s)).preset == ""
 
 
@@ -402,7 +402,7 @@ def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
     from app import compute as c
 
     s = Scenario(resolution=21)
-    d = c.design(Snapshot.of(s, c.DESIGN_FIELDS))
+    d = c.design(Snapshot.of(s, c.SCENE))
     with caplog.at_level("WARNING"):
         fig, hovers = _design_plot(views.error_map(d, "t") * views.station_layer(d.stations))
     assert not [r for r in caplog.records if "could not be found" in r.getMessage()]
@@ -413,7 +413,7 @@ def test_best_and_paper_maps_share_one_colour_range():
     from app import compute as c
 
     s = Scenario(resolution=21)
-    sp = c.best_spacing(Snapshot.of(s, c.DESIGN_FIELDS))
+    sp = c.best_spacing(Snapshot.of(s, c.DESIGN))
     clim = views.common_clim(sp.best, sp.paper)
     for design in (sp.best, sp.paper):
         lo, hi = views.error_clim(design)
@@ -476,7 +476,7 @@ def test_each_map_is_captioned_with_its_own_moments():
     assert "P = (1000, 200) A·m" in compute(Snapshot.of(s)).captions[1]
     # and the spacing and the grid (issue 25: captions omitted d and the grid)
     s.apply_preset("Fig. 6")
-    s.resolution = 21
+    s.region.resolution = 21
     caps = compute(Snapshot.of(s)).captions
     assert "2 stations d = 10 m apart" in caps[0] and "2 stations d = 50 m apart" in caps[1]
     assert "A: 2 stations d = 10 m apart, B: 2 stations d = 50 m apart" in caps[2]
@@ -496,12 +496,12 @@ def test_map_bs_unobservable_direction_is_bs_own(name, moments_b):
     note = compute(Snapshot.of(s)).note
     lines = {line[0]: line for line in note.splitlines()}
     vectors = {}
-    for which, moments in (("A", (s.Ph, s.Pv)), ("B", moments_b)):
+    for which, moments in (("A", (s.target.Ph, s.target.Pv)), ("B", moments_b)):
         m = re.search(r"at \((-?\d+), (-?\d+), (-?\d+)\) m: .*= \(([^)]*)\)\. Use", lines[which])
         probe = [float(v) for v in m.groups()[:3]]
         shown = np.array([float(v) for v in m.group(4).split(", ")])
-        n = core.unobservable_direction([*probe, *s.velocity(), *moments], [[0.0, 0.0, s.h]],
-                                        T=s.T, sigma=s.sigma)
+        n = core.unobservable_direction([*probe, *s.snapshot().velocity(), *moments], [[0.0, 0.0, s.stations.h]],
+                                        T=s.sensor.T, sigma=s.medium.sigma)
         assert np.allclose(np.abs(shown), np.abs(n), atol=5e-4)  # printed to 3 decimals; sign free
         vectors[which] = shown
     assert not np.allclose(np.abs(vectors["A"]), np.abs(vectors["B"]), atol=5e-3)
@@ -515,7 +515,7 @@ def test_the_note_probes_a_point_of_the_x_z_plane():
 
 
 def _state(s):
-    return {n: getattr(s, n) for n in Scenario.param if n != "name"}
+    return {n: s.value(n) for n in PART_OF}
 
 
 @pytest.mark.parametrize("first", sorted(PRESETS))
@@ -525,7 +525,7 @@ def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
         alone = Scenario(resolution=21)
         alone.apply_preset(second)
         s = Scenario(resolution=21)
-        s.param.update(stations=[[1.0, 2.0, 3.0]], track_heading=33.0, error_quantity="Depth error σz (m)")
+        s.update(stations=[[1.0, 2.0, 3.0]], track_heading=33.0, error_quantity="Depth error σz (m)")
         s.apply_preset(first)
         s.apply_preset(second)
         assert _state(s) == _state(alone), (first, second)
@@ -538,7 +538,7 @@ def test_the_sea_trial_has_one_geometry_on_every_tab():
 
     s = Scenario()
     s.apply_preset("Seed 001 sea trial")
-    assert np.array_equal(np.array(s.stations), core.dual_station(s.h, s.d))
+    assert np.array_equal(np.array(s.stations.stations), core.dual_station(s.stations.h, s.stations.d))
 
 
 def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():
@@ -547,15 +547,15 @@ def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():
 
     s = Scenario()
     for name in ("speed", "heading"):
-        assert applies(name, s, MAPS_TAB) and applies(name, s, DESIGN_TAB)
-        assert not applies(name, s, TRACK_TAB)
-    assert "track_speed" in Scenario.param and "track_heading" in Scenario.param
+        assert applies(name, s.snapshot(), MAPS_TAB) and applies(name, s.snapshot(), DESIGN_TAB)
+        assert not applies(name, s.snapshot(), TRACK_TAB)
+    assert "track_speed" in PART_OF and "track_heading" in PART_OF
 
 
 def test_nine_stations_are_refused_with_at_most_eight():
     s = Scenario()
-    s.stations = [[10.0 * i, 0.0, 100.0] for i in range(9)]
-    assert "At most 8 stations" in s.message and len(s.stations) == 2
+    s.stations.stations = [[10.0 * i, 0.0, 100.0] for i in range(9)]
+    assert "At most 8 stations" in s.message and len(s.stations.stations) == 2
 
 
 def test_a_map_veiled_everywhere_says_what_it_is_inside_its_frame():

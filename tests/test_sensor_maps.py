@@ -5,7 +5,7 @@ import pytest
 
 import core
 from app import map_figures
-from app.compute import DESIGN_FIELDS, Snapshot, compute, design
+from app.compute import SCENE, Snapshot, compute, design
 from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
 from app.scenario import PRESETS, Scenario
 
@@ -23,12 +23,12 @@ def same(x, y):
                                               (BOTH, "BG", (0.02, 0.03))])
 def test_a_magnetic_map_is_core_evaluate_map_with_the_same_sensor(label, kind, noise):
     s = Scenario(sensor=label, noise_b=0.02, noise_g=0.03, mx=-2000.0, my=500.0, mz=4000.0, **SMALL)
-    assert s.measure == "CRLB position error (m)"  # moved off the electric paper's square rule
+    assert s.maps.measure == "CRLB position error (m)"  # moved off the electric paper's square rule
     p = compute(Snapshot.of(s))
     sensor = core.Sensor(kind, noise)
-    for st, res in ((core.single_station(s.h), p.a), (core.dual_station(s.h, s.d), p.b)):
-        want = core.evaluate_map(s.core_plane(), st, velocity=s.velocity(), moments=(-2000.0, 500.0, 4000.0),
-                                 measure="crlb_position", T=s.T, steps=s.steps, sensor=sensor)
+    for st, res in ((core.single_station(s.stations.h), p.a), (core.dual_station(s.stations.h, s.stations.d), p.b)):
+        want = core.evaluate_map(s.snapshot().core_plane(), st, velocity=s.snapshot().velocity(), moments=(-2000.0, 500.0, 4000.0),
+                                 measure="crlb_position", T=s.sensor.T, steps=s.sensor.steps, sensor=sensor)
         assert same(res.value, want.value) and same(res.observable, want.observable)
     assert p.kinds == (kind, kind)
 
@@ -63,10 +63,10 @@ def test_captions_colour_bars_and_hovers_name_the_kind_and_its_units():
     assert figs.hovers[0].tooltips[-1][0] == "CRLB 1σ (m), gradiometer (nT/m)"
     assert "rank 7 of 8" in figs.labels[0].text and figs.labels[0].visible
     assert p.filename == "dual_vs_single_gradiometer_x_y_crlb"
-    s.sensor = BOTH
+    s.sensor.sensor = BOTH
     both = compute(Snapshot.of(s)).captions[0]
     assert "magnetometer + gradiometer" in both and "noise 0.01 nT and 0.01 nT/m" in both
-    s.measure = "D-optimal ½·log10 det F"
+    s.maps.measure = "D-optimal ½·log10 det F"
     assert compute(Snapshot.of(s)).value_labels[0] == "½·log10 det F, B + G (nT, nT/m)"
 
 
@@ -81,22 +81,22 @@ def test_the_electric_default_names_no_kind():
 def test_the_sensor_comparison_preset_puts_one_kind_against_another_at_one_station():
     s = Scenario()
     s.apply_preset("Seed 003 sensors")
-    assert (s.layout, s.sensor, s.sensor_b) == ("single", MAGNETOMETER, BOTH)
-    s.resolution = 24
+    assert (s.stations.layout, s.sensor.sensor, s.maps.sensor_b) == ("single", MAGNETOMETER, BOTH)
+    s.region.resolution = 24
     p = compute(Snapshot.of(s))
     assert p.titles[:2] == ("A: single, magnetometer", "B: single, magnetometer + gradiometer")
     assert p.kinds == ("B", "BG") and len(p.stations[0]) == len(p.stations[1]) == 1
     assert not p.a.observable.any() and p.b.observable.mean() > 0.9
-    want = core.evaluate_map(s.core_plane(), core.single_station(s.h), velocity=s.velocity(),
-                             moments=(s.mx, s.my, s.mz), measure="crlb_position", steps=s.steps,
-                             sensor=core.Sensor("BG", (s.noise_b, s.noise_g)))
+    want = core.evaluate_map(s.snapshot().core_plane(), core.single_station(s.stations.h), velocity=s.snapshot().velocity(),
+                             moments=(s.target.mx, s.target.my, s.target.mz), measure="crlb_position", steps=s.sensor.steps,
+                             sensor=core.Sensor("BG", (s.sensor.noise_b, s.sensor.noise_g)))
     assert same(p.b.value, want.value)
     assert "sensors A magnetometer, B magnetometer + gradiometer" in p.captions[2]
     assert map_figures.veiled_text(p, 2).startswith("no difference:\nA is unobservable")
-    s.sensor = GRADIOMETER  # the third kind, against both
+    s.sensor.sensor = GRADIOMETER  # the third kind, against both
     p = compute(Snapshot.of(s))
     assert p.titles[0] == "A: single, gradiometer" and not p.a.observable.any()
-    s.sensor_b = ELECTRIC  # an electric B beside a magnetic A: each in its own units
+    s.maps.sensor_b = ELECTRIC  # an electric B beside a magnetic A: each in its own units
     p = compute(Snapshot.of(s))
     assert p.kinds == ("G", "E") and "P_B = (100, 20) A·m" in p.captions[2]
     assert "m_A = (-3000, 1000, 5000) A·m²" in p.captions[2]
@@ -105,40 +105,40 @@ def test_the_sensor_comparison_preset_puts_one_kind_against_another_at_one_stati
 
 def test_a_magnetic_kind_moves_the_paper_measure_to_the_crlb_and_says_so():
     s = Scenario()
-    assert s.measure == "log10|det Γ| (paper)"
-    s.sensor = MAGNETOMETER
-    assert s.measure == "CRLB position error (m)"
+    assert s.maps.measure == "log10|det Γ| (paper)"
+    s.sensor.sensor = MAGNETOMETER
+    assert s.maps.measure == "CRLB position error (m)"
     assert "square-Γ rule is the electric paper's" in s.message and s.refused == ["sensor"]
-    s.measure = "Observability index log10 η"  # asked again while magnetic: moved again
-    assert s.measure == "CRLB position error (m)"
-    s.measure = "D-optimal ½·log10 det F"  # all rows: kept
-    assert s.measure == "D-optimal ½·log10 det F"
+    s.maps.measure = "Observability index log10 η"  # asked again while magnetic: moved again
+    assert s.maps.measure == "CRLB position error (m)"
+    s.maps.measure = "D-optimal ½·log10 det F"  # all rows: kept
+    assert s.maps.measure == "D-optimal ½·log10 det F"
 
 
 def test_the_design_tab_uses_the_sensor():
     s = Scenario(sensor=BOTH, stations=[[0.0, 0.0, 100.0]], **SMALL)
-    d = design(Snapshot.of(s, DESIGN_FIELDS))
-    want = core.crlb_maps(d.plane, [[0.0, 0.0, 100.0]], velocity=s.velocity(), moments=(s.mx, s.my, s.mz),
-                          steps=s.steps, sensor=core.Sensor("BG", (s.noise_b, s.noise_g)))
+    d = design(Snapshot.of(s, SCENE))
+    want = core.crlb_maps(d.plane, [[0.0, 0.0, 100.0]], velocity=s.snapshot().velocity(), moments=(s.target.mx, s.target.my, s.target.mz),
+                          steps=s.sensor.steps, sensor=core.Sensor("BG", (s.sensor.noise_b, s.sensor.noise_g)))
     assert same(d.errors.position, want.position) and np.isfinite(d.errors.position).mean() > 0.9
 
 
 def test_inputs_follow_the_kind():
     s = Scenario()
-    electric = {n for n in ("Ph", "Pv", "noise", "sigma", "model", "sea_model") if applies(n, s, MAPS_TAB)}
+    electric = {n for n in ("Ph", "Pv", "noise", "sigma", "model", "sea_model") if applies(n, s.snapshot(), MAPS_TAB)}
     assert electric == {"Ph", "Pv", "noise", "sigma", "model", "sea_model"}
-    assert not any(applies(n, s, MAPS_TAB) for n in ("mx", "my", "mz", "noise_b", "noise_g", "sensor_b"))
-    s.sensor = GRADIOMETER
+    assert not any(applies(n, s.snapshot(), MAPS_TAB) for n in ("mx", "my", "mz", "noise_b", "noise_g", "sensor_b"))
+    s.sensor.sensor = GRADIOMETER
     # the Track tab tracks with the scenario's kind too (issue 26): its inputs follow it
     for tab in (MAPS_TAB, DESIGN_TAB, TRACK_TAB):
-        assert all(applies(n, s, tab) for n in ("mx", "my", "mz", "noise_g"))
-        assert not any(applies(n, s, tab) for n in ("Ph", "Pv", "noise", "noise_b", "sigma", "model",
+        assert all(applies(n, s.snapshot(), tab) for n in ("mx", "my", "mz", "noise_g"))
+        assert not any(applies(n, s.snapshot(), tab) for n in ("Ph", "Pv", "noise", "noise_b", "sigma", "model",
                                                     "sea_model"))
-    s.comparison = "Sensor kind B − A (seed 003)"  # G against B + G: both noises
-    assert applies("noise_b", s, MAPS_TAB) and applies("noise_g", s, MAPS_TAB)
-    assert applies("sensor_b", s, MAPS_TAB) and applies("layout", s, MAPS_TAB)
-    s.comparison = "Moment split B − A (Fig. 4)"
-    assert applies("mz_b", s, MAPS_TAB) and not applies("Ph_b", s, MAPS_TAB)
+    s.maps.comparison = "Sensor kind B − A (seed 003)"  # G against B + G: both noises
+    assert applies("noise_b", s.snapshot(), MAPS_TAB) and applies("noise_g", s.snapshot(), MAPS_TAB)
+    assert applies("sensor_b", s.snapshot(), MAPS_TAB) and applies("layout", s.snapshot(), MAPS_TAB)
+    s.maps.comparison = "Moment split B − A (Fig. 4)"
+    assert applies("mz_b", s.snapshot(), MAPS_TAB) and not applies("Ph_b", s.snapshot(), MAPS_TAB)
 
 
 def test_a_zero_magnetic_moment_is_said_not_computed_into_a_direction():

@@ -31,18 +31,18 @@ def server():
 @pytest.mark.parametrize("value", [401, 100_000, 10**9, 0, -5, 19])
 def test_resolution_outside_limits_is_refused(value):
     s = Scenario()
-    s.resolution = value
-    assert s.resolution == 200 and "Grid points per axis" in s.message
+    s.region.resolution = value
+    assert s.region.resolution == 200 and "Grid points per axis" in s.message
     s2 = Scenario(resolution=value)  # also when given to the constructor
-    assert s2.resolution == 200 and "Grid points per axis" in s2.message
-    assert s2.core_plane().n == 200
+    assert s2.region.resolution == 200 and "Grid points per axis" in s2.message
+    assert s2.snapshot().core_plane().n == 200
 
 
 def test_resolution_limit_is_400():
     assert ACCEPTED["resolution"][1] == 400
     s = Scenario()
-    s.resolution = 400
-    assert s.resolution == 400 and s.message == ""
+    s.region.resolution = 400
+    assert s.region.resolution == 400 and s.message == ""
 
 
 # -- websocket origin ---------------------------------------------------------------------------

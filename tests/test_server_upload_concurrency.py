@@ -69,11 +69,11 @@ def expected_images(ph):
     (v − low) / (high − low) with the colour range the page gives A and B together
     (app.compute.colour_range: 0.5–99.5 % of their finite values)."""
     s = Scenario(**B_ARGS, Ph=ph)
-    opts = s.core_options()
+    opts = s.snapshot().core_options()
     measure = opts.pop("measure")
-    values = [core.evaluate_map(s.core_plane(), core.dual_station(s.h, d), velocity=s.velocity(),
-                                moments=(s.Ph, s.Pv), measure=measure, **opts).value
-              for d in (s.d_ref, s.d)]
+    values = [core.evaluate_map(s.snapshot().core_plane(), core.dual_station(s.stations.h, d), velocity=s.snapshot().velocity(),
+                                moments=(s.target.Ph, s.target.Pv), measure=measure, **opts).value
+              for d in (s.maps.d_ref, s.stations.d)]
     low, high = colour_range(*values)
     return [(v - low) / (high - low) for v in values]
 

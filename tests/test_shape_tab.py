@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from app import shape, url
-from app.compute import DESIGN_FIELDS, FIELDS
+from app.compute import DESIGN, MAPS
 from app.scenario import Scenario, preset_values
 from core.shape.bound import shape_bound
 from core.shape.cases import CASES
@@ -13,7 +13,7 @@ from core.shape.cases import CASES
 
 def values(**changed):
     s = Scenario()
-    return {**{n: getattr(s, n) for n in shape.PARAMS}, **changed}
+    return {**{n: s.value(n) for n in shape.PARAMS}, **changed}
 
 
 def test_every_paper_case_row_is_a_preset_that_rebuilds_its_case():
@@ -60,38 +60,38 @@ def test_values_accepted_alone_but_not_together_are_refused(changed, why):
 
 def test_the_scenario_refuses_an_out_of_range_shape_value_and_keeps_the_last_good():
     s = Scenario()
-    s.shape_offset = 500.0
-    assert s.shape_offset == 5.0
+    s.shape.shape_offset = 500.0
+    assert s.shape.shape_offset == 5.0
     assert "outside the accepted range" in s.message and s.refused == ["shape_offset"]
-    s.shape_noise = 0.05
-    assert s.shape_noise == 0.05 and s.message == ""
-    s.shape_runs = 0
-    assert s.shape_runs == 1 and "shape_runs" in s.refused
+    s.shape.shape_noise = 0.05
+    assert s.shape.shape_noise == 0.05 and s.message == ""
+    s.shape.shape_runs = 0
+    assert s.shape.shape_runs == 1 and "shape_runs" in s.refused
 
 
 def test_switching_the_type_sets_that_types_sizes_and_says_so():
     s = Scenario()
-    s.shape_type = "disc"
-    assert (s.shape_height, s.shape_radius) == (0.3, 1.0)
+    s.shape.shape_type = "disc"
+    assert (s.shape.shape_height, s.shape.shape_radius) == (0.3, 1.0)
     assert "Disc" in s.message and s.refused == ["shape_type"]
-    shape.case_of(values(**{n: getattr(s, n) for n in shape.PARAMS}))  # consistent now
-    s.shape_radius = 0.2  # H > R: a disc no more, said by the tab
+    shape.case_of(values(**{n: s.value(n) for n in shape.PARAMS}))  # consistent now
+    s.shape.shape_radius = 0.2  # H > R: a disc no more, said by the tab
     with pytest.raises(ValueError, match="make a cylinder"):
-        shape.case_of({n: getattr(s, n) for n in shape.PARAMS})
+        shape.case_of({n: s.value(n) for n in shape.PARAMS})
 
 
 def test_shape_inputs_are_not_map_inputs_nor_reset_by_a_paper_figure():
-    assert not [n for n in FIELDS + DESIGN_FIELDS if n.startswith("shape_")]
+    assert "shape" not in MAPS + DESIGN
     assert not [n for n in preset_values("Fig. 1") if n.startswith("shape_")]
     s = Scenario()
-    s.shape_offset = 12.0
+    s.shape.shape_offset = 12.0
     s.apply_preset("Fig. 5")
-    assert s.shape_offset == 12.0
+    assert s.shape.shape_offset == 12.0
 
 
 def test_the_link_carries_the_shape_inputs_and_refuses_bad_ones():
     s = Scenario()
-    s.param.update(shape_offset=12.5, shape_outliers="-20, 0", shape_window="seed 003 window (lag 5)")
+    s.update(shape_offset=12.5, shape_outliers="-20, 0", shape_window="seed 003 window (lag 5)")
     q = url.query(s, "Shape")
     assert "shape_offset=12.5" in q and "shape_outliers=-20%2C+0" in q and "tab=Shape" in q
     assert url.link_problem("shape_offset", 500) is not None
@@ -109,7 +109,7 @@ def test_verdict_and_bound_are_cores_and_the_bound_grows_with_the_offset():
     s = near["res"].summary["filters"]["nhukf"]
     assert f"{s['main_scale_m']:.3g} m ± {b.main_scale_m:.2g} m" in text
     far_scenario = Scenario()
-    far_scenario.shape_offset = 20.0
+    far_scenario.shape.shape_offset = 20.0
     far = shape.compute(shape.key_of(far_scenario))
     assert far["cpa"] > near["cpa"]
     assert far["bound"].main_scale_m > 100 * near["bound"].main_scale_m  # CPA^7.6: docs/shape.md
@@ -120,7 +120,7 @@ def test_verdict_and_bound_are_cores_and_the_bound_grows_with_the_offset():
 
 def test_views_have_units_and_mark_the_outliers():
     s = Scenario()
-    s.param.update(shape.PRESETS["seed003-fig5"])
+    s.update(shape.PRESETS["seed003-fig5"])
     v = shape.views(shape.key_of(s))
     err = hv.render(v["error"])
     assert err.xaxis[0].axis_label == "platform x (m)"

@@ -231,16 +231,16 @@ def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():
     from app.scenario import Scenario
 
     s = Scenario()
-    s.param.update(sensor="magnetometer + gradiometer (BG)", track_filter="ekf", track_runs=2,
+    s.update(sensor="magnetometer + gradiometer (BG)", track_filter="ekf", track_runs=2,
                    track_duration=20.0)
-    case = track.case_of(s)
-    assert case.sensor.kind == "BG" and case.moments == (s.mx, s.my, s.mz)
+    case = track.case_of(s.snapshot())
+    assert case.sensor.kind == "BG" and case.moments == (s.target.mx, s.target.my, s.target.mz)
     assert case.sensors().n_states == 8 and len(case.prior_std) == 8
     out = track.compute(s)
     assert out["res"].summary["nees_dof"] == 8 and out["truth"].shape[1] == 8
     direct = tr.monte_carlo(case, filter="ekf", runs=2, seed=0, workers=1)
     np.testing.assert_allclose(out["res"].pcrlb_m, direct.pcrlb_m, rtol=1e-12)
     assert "(8 states: 8 if consistent)" in track.summary_text(out)
-    s.track_filter = "bank"
+    s.track.track_filter = "bank"
     with pytest.raises(ValueError, match="electric dipole only"):
-        track.case_of(s)
+        track.case_of(s.snapshot())

@@ -7,15 +7,15 @@ import panel as pn
 import pytest
 from panel.io.location import Location
 
-from app.compute import FIELDS
-from app.scenario import PRESETS, Scenario
+from app.compute import MAP_INPUTS
+from app.scenario import PART_OF, PRESETS, Scenario
 from app.url import query, sync_url, without
 
 TITLES = ("Maps", "Layout design", "Track", "Calibration")
 
 
 def _maps_wait(names):
-    return bool(set(names) & set(FIELDS))
+    return bool(set(names) & MAP_INPUTS)
 
 
 def _location(search=""):
@@ -32,8 +32,8 @@ def _args(search):
 def test_a_map_value_reaches_the_url_when_flushed_after_the_maps():
     scenario, location = Scenario(), _location()
     flush = sync_url(scenario, location, {}, waits=_maps_wait)
-    scenario.Ph = 250.0
-    scenario.Pv = 40.0
+    scenario.target.Ph = 250.0
+    scenario.target.Pv = 40.0
     assert location.updates == []  # waits for the maps: redraw flushes after sending them
     flush()
     assert location.updates == [{"Ph": ["250"], "Pv": ["40"]}]
@@ -44,7 +44,7 @@ def test_a_map_value_reaches_the_url_when_flushed_after_the_maps():
 def test_a_design_only_value_reaches_the_url_at_once():
     scenario, location = Scenario(), _location()
     sync_url(scenario, location, {})
-    scenario.threshold = 7.0
+    scenario.design.threshold = 7.0
     assert location.updates == [{"threshold": ["7"]}]
 
 
@@ -52,10 +52,10 @@ def test_a_link_value_that_would_be_refused_is_not_set_reported_and_removed_from
     search = "?Ph=250&h=1e9&d=abc&resolution=100000&z=-5"
     scenario, location = Scenario(), _location(search)
     sync_url(scenario, location, _args(search))
-    assert scenario.Ph == 250
+    assert scenario.target.Ph == 250
     default = Scenario()
-    assert (scenario.h, scenario.d, scenario.resolution, scenario.z) == (default.h, default.d,
-                                                                        default.resolution, default.z)
+    assert (scenario.stations.h, scenario.stations.d, scenario.region.resolution, scenario.target.z) == (default.stations.h, default.stations.d,
+                                                                        default.region.resolution, default.target.z)
     for name in ("h:", "d:", "resolution:", "z:"):
         assert name in scenario.message
     assert "above the sea surface" in scenario.message  # z = -5 m: a depth above the surface
@@ -73,9 +73,9 @@ def test_a_refused_value_never_reaches_the_url():
     # what the scenario holds (it took the refused -0.5, so a copied link reopened with an error).
     scenario, location = Scenario(), _location()
     flush = sync_url(scenario, location, {}, waits=_maps_wait)
-    scenario.Ph = -0.5
-    assert scenario.Ph == Scenario().Ph and "P_h" in scenario.message
-    scenario.z = 150.0
+    scenario.target.Ph = -0.5
+    assert scenario.target.Ph == Scenario().value("Ph") and "P_h" in scenario.message
+    scenario.target.z = 150.0
     flush()
     assert location.updates == [{"z": ["150"]}]  # P_h is back at its default: not in the link
 
@@ -89,7 +89,7 @@ def _served_like(search):
 
 
 def _inputs(s):
-    return {n: getattr(s, n) for n in Scenario.param if n not in ("name", "message", "refused")}
+    return {n: s.value(n) for n in PART_OF}
 
 
 @pytest.mark.parametrize("tab", TITLES)
@@ -98,7 +98,7 @@ def test_a_link_of_every_tab_reopens_every_input_and_the_tab(tab):
     # ignored), nor the tab shown
     s, tabs, location = _served_like("")
     s.apply_preset("Seed 001 sea trial")
-    s.param.update(track_heading=33.0, track_runs=7, cal_source="Designed manoeuvre",
+    s.update(track_heading=33.0, track_runs=7, cal_source="Designed manoeuvre",
                    cal_headings="0, 45, 90", error_quantity="Depth error σz (m)", d=65.9, Ph=101.3)
     tabs.active = TITLES.index(tab)
     link = location.search
@@ -111,16 +111,16 @@ def test_a_link_of_every_tab_reopens_every_input_and_the_tab(tab):
 def test_a_link_holds_only_values_that_differ_from_the_defaults_without_float_noise():
     s = Scenario()
     assert query(s) == ""
-    s.d = 65.89999999999999  # what a slider step gives
-    s.stations = [[0.1 + 0.2, 0.0, 100.0]]
+    s.stations.d = 65.89999999999999  # what a slider step gives
+    s.stations.stations = [[0.1 + 0.2, 0.0, 100.0]]
     assert parse_qs(query(s).lstrip("?")) == {"d": ["65.9"], "stations": ["[[0.3,0.0,100.0]]"]}
-    s.d = Scenario().d
+    s.stations.d = Scenario().value("d")
     assert "d=" not in query(s)
 
 
 def test_a_value_moved_by_the_layered_sea_is_in_the_link_as_moved_and_said():
     s, _, location = _served_like("")
-    s.sea_model = "layered"
+    s.medium.sea_model = "layered"
     assert "moved" in s.message and "100 → 200 m" in s.message and s.refused == ["sea_model"]
     got = parse_qs(location.search.lstrip("?"))
     assert got["h"] == ["200"] and got["sea_model"] == ["layered"]
