@@ -19,7 +19,16 @@ from .calibration import calibration_tab
 from .compute import KIND_NAMES, MAP_INPUTS, SHARED
 from .design import design_tab
 from .inputs import number_input
-from .scenario import ACCEPTED, COMPARISONS, MEASURE_LABELS, PART_OF, PRESETS, SENSORS, Scenario, parameter
+from .scenario import (
+    ACCEPTED,
+    COMPARISONS,
+    MEASURE_LABELS,
+    PART_OF,
+    PRESETS,
+    SENSORS,
+    Scenario,
+    parameter,
+)
 from .shape import shape_tab
 from .track import track_tab
 
