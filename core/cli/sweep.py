@@ -41,7 +41,6 @@ the same bit for bit either way (each cell is computed by the same code).
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import math
@@ -59,6 +58,7 @@ from tqdm import tqdm
 import core
 
 from .. import dask_backend
+from . import ArgumentParser
 
 #: name -> (default, unit, description). Defaults: the paper's common scenario (spec §5).
 PARAMETERS = {
@@ -321,7 +321,7 @@ def write_heatmap(path, xname, xvals, yname, yvals, measure, values, title):
 
 
 def build_parser():
-    p = argparse.ArgumentParser(
+    p = ArgumentParser(
         prog="python -m core.sweep",
         description="Sweep two scenario parameters; write a tidy CSV and a heatmap PNG.",
         epilog="parameters: " + "; ".join(f"{k} ({v[1] or '-'}, default {v[0]}): {v[2]}"

@@ -15,7 +15,6 @@ and writes
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -24,6 +23,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..tracking.montecarlo import CASES, DEFAULT_N_PU, FILTERS, monte_carlo
+from . import ArgumentParser
 
 __all__ = ["main", "write_outputs"]
 
@@ -64,7 +64,7 @@ def _plot(result, path):
 
 def main(argv=None):
     """Command line (``argv``: the arguments, default ``sys.argv[1:]``): see the module notes."""
-    ap = argparse.ArgumentParser(prog="python -m core.track",
+    ap = ArgumentParser(prog="python -m core.track",
                                  description="Monte-Carlo tracking on seed 001's cases: TRMSE vs PCRLB")
     ap.add_argument("--case", required=True, choices=sorted(CASES))
     ap.add_argument("--filter", default="bank", choices=FILTERS)
