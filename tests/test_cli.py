@@ -1,6 +1,10 @@
-"""What every command line shares (issue 25): an unknown option is named as such."""
+"""What every command line shares (issue 25): an unknown option is named as such, and the
+output folders of the README's commands are not left for ``git add``."""
 
 import importlib
+import re
+import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -41,3 +45,21 @@ def test_missing_required_arguments_are_still_named(module, capsys):
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert code == 2 and "the following arguments are required: " in last, last
 
+
+def _readme_outputs():
+    """The folders the README's command lines write (``--out DIR``)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    return sorted(set(re.findall(r"^\.venv/bin/python -m \S+ .*--out (\S+)", text, re.M)))
+
+
+def test_the_readme_commands_outputs_are_ignored_by_git():
+    # Running the README's commands left paper-figures/, sweep-d-z/, track-sim/ and shape-fig5/
+    # as untracked folders for a `git add .` to commit.
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    outs = _readme_outputs()
+    assert len(outs) >= 4, outs  # the reader finds the commands
+    for out in outs:
+        done = subprocess.run(["git", "check-ignore", "-q", "--no-index", f"{out}/x.csv"],
+                              cwd=ROOT, check=False)
+        assert done.returncode == 0, f"{out}/ (written by a README command) is not git-ignored"
