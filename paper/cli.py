@@ -166,6 +166,9 @@ def main(argv=None):
                   + f". Regenerate with: {made}", file=sys.stderr)
             sys.exit(1)
         print(f"{res['doc']} and {res['claims']} are current.")
+    else:
+        print(f"wrote the report {res['doc']} (numbers in {res['claims']}; {len(res['pngs'])} PNG "
+              f"panels, {len(res['htmls'])} HTML pages under {a.out})")
     return res
 
 
