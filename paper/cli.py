@@ -15,7 +15,6 @@ the command above: it is the test that the committed document is current.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -24,12 +23,14 @@ import sys
 
 from tqdm import tqdm
 
+from core.cli import ArgumentParser
+
 from . import beyond, claims, figures, precision, report
 from . import scenarios as sc
 
 
 def _parser():
-    p = argparse.ArgumentParser(prog="python -m paper", description=__doc__.split("\n")[0])
+    p = ArgumentParser(prog="python -m paper", description=__doc__.split("\n")[0])
     p.add_argument("--out", required=True, help="output folder (created if missing)")
     p.add_argument("--n", type=int, default=121, help="grid points per axis (default 121)")
     p.add_argument("--doc", default=None, help="report path (default OUT/paper-reproduction.md)")
@@ -165,6 +166,9 @@ def main(argv=None):
                   + f". Regenerate with: {made}", file=sys.stderr)
             sys.exit(1)
         print(f"{res['doc']} and {res['claims']} are current.")
+    else:
+        print(f"wrote the report {res['doc']} (numbers in {res['claims']}; {len(res['pngs'])} PNG "
+              f"panels, {len(res['htmls'])} HTML pages under {a.out})")
     return res
 
 

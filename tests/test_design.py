@@ -254,6 +254,29 @@ def test_sweep_cli_writes_csv_and_png(tmp_path):
     assert bad.returncode == 2 and "d must be > 0" in bad.stderr
 
 
+# Issue 25: a depth above the sea surface (z, h < 0) was swept without a word (cells computed
+# for a target in the air); one below the seabed of --sea-depth ended in a traceback from a
+# worker, unless it was the first cell. Both are refused, like every bad argument, with one
+# error line (after argparse's usage) and exit status 2, before anything is computed or written.
+@pytest.mark.parametrize("args,message", [
+    (["--y", "z=-100:400:4"], "parameter z (target depth) = -100 m is above the sea surface"),
+    (["--y", "h=-1,50"], "parameter h (station depth) = -1 m is above the sea surface"),
+    (["--y", "x=1,2", "--set", "z=-5"], "parameter z (target depth) = -5 m is above the sea surface"),
+    (["--y", "z=100:400:4", "--sea-depth", "200"],
+     "parameter z (target depth) = 400 m is below the seabed: with --sea-depth 200"),
+])
+def test_sweep_cli_refuses_depths_outside_the_sea(tmp_path, capsys, args, message):
+    from core.cli import sweep
+
+    out = tmp_path / "sweep"
+    with pytest.raises(SystemExit) as exc:
+        sweep.main(["--x", "d=5:45:3", *args, "--out", str(out), "--workers", "1", "--no-progress"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert err.splitlines()[-1].startswith(f"python -m core.sweep: error: {message}"), err
+    assert "Traceback" not in err and not out.exists()
+
+
 # Issue 16, defect 7: scaled layouts centred on the region, bounds from the region, bounds reported.
 APP_REGION = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 31)  # the app's Layout design grid
 

@@ -2,6 +2,8 @@
 recomputed here straight from core's public functions (not from paper's cached maps), and its
 images are real images of the documented size."""
 
+import contextlib
+import io
 import json
 import re
 import shlex
@@ -26,8 +28,11 @@ BASE = [120.0, 2.0, 2.0, 100.0, 20.0]  # z, vx, vy, Ph, Pv of spec §5
 def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper")
     t0 = time.perf_counter()
-    res = paper.run(str(out), n=N, dpi=DPI, quiet=True)
+    said = io.StringIO()
+    with contextlib.redirect_stdout(said):  # the command line, as a user runs it
+        res = paper.main(["--out", str(out), "--n", str(N), "--dpi", str(DPI), "--quiet"])
     res["seconds"] = time.perf_counter() - t0
+    res["said"] = said.getvalue()
     res["json"] = json.loads((out / "claims.json").read_text())
     res["text"] = (out / "paper-reproduction.md").read_text()
     res["out"] = out
@@ -64,6 +69,12 @@ def test_writes_everything(run):
             assert "Bokeh" in text and len(text) > 5000
         assert {k for m, k in run["pngs"] if m == model} >= {
             "fig1a", "fig2a", "fig2b", "fig3_diff", "fig3_ratio", "fig5a_diff", "fig6c_ratio", "eta_single"}
+
+
+def test_the_command_says_where_the_report_is(run):
+    # issue 25: `python -m paper --out DIR` ended without a word on where the report went
+    assert run["said"].strip().splitlines()[-1].startswith(f"wrote the report {run['doc']} ")
+    assert Path(run["doc"]) == run["out"] / "paper-reproduction.md" and Path(run["doc"]).is_file()
 
 
 def test_pngs_are_images_of_the_documented_size(run):
@@ -267,10 +278,11 @@ def test_check_mode_detects_a_stale_doc(tmp_path, run):
     stale_doc.write_text(head + "## The round-off finding" + tail, encoding="utf-8")
     kw = dict(n=N, dpi=DPI, quiet=True, check=True, sections=report.PAPER_SECTIONS)
     out = str(claims_path.parent)
-    res = cli.run(out, doc=str(stale_doc), command=f"python -m paper --out {out} --n {N}", **kw)
+    made = f"python -m paper --out {out} --n {N} --dpi {DPI}"  # the fixture's command
+    res = cli.run(out, doc=str(stale_doc), command=made, **kw)
     assert any("round-off" in s for s in res["stale"]), res["stale"]
     # the untouched report of the fixture's run is current
-    res = cli.run(out, doc=str(doc), command=f"python -m paper --out {out} --n {N}", **kw)
+    res = cli.run(out, doc=str(doc), command=made, **kw)
     assert res["stale"] == []
 
 

@@ -290,10 +290,17 @@ def test_dask_scheduler_gives_the_same_results():
     assert b.summary["workers"] == "dask"
 
 
-def test_cli_in_two_processes_writes_csv_summary_and_png(tmp_path):
+def test_cli_in_two_processes_writes_csv_summary_and_png(tmp_path, capsys):
     out = tmp_path / "run"
     assert track_cli.main(["--case", "seed001-sim", "--filter", "ekf", "--runs", "4", "--workers", "2",
                     "--seed", "2", "--out", str(out)]) == 0
+    said = capsys.readouterr()
+    # issue 25: no stray "0it" bar (a tqdm drawn before its total was known), and the NEES to
+    # 3 significant digits beside the consistent value, not float's 16 (5.196454930496687)
+    assert "0it" not in said.err and "/2 [" in said.err  # the bar counts the 2 chunks
+    nees = json.loads((out / "summary.json").read_text())["nees"]
+    assert f"mean NEES {nees:.3g} (7 states: 7 if consistent);" in said.out
+    assert repr(nees) not in said.out
     lines = (out / "trmse.csv").read_text().splitlines()
     assert lines[0] == "step,time_s,trmse_m,pcrlb_m" and len(lines) == 301
     # two spawned processes, two chunks: the same numbers as one process

@@ -2,4 +2,46 @@
 tqdm (tests/test_layout.py checks it): :mod:`.sweep` (``python -m core.sweep``), :mod:`.track`
 (``python -m core.track``), :mod:`.calibration` (``python -m core.calibration``) and
 :mod:`.shape` (``python -m core.shape``). ``import core`` imports none of them.
+
+They (and ``python -m paper``) parse with :class:`ArgumentParser`, which names an unknown
+option before a missing required one.
 """
+
+import argparse
+import sys
+
+__all__ = ["ArgumentParser"]
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser that reports unrecognised arguments first.
+
+    argparse checks that the required arguments are present before it looks at the ones it does
+    not know, so ``python -m paper --bogus`` said "the following arguments are required: --out"
+    and never named ``--bogus``. Here a first pass parses with every required argument optional:
+    anything it does not recognise is an error of its own (same wording and status as argparse:
+    "unrecognized arguments: …", exit 2, through :meth:`error`), before the normal parse.
+    """
+
+    def __init__(self, *args, **kwargs):
+        self.added = []  # every action add_argument made (before super(): it adds --help)
+        super().__init__(*args, **kwargs)
+
+    def add_argument(self, *args, **kwargs):
+        action = super().add_argument(*args, **kwargs)
+        self.added.append(action)
+        return action
+
+    def parse_args(self, args=None, namespace=None):
+        args = sys.argv[1:] if args is None else list(args)
+        required = [a for a in self.added if a.required]
+        for action in required:
+            action.required = False
+        try:
+            _, extras = self.parse_known_args(args)
+        finally:
+            for action in required:
+                action.required = True
+        if extras:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return super().parse_args(args, namespace)

@@ -9,7 +9,6 @@ that imports argparse; ``core`` does not import it.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
@@ -28,11 +27,12 @@ from ..calibration.misfit import fit_diagnosis
 from ..calibration.model import COEFFICIENTS, CONVENTIONS
 from ..calibration.observability import calibration_crlb, calibration_observability
 from ..calibration.validation import NOISE_RANGE_NT, _angle_noise, _be, _count, _noise
+from . import ArgumentParser
 
 PROG = "python -m core.calibration"
 
 
-class _Parser(argparse.ArgumentParser):
+class _Parser(ArgumentParser):
     """argparse's parser with its errors as ValueError, so that every bad option reaches the
     same one-line message as a bad file (argparse prints usage and a second line otherwise)."""
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..shape.cases import CASES, case_rows
 from ..shape.experiment import run_case
+from . import ArgumentParser
 
 PROG = "python -m core.shape"
 #: Largest ``--runs``: each run keeps ~0.3 MB (the two filters' 81 covariances of 15 × 15, the
@@ -41,7 +42,7 @@ PROG = "python -m core.shape"
 MAX_RUNS = 10000
 
 
-class _Parser(argparse.ArgumentParser):
+class _Parser(ArgumentParser):
     def error(self, message):  # one line, status 2 (argparse's default adds the usage text)
         print(f"{PROG}: error: {message}", file=sys.stderr)
         sys.exit(2)

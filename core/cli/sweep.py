@@ -41,7 +41,6 @@ the same bit for bit either way (each cell is computed by the same code).
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import math
@@ -59,6 +58,7 @@ from tqdm import tqdm
 import core
 
 from .. import dask_backend
+from . import ArgumentParser
 
 #: name -> (default, unit, description). Defaults: the paper's common scenario (spec §5).
 PARAMETERS = {
@@ -84,6 +84,9 @@ PARAMETERS = {
 
 #: Parameters that must be > 0.
 POSITIVE = ("d", "speed", "sigma", "noise", "T", "ratio", "noise_g")
+#: Depths (m, positive down, the sea surface at 0; spec §7): never negative, and within the water
+#: column 0 … D with ``--sea-depth D``.
+DEPTHS = ("h", "z")
 #: Sensor kinds of ``--sensor`` (:data:`core.KINDS`).
 SENSORS = tuple(core.KINDS)
 #: Parameters of the electric kind only, and of the magnetic kinds only.
@@ -321,7 +324,7 @@ def write_heatmap(path, xname, xvals, yname, yvals, measure, values, title):
 
 
 def build_parser():
-    p = argparse.ArgumentParser(
+    p = ArgumentParser(
         prog="python -m core.sweep",
         description="Sweep two scenario parameters; write a tidy CSV and a heatmap PNG.",
         epilog="parameters: " + "; ".join(f"{k} ({v[1] or '-'}, default {v[0]}): {v[2]}"
@@ -382,10 +385,15 @@ def main(argv=None):
             if vals.size != 1:
                 raise ValueError(f"--set takes one value; got {item!r}")
             base[name] = float(vals[0])
-        for name, vals in (xaxis, yaxis, *((k, [v]) for k, v in base.items() if v is not None)):
+        given = (xaxis, yaxis, *((k, [v]) for k, v in base.items() if v is not None))
+        for name, vals in given:
             if name in POSITIVE and np.any(np.asarray(vals) <= 0):
                 raise ValueError(f"parameter {name} must be > 0 ({PARAMETERS[name][1]}); "
                                  f"got {np.asarray(vals).min():g}")
+        for name, vals in given:
+            if name in DEPTHS and np.min(vals) < 0:
+                raise ValueError(f"parameter {name} ({PARAMETERS[name][2]}) = {np.min(vals):g} m is "
+                                 "above the sea surface: depths are measured down from it (≥ 0)")
         if args.workers < 1:
             raise ValueError(f"--workers must be ≥ 1; got {args.workers}")
         settings = {"measure": args.measure, "layout": args.layout, "stations": args.stations,
@@ -394,6 +402,12 @@ def main(argv=None):
                     "region": parse_region(args.region), "threshold": args.threshold}
         # Check one cell here, so that bad input fails fast with its message, not in a worker.
         evaluate(dict(base, **{xaxis[0]: xaxis[1][0], yaxis[0]: yaxis[1][0]}), settings)
+        # ... which accepted the sea (--sea-depth); the other cells' depths must be in it too.
+        for name, vals in given:
+            if name in DEPTHS and args.sea_depth is not None and np.max(vals) > args.sea_depth:
+                raise ValueError(f"parameter {name} ({PARAMETERS[name][2]}) = {np.max(vals):g} m is "
+                                 f"below the seabed: with --sea-depth {args.sea_depth:g} depths "
+                                 f"lie in 0 … {args.sea_depth:g} m")
     except ValueError as exc:
         parser.error(str(exc))  # exits with status 2
     client = None

@@ -15,7 +15,6 @@ and writes
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -24,6 +23,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..tracking.montecarlo import CASES, DEFAULT_N_PU, FILTERS, monte_carlo
+from . import ArgumentParser
 
 __all__ = ["main", "write_outputs"]
 
@@ -62,9 +62,31 @@ def _plot(result, path):
     fig.savefig(path)
 
 
+class _Bar:
+    """The tqdm bar handed to :func:`monte_carlo`, made at its first ``reset(total=)``: a tqdm
+    made before the total is known draws a stray "0it" bar first."""
+
+    def __init__(self, desc):
+        self.desc, self.bar = desc, None
+
+    def reset(self, total=None):
+        if self.bar is None:
+            self.bar = tqdm(total=total, desc=self.desc, file=sys.stderr)
+        else:
+            self.bar.reset(total=total)
+
+    def update(self, n=1):
+        if self.bar is not None:
+            self.bar.update(n)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
 def main(argv=None):
     """Command line (``argv``: the arguments, default ``sys.argv[1:]``): see the module notes."""
-    ap = argparse.ArgumentParser(prog="python -m core.track",
+    ap = ArgumentParser(prog="python -m core.track",
                                  description="Monte-Carlo tracking on seed 001's cases: TRMSE vs PCRLB")
     ap.add_argument("--case", required=True, choices=sorted(CASES))
     ap.add_argument("--filter", default="bank", choices=FILTERS)
@@ -81,17 +103,19 @@ def main(argv=None):
     if a.workers is None:
         a.workers = min(2, os.cpu_count() or 1) if a.runs >= 200 else 1
     try:
-        with tqdm(desc=f"{a.case} {a.filter}", file=sys.stderr) as bar:
-            res = monte_carlo(a.case, filter=a.filter, runs=a.runs, seed=a.seed, n_pu=a.n_pu,
-                              workers=a.workers, scheduler=a.scheduler,
-                              truth_noise=a.truth_noise, progress=bar)
+        res = monte_carlo(a.case, filter=a.filter, runs=a.runs, seed=a.seed, n_pu=a.n_pu,
+                          workers=a.workers, scheduler=a.scheduler, truth_noise=a.truth_noise,
+                          progress=_Bar(f"{a.case} {a.filter}"))
     except ValueError as exc:
         ap.error(str(exc))
     write_outputs(res, a.out)
     s = res.summary
+    # mean NEES to 3 digits beside its consistent value, as the Track tab says it
+    nees = ("mean NEES —" if s["nees"] is None
+            else f"mean NEES {s['nees']:.3g} ({s['nees_dof']} states: {s['nees_dof']} if consistent)")
     print(f"{s['case']} {s['filter']}: {s['runs']} runs in {s['elapsed_s']} s, diverged "
           f"{100 * s['diverged']:.0f} %, final TRMSE {s['trmse_final_m']:.3g} m vs PCRLB "
-          f"{s['pcrlb_final_m']:.3g} m, NEES {s['nees']}; wrote {a.out}")
+          f"{s['pcrlb_final_m']:.3g} m, {nees}; wrote {a.out}")
     return 0
 
 
