@@ -12,18 +12,17 @@ import hashlib
 import html
 from functools import partial
 
-import holoviews as hv
 import numpy as np
 import pandas as pd
 import panel as pn
+import param
 
 from core import calibration as cal
 
 from . import offloop
+from .calibration_plots import Figures, plot_data
 from .maps import refusal
 from .scenario import Calibration
-
-hv.extension("bokeh", logo=False)  # as app/views.py: the tab also serves on its own (tests)
 
 #: The parts (app.scenario.PARTS) the tab reads: its own.
 READS = ("calibration",)
@@ -50,6 +49,24 @@ PRESETS = {
                                     cal_noise_nt=100.0, cal_angle_noise_deg=0.05,
                                     cal_iterations=3000, cal_p0_bp_nt=30.0, cal_seed=4),
 }
+for _preset in PRESETS.values():  # seed 004's cases, in its eq. (2)
+    _preset["cal_convention"] = "seed004"
+
+#: Which inputs apply to which data source (the others are hidden): the design's shape to a
+#: designed manoeuvre; the number of attitudes and the seed of the simulated errors to the
+#: simulated sources; the noise, Be, convention and filter settings to every source.
+SOURCE_INPUTS = {
+    "cal_headings": ("Designed manoeuvre",),
+    "cal_roll_deg": ("Designed manoeuvre",),
+    "cal_pitch_deg": ("Designed manoeuvre",),
+    "cal_n_attitudes": ("Designed manoeuvre", "Seed 004 simulation"),
+    "cal_seed": ("Designed manoeuvre", "Seed 004 simulation"),
+}
+
+
+def applies(name, source):
+    """Whether the input of ``name`` (one of FIELDS) applies to the data source ``source``."""
+    return source in SOURCE_INPUTS.get(name, (source,))
 
 HELP = """
 **Ship magnetometer calibration** (seed 004). A magnetometer on a ship reads
@@ -62,10 +79,6 @@ prior σ below, Q = 0) over the readings reused cyclically; dashed lines are the
 cases) or the least-squares solution. Upload a CSV with columns B1, B2, B3 (nT), psi, theta, phi
 (rad) and set Be for real data.
 """
-
-_K_NAMES = cal.COEFFICIENTS[:9]
-_BP_NAMES = cal.COEFFICIENTS[9:]
-
 
 def parse_headings(text):
     """Headings (deg) from comma- or space-separated text, each within ±360°, returned wrapped
@@ -91,12 +104,16 @@ def compute(values, upload=None):
     -------
     dict
         ``error`` (str) if the inputs cannot be used; else ``attitudes`` (N, 3) rad, ``be`` (nT),
-        ``truth`` (K, Bp) or None, ``obs``, ``crlb`` (12,), ``lsq``, ``kalman``, ``conv`` (iteration),
-        ``be_err_kal`` / ``be_err_lsq`` ((N, 3) nT or None), ``be_rms`` (dict), ``note`` (str),
-        ``diagnosis`` (:class:`core.calibration.FitDiagnosis`, when N ≥ 4).
+        ``convention``, ``truth`` (K, Bp) or None, ``obs``, ``crlb`` (12,), ``lsq``, ``kalman``,
+        ``conv`` (iteration), ``be_err_kal`` / ``be_err_lsq`` ((N, 3) nT or None), ``be_rms``
+        (dict), ``note`` (str), ``diagnosis`` (:class:`core.calibration.FitDiagnosis`, when
+        N ≥ 4) and ``from_residuals`` (None, or when the residual says the stated noise is off
+        by more than chance: ``sigma_nt``, the reading σ the residuals give, ``bound_nt`` its
+        ± bound (the input's unit) and ``crlb`` (12,) for it).
     """
     v = values
     be = np.array([v["cal_be_n"], v["cal_be_e"], v["cal_be_d"]], dtype=float)
+    conv = v.get("cal_convention", "seed004")
     sim = cal.SEED004_SIMULATION
     truth = None
     nominal = None  # the attitudes as designed (simulated cases): observability is theirs
@@ -113,8 +130,9 @@ def compute(values, upload=None):
                                             pitch_deg=v["cal_pitch_deg"], n_attitudes=n)
             else:
                 att = cal.random_attitudes(n, rng)
+            # the simulated ship is recorded in the chosen convention
             B, rec = cal.simulate_ship_data(*truth, att, be, rng, noise_nt=v["cal_noise_nt"],
-                                            angle_noise_deg=v["cal_angle_noise_deg"])
+                                            angle_noise_deg=v["cal_angle_noise_deg"], convention=conv)
             nominal = att
         elif src == "Seed 004 Table 1":
             B, rec = cal.seed004_table1()
@@ -127,25 +145,28 @@ def compute(values, upload=None):
         # Rank and CRLB of the manoeuvre as sailed (designed), not of its noisy record: angle
         # errors would make four level headings look barely "rank 12".
         design = rec if nominal is None else nominal
-        obs = cal.calibration_observability(design, be)
-        out = dict(error=None, attitudes=rec, be=be, truth=truth, obs=obs, note="")
+        obs = cal.calibration_observability(design, be, convention=conv)
+        out = dict(error=None, attitudes=rec, be=be, convention=conv, truth=truth, obs=obs, note="",
+                   from_residuals=None)
         if rec.shape[0] < 4:
             out.update(crlb=np.full(12, np.inf), lsq=None, kalman=None, conv=None, be_err_kal=None,
                        be_err_lsq=None, be_rms={},
                        note=f"{rec.shape[0]} attitude(s): the 12 coefficients need at least 4.")
             return out
-        lsq = cal.lsq_calibrate(B, rec, be)
+        lsq = cal.lsq_calibrate(B, rec, be, convention=conv)
         K_lin = truth[0] if truth is not None else lsq.K
-        crlb = cal.calibration_crlb(design, be, noise_nt=sigma, angle_noise_rad=sig_a, K=K_lin)
+        crlb = cal.calibration_crlb(design, be, noise_nt=sigma, angle_noise_rad=sig_a, K=K_lin,
+                                    convention=conv)
         kal = cal.kalman_calibrate(B, rec, be, sigma_nt=sigma, iterations=int(v["cal_iterations"]),
-                                   P0=(1.0, 1.0, 1.0, float(v["cal_p0_bp_nt"]) ** 2))
+                                   P0=(1.0, 1.0, 1.0, float(v["cal_p0_bp_nt"]) ** 2), convention=conv)
+        diag = cal.fit_diagnosis(B, rec, be, noise_nt=sigma, angle_noise_rad=sig_a, convention=conv)
         out.update(crlb=crlb, lsq=lsq, kalman=kal,
-                   conv=int(cal.convergence_iteration(kal.coefficients, crlb)),
-                   diagnosis=cal.fit_diagnosis(B, rec, be, noise_nt=sigma, angle_noise_rad=sig_a))
+                   conv=int(cal.convergence_iteration(kal.coefficients, crlb)), diagnosis=diag,
+                   from_residuals=_from_residuals(diag, design, be, sig_a, K_lin, conv))
         rms = {}
         for key, (K, Bp) in (("kal", (kal.K, kal.Bp)), ("lsq", (lsq.K, lsq.Bp))):
             try:
-                est = cal.geomagnetic_solution(B, rec, K, Bp)
+                est = cal.geomagnetic_solution(B, rec, K, Bp, convention=conv)
             except ValueError:
                 out[f"be_err_{key}"] = None
                 continue
@@ -157,11 +178,39 @@ def compute(values, upload=None):
         return dict(error=str(exc))
 
 
+def _from_residuals(diag, design, be, sig_a, K, conv):
+    """The reading σ the residuals give (:attr:`core.calibration.FitDiagnosis.reading_sigma_hat_nt`),
+    its ± bound (the input's unit) and the CRLB for it, when the stated noise is off by more than
+    chance and the model fits (:attr:`~core.calibration.FitDiagnosis.noise_misstated`); else None."""
+    if not diag.noise_misstated:
+        return None
+    s = diag.reading_sigma_hat_nt
+    return dict(sigma_nt=s, bound_nt=s * np.sqrt(3),
+                crlb=cal.calibration_crlb(design, be, noise_nt=s, angle_noise_rad=sig_a, K=K,
+                                          convention=conv))
+
+
 # --------------------------------------------------------------------------- views
 def _fmt(x, unit=""):
+    """A number as shown: 4 significant digits (no float noise such as 173.20508075688772)."""
     if x is None or not np.isfinite(x):
         return "∞" if x is not None and np.isinf(x) else "—"
     return f"{x:.4g}{unit}".replace("-", "−")
+
+
+def _names(names):
+    names = list(names)
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def unidentifiable(res):
+    """Names of the coefficients the manoeuvre (as designed) does not determine: CRLB ∞."""
+    return tuple(c for c, ok in zip(cal.COEFFICIENTS, res["obs"].observable) if not ok)
+
+
+#: fit_diagnosis's sentence on unbounded coefficients (its rank is the record's): the tab says it
+#: for the manoeuvre as designed instead, once (a record's angle errors can hide a rank of 9).
+_UNBOUNDED_WORDS = "are unbounded (CRLB ∞)"
 
 
 def summary(res):
@@ -169,132 +218,93 @@ def summary(res):
     if res["error"]:
         return ""
     obs = res["obs"]
+    lost = unidentifiable(res)
     lines = [f"**Rank of Γ: {obs.rank} of 12** ({res['attitudes'].shape[0]} attitudes; condition "
              f"number of the column-scaled Γ {_fmt(obs.condition)})."]
     lines += [f"- Unobservable: {html.escape(d, quote=False)}." for d in obs.descriptions]
+    if lost:
+        lines.append(
+            f"- **Not identifiable: {_names(lost)}** ({len(lost)} of the 12 coefficients, CRLB ∞). "
+            "This manoeuvre cannot determine them: their estimates in the table are arbitrary, one "
+            "of infinitely many that fit the readings equally well, however small the residual or "
+            "the geomagnetic-solution error below. Add roll or pitch that varies between attitudes.")
     if res["note"]:
         lines.append(f"- {html.escape(res['note'], quote=False)}")
     if res["kalman"] is not None:
-        lines.append(f"- Kalman filter: within one CRLB σ of its final value after **{res['conv']}** "
-                     f"of {res['kalman'].history.shape[-3] - 1} iterations.")
+        iters = res["kalman"].history.shape[-3] - 1
+        if lost:  # no bound, so no "within one CRLB σ" for the filter as a whole
+            lines.append(f"- Kalman filter ({iters} iterations): no convergence to report, as the "
+                         "coefficients that are not identifiable have no bound; their values follow "
+                         "the prior P(0), not the data.")
+        else:
+            lines.append(f"- Kalman filter: within one CRLB σ of its final value after **{res['conv']}** "
+                         f"of {iters} iterations.")
         if res["lsq"].rank < 12:
             lines.append("- Least squares is not unique here (minimum-norm solution shown).")
-        if 3 * res["attitudes"].shape[0] == 12:
+        d = res["diagnosis"]
+        if 3 * res["attitudes"].shape[0] == 12 and d.dof > 0 and not lost:  # (else core says it)
             lines.append("- 12 readings for 12 unknowns: least squares fits them exactly, so its "
                          "geomagnetic solution has no error to show; the CRLB is the honest measure.")
-        # a misfit, an optimistic bound or unbounded coefficients, in words (core's sentences)
+        # a misfit, an optimistic bound or unbounded coefficients, in words (core's sentences).
+        # Core judges the attitudes as recorded: with a rank-deficient design its words on the
+        # unbounded coefficients, or on a record that angle errors made exactly determined, are
+        # replaced by the design's, above.
         lines += [f"- **{dict(misfit='Misfit', warning='Check', note='Note')[d.level]}:** "
                   f"{html.escape(m, quote=False)}"
-                  for d in [res["diagnosis"]] for m in d.messages]
+                  for m in d.messages if not (lost and (_UNBOUNDED_WORDS in m or d.dof == 0))]
+        fr = res["from_residuals"]
+        if fr is not None:
+            lines.append(f"- With σ from the residuals ({_fmt(fr['sigma_nt'], ' nT')}, a reading error "
+                         f"bound of ± {_fmt(fr['bound_nt'], ' nT')}) the CRLB is the column "
+                         "*CRLB σ from residuals*; the button below sets that noise.")
         r = res["be_rms"]
         if r:
-            lines.append("- Geomagnetic solution Be = (KA)⁻¹(B − Bp), RMS error per component: "
-                         + ", ".join(f"{'Kalman' if k == 'kal' else 'least squares'} "
-                                     f"**{e.rms_nt:.1f} nT** (largest {100 * e.max_rel:.2f} % of |Be|)"
-                                     for k, e in r.items()) + ".")
+            said = ", ".join(f"{'Kalman' if k == 'kal' else 'least squares'} "
+                             f"**{e.rms_nt:.1f} nT** (largest {100 * e.max_rel:.2f} % of |Be|)"
+                             for k, e in r.items())
+            if lost:
+                lines.append(f"- Geomagnetic solution Be = (KA)⁻¹(B − Bp) on these attitudes, RMS "
+                             f"error per component: {said}. Not a check of K and Bp: the "
+                             "unidentifiable combinations leave these attitudes' readings "
+                             "unchanged, so any of them gives this Be here, and at another roll or "
+                             "pitch the error has no bound.")
+            else:
+                lines.append(f"- Geomagnetic solution Be = (KA)⁻¹(B − Bp), RMS error per component: "
+                             f"{said}.")
     return "\n".join(lines)
 
 
 def coefficient_table(res):
-    """DataFrame: per coefficient its truth (if known), the Kalman and LSQ estimates, the CRLB."""
+    """DataFrame: per coefficient its truth (if known), the Kalman and LSQ estimates, the CRLB
+    (and the CRLB for σ from the residuals when that differs from the stated σ)."""
     if res["error"]:
         return pd.DataFrame()
     rows = []
     truth = None if res["truth"] is None else np.r_[res["truth"][0].ravel(), res["truth"][1]]
     kal = None if res["kalman"] is None else res["kalman"].coefficients[-1]
     lsq = None if res["lsq"] is None else np.r_[res["lsq"].K.ravel(), res["lsq"].Bp]
+    fr = res.get("from_residuals")
     for j, (c, u) in enumerate(zip(cal.COEFFICIENTS, cal.COEFFICIENT_UNITS)):
         unit = "" if u == "1" else " nT"
-        rows.append({
+        ok = bool(res["obs"].observable[j])
+
+        def est(x):  # an estimate the manoeuvre does not determine is one of infinitely many
+            return _fmt(x, unit) + ("" if ok or x is None else " (arbitrary)")
+
+        row = {
             "coefficient": c, "unit": "dimensionless" if u == "1" else "nT",
-            "observable": bool(res["obs"].observable[j]),
+            "observable": "yes" if ok else "no: not identifiable",
             "truth": _fmt(None if truth is None else truth[j], unit),
-            "Kalman": _fmt(None if kal is None else kal[j], unit),
-            "least squares": _fmt(None if lsq is None else lsq[j], unit),
+            "Kalman": est(None if kal is None else kal[j]),
+            "least squares": est(None if lsq is None else lsq[j]),
             "CRLB σ": _fmt(res["crlb"][j], unit),
-            "(Kalman − truth)/σ": _fmt(None if truth is None or kal is None or not np.isfinite(res["crlb"][j])
-                                       else (kal[j] - truth[j]) / res["crlb"][j]),
-        })
+        }
+        if fr is not None:
+            row["CRLB σ from residuals"] = _fmt(fr["crlb"][j], unit)
+        row["(Kalman − truth)/σ"] = _fmt(None if truth is None or kal is None or not np.isfinite(res["crlb"][j])
+                                         else (kal[j] - truth[j]) / res["crlb"][j])
+        rows.append(row)
     return pd.DataFrame(rows)
-
-
-_OPTS = dict(responsive=True, height=320, show_grid=True, tools=["hover"], legend_position="right")
-
-
-def _empty(xlabel, ylabel, title):
-    return hv.Curve([], hv.Dimension("x", label=xlabel), hv.Dimension("y", label=ylabel)).opts(
-        title=title, responsive=True, height=320, show_grid=True)
-
-
-def convergence_plot(res, which):
-    """Seed 004's Figs. 1 / 3: estimates vs iteration (``which`` = "K" or "Bp")."""
-    names = _K_NAMES if which == "K" else _BP_NAMES
-    ylabel = "K entry (dimensionless)" if which == "K" else "Bp (nT)"
-    title = f"Kalman filter: {which} vs iteration"
-    if res["error"] or res["kalman"] is None:
-        return _empty("Iteration n (log scale)", ylabel, title)
-    h = res["kalman"].coefficients[1:]  # after each step: n = 1…M on a log axis (x(0) = 0)
-    cols = slice(0, 9) if which == "K" else slice(9, 12)
-    n = np.arange(1, h.shape[0] + 1)
-    kd = hv.Dimension("n", label="Iteration n (log scale)")
-    vd = hv.Dimension("value", label=ylabel)
-    curves = [hv.Curve((n, h[:, cols][:, j]), kd, vd, label=name) for j, name in enumerate(names)]
-    ref = (np.r_[res["truth"][0].ravel(), res["truth"][1]] if res["truth"] is not None
-           else np.r_[res["lsq"].K.ravel(), res["lsq"].Bp])[cols]
-    lines = [hv.HLine(r).opts(line_dash="dashed", color="grey", line_width=1) for r in ref]
-    return hv.Overlay(curves + lines).opts(
-        title=title + (" (dashed: truth)" if res["truth"] is not None else " (dashed: least squares)"),
-        logx=True, **_OPTS)
-
-
-#: Most attitudes a plot draws: a real log has tens of thousands, which the browser need not get
-#: (every attitude is in the numbers above; the plots show an even selection and say so).
-MAX_PLOT_POINTS = 2000
-
-
-def _shown(n):
-    """(indices, title note) of the attitudes 0…n−1 a plot draws: all, or MAX_PLOT_POINTS evenly."""
-    if n <= MAX_PLOT_POINTS:
-        return np.arange(n), ""
-    return (np.unique(np.linspace(0, n - 1, MAX_PLOT_POINTS).round().astype(int)),
-            f" ({MAX_PLOT_POINTS:,} of {n:,} attitudes shown)")
-
-
-def be_error_plot(res):
-    """Per attitude, the error of the geomagnetic solution Be = (KA)⁻¹(B − Bp), Kalman K and Bp."""
-    title = "Geomagnetic solution error (Kalman K, Bp)"
-    ylabel = "Be error (nT)"
-    if res["error"] or res.get("be_err_kal") is None:
-        return _empty("Attitude n", ylabel, title)
-    idx, shown = _shown(res["be_err_kal"].shape[0])
-    e = res["be_err_kal"][idx]
-    title += shown
-    kd = hv.Dimension("attitude", label="Attitude n")
-    vd = hv.Dimension("error", label=ylabel)
-    n = idx + 1
-    layers = []
-    for i, lab in enumerate(("north", "east", "down")):
-        layers += [hv.Curve((n, e[:, i]), kd, vd, label=lab),
-                   hv.Scatter((n, e[:, i]), kd, vd, label=lab).opts(size=6)]
-    return hv.Overlay(layers).opts(title=title, **_OPTS)
-
-
-def manoeuvre_plot(res):
-    """The attitudes: roll against heading, coloured by pitch (degrees)."""
-    title = "Manoeuvre: attitudes"
-    if res["error"]:
-        return _empty("Heading ψ (°)", "Roll θ (°)", title)
-    idx, shown = _shown(res["attitudes"].shape[0])
-    title += shown
-    a = np.rad2deg(res["attitudes"][idx])
-    df = pd.DataFrame({"heading": np.mod(a[:, 0], 360), "roll": a[:, 1], "pitch": a[:, 2],
-                       "n": idx + 1})
-    return hv.Scatter(df, hv.Dimension("heading", label="Heading ψ (°)"),
-                      [hv.Dimension("roll", label="Roll θ (°)"), hv.Dimension("pitch", label="Pitch φ (°)"),
-                       hv.Dimension("n", label="Attitude n")]).opts(
-        color="pitch", cmap="coolwarm", colorbar=True, size=9, title=title, responsive=True,
-        height=320, show_grid=True, tools=["hover"], xlim=(-10, 370),
-        clabel="Pitch φ (°)")
 
 
 def _error_html(res):
@@ -312,17 +322,39 @@ def _load(scenario, name):
 
 def views(values, upload=None):
     """Everything the tab draws for the cal_ ``values`` and the ``upload``ed bytes: dict of the
-    error HTML, the summary markdown, the coefficient table and the four plots (built on a
-    worker thread, :mod:`app.offloop`; drawn on the event loop)."""
+    error HTML, the summary markdown, the coefficient table, the four plots' data
+    (:func:`app.calibration_plots.plot_data`) and the fixes offered (made on a worker thread,
+    :mod:`app.offloop`; shown on the event loop)."""
     res = compute(values, upload)
     return dict(error=_error_html(res), summary=summary(res), table=coefficient_table(res),
-                K=convergence_plot(res, "K"), Bp=convergence_plot(res, "Bp"),
-                be=be_error_plot(res), manoeuvre=manoeuvre_plot(res))
+                plots=plot_data(res), fixes=fixes(res))
+
+
+def fixes(res):
+    """What the diagnosis offers to set, as Scenario values: ``noise`` (the ± bound from the
+    residuals' σ), ``convention`` (the one that fits) and ``be`` (Be with a slip undone); each
+    None when not offered."""
+    if res["error"] or res.get("diagnosis") is None:
+        return dict(noise=None, convention=None, be=None)
+    d, fr = res["diagnosis"], res["from_residuals"]
+    return dict(noise=None if fr is None else {"cal_noise_nt": float(fr["bound_nt"])},
+                convention=None if d.suggested_convention is None
+                else {"cal_convention": d.suggested_convention},
+                be=None if d.suggested_be is None
+                else dict(zip(("cal_be_n", "cal_be_e", "cal_be_d"), d.suggested_be)))
+
+
+def _fix_label(kind, values):
+    if kind == "noise":
+        return f"Use σ from the residuals (reading error ± {_fmt(values['cal_noise_nt'], ' nT')})"
+    if kind == "convention":
+        return f"Use the '{values['cal_convention']}' attitude convention"
+    return "Use Be = [" + ", ".join(_fmt(values[k]) for k in ("cal_be_n", "cal_be_e", "cal_be_d")) + "] nT"
 
 
 def calibration_tab(scenario):
     """The tab's layout for one session's ``scenario`` (its ``cal_`` parameters). A change of
-    the inputs or an upload computes off the event loop (:class:`app.offloop.Task`, ~3 s for a
+    the inputs or an upload computes off the event loop (:class:`app.offloop.Task`, ~1 s for a
     50,000-reading log), a spinner over the results and plots meanwhile."""
     upload = pn.widgets.FileInput(accept=".csv", css_classes=["w-cal-upload"])
 
@@ -333,11 +365,21 @@ def calibration_tab(scenario):
     upload.param.watch(uploaded, "value")
     error = pn.pane.HTML("", sizing_mode="stretch_width", css_classes=["w-cal-error"])
     text = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-cal-summary"])
+    # What the diagnosis offers to set (fixes()): one button each, shown when offered.
+    offered = {}
+    buttons = {kind: pn.widgets.Button(name="", button_type="warning", button_style="outline",
+                                       visible=False, css_classes=[f"w-cal-fix-{kind}"])
+               for kind in ("noise", "convention", "be")}
+    for kind, button in buttons.items():
+        button.on_click(lambda e, k=kind: offered.get(k) and _set(scenario, offered[k]))
     table = pn.pane.DataFrame(pd.DataFrame(), index=False, sizing_mode="stretch_width",
                               css_classes=["w-cal-table"])
-    k_plot, bp_plot, be_plot, att_plot = (pn.pane.HoloViews(None, sizing_mode="stretch_width")
-                                          for _ in range(4))
-    results = pn.Column(refusal(scenario, FIELDS, "w-message-cal"), error, text, table, sizing_mode="stretch_width")
+    figures = Figures()  # built once; a result only replaces their data (app.calibration_plots)
+    k_plot, bp_plot, be_plot, att_plot = (pn.pane.Bokeh(figures.figures[k], sizing_mode="stretch_width")
+                                          for k in ("K", "Bp", "be", "manoeuvre"))
+    results = pn.Column(refusal(scenario, FIELDS, "w-message-cal"), error, text,
+                        pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"), table,
+                        sizing_mode="stretch_width")
     plots = pn.Column(pn.Row(k_plot, bp_plot, sizing_mode="stretch_width"),
                       pn.Row(be_plot, att_plot, sizing_mode="stretch_width"),
                       sizing_mode="stretch_width")
@@ -345,8 +387,12 @@ def calibration_tab(scenario):
 
     def show(shown):
         error.object, text.object, table.object = shown["error"], shown["summary"], shown["table"]
-        k_plot.object, bp_plot.object = shown["K"], shown["Bp"]
-        be_plot.object, att_plot.object = shown["be"], shown["manoeuvre"]
+        figures.show(shown["plots"])
+        offered.clear()
+        offered.update(shown["fixes"])
+        for kind, button in buttons.items():
+            values = offered[kind]
+            button.param.update(name=_fix_label(kind, values) if values else "", visible=bool(values))
 
     def failed(exc):  # compute says what is wrong with the inputs; anything else is said here
         error.object = _error_html(dict(error=f"Not computed: {type(exc).__name__}: {exc}"))
@@ -366,16 +412,8 @@ def calibration_tab(scenario):
                           css_classes=[f"w-cal-preset-{i}"],
                           on_click=lambda e, n=name: _load(scenario, n))
         for i, name in enumerate(PRESETS)], sizing_mode="stretch_width")
-    number = {"type": pn.widgets.FloatInput, "sizing_mode": "stretch_width"}
-    widgets = {f: dict(number, css_classes=[f"w-{f}"]) for f in FIELDS}
-    widgets.update(cal_source={"type": pn.widgets.Select, "css_classes": ["w-cal_source"]},
-                   cal_headings={"type": pn.widgets.TextInput, "css_classes": ["w-cal_headings"]},
-                   cal_n_attitudes={"type": pn.widgets.IntInput, "css_classes": ["w-cal_n_attitudes"]},
-                   cal_iterations={"type": pn.widgets.IntInput, "css_classes": ["w-cal_iterations"]},
-                   cal_seed={"type": pn.widgets.IntInput, "css_classes": ["w-cal_seed"]})
     controls = pn.Column(
-        pn.Param(scenario.calibration, parameters=list(FIELDS), widgets=widgets, show_name=False,
-                 sizing_mode="stretch_width"),
+        *[_input(scenario, f) for f in FIELDS],
         pn.pane.Markdown(f"**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad; at most "
                          f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB)"), upload,
         width=320)
@@ -384,3 +422,29 @@ def calibration_tab(scenario):
         pn.pane.Markdown("**Seed 004's cases and instructive manoeuvres** (one click loads one)"), presets,
         pn.Row(controls, results, sizing_mode="stretch_width"),
         plots, sizing_mode="stretch_width")
+
+
+#: Number format of the tab's boxes (numbro): up to 4 decimals, so that a value such as the
+#: Table 1 preset's 100·√3 shows as 173.2051, not 173.20508075688772 (the value keeps every digit).
+NUMBER_FORMAT = "0.[0000]"
+
+
+def _input(scenario, name):
+    """The widget of parameter ``name`` (from the parameter), shown only while it applies to the
+    chosen data source (:func:`applies`)."""
+    p = scenario.ref(name)
+    visible = pn.bind(lambda source: applies(name, source), scenario.ref("cal_source"))
+    opts = dict(css_classes=[f"w-{name}"], sizing_mode="stretch_width", visible=visible)
+    if isinstance(p, param.Selector):
+        return pn.widgets.Select.from_param(p, **opts)
+    if isinstance(p, param.String):
+        return pn.widgets.TextInput.from_param(p, **opts)
+    if isinstance(p, param.Integer):
+        return pn.widgets.IntInput.from_param(p, **opts)
+    return pn.widgets.FloatInput.from_param(p, format=NUMBER_FORMAT, **opts)
+
+
+def _set(scenario, values):
+    """Set what a diagnosis button offers, in one update (as a preset)."""
+    with pn.io.hold():
+        scenario.update(values)

@@ -306,8 +306,12 @@ def create_app():
     downloads = pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf))
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
-        sidebar=[pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; the "
-                                  "figure's map gets a red frame)"), presets,
+        # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
+        # own (Calibration, Shape), where a click changed the hidden Maps state.
+        sidebar=[pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
+                                            "the figure's map gets a red frame)"), presets,
+                           visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
+                           sizing_mode="stretch_width", margin=0),
                  maps.refusal(scenario, None, "w-message"), *sections,
                  pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],

@@ -44,15 +44,30 @@ def pool(name, workers=2):
         return _POOLS[name]
 
 
-def schedule(doc, coroutine_function):
+def schedule(doc, coroutine_function, *, after_changes=False):
     """Run ``coroutine_function()`` on the event loop of ``doc``'s session (``doc``: the session's
-    document, None outside a server), whichever thread calls this."""
+    document, None outside a server), whichever thread calls this.
+
+    ``after_changes``: start it only after the changes of the page's components that this thread
+    has made so far reach the page. Off the loop, Panel queues each change for the loop as a
+    callback of the document (``add_next_tick_callback``), while a coroutine handed to
+    ``pn.state.execute`` may run before them; a result that is ready at once (an input the
+    computation refuses) then switched the busy spinner off before its "on" arrived, and the
+    spinner stayed on for good. Queued as one more callback of the document, behind them, the
+    coroutine starts after them (it then runs, and awaits, without the document's lock)."""
     if doc is None or doc.session_context is None:  # no server: run it here, to the end
         try:
             asyncio.get_running_loop()
         except RuntimeError:  # (Panel would leave a new event loop open for each call)
             asyncio.run(coroutine_function())
             return
+    if after_changes:
+        def begin():
+            with set_curdoc(doc):  # the task keeps this session's curdoc (a context variable)
+                asyncio.ensure_future(coroutine_function())
+
+        doc.add_next_tick_callback(begin)
+        return
     with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
         pn.state.execute(coroutine_function)
 
@@ -88,7 +103,7 @@ class Task:
             token = self._token = object()
             future = self.pool.submit(work)
         self._loading(True)
-        schedule(self.doc, partial(self._finish, token, future, show, failed))
+        schedule(self.doc, partial(self._finish, token, future, show, failed), after_changes=True)
         return future
 
     def cancel(self):

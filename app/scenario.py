@@ -433,6 +433,9 @@ class Calibration(Part):
         objects=["Designed manoeuvre", "Seed 004 simulation", "Seed 004 Table 1", "Uploaded CSV"],
         default="Seed 004 simulation", label="Calibration data",
         doc="Designed or simulated manoeuvres use seed 004's simulated ship (K, Bp) as the truth.")
+    cal_convention = param.Selector(
+        objects=list(core.calibration.CONVENTIONS), default="seed004", label="Attitude convention",
+        doc="How heading, roll and pitch make A (core.calibration.CONVENTIONS); seed004 is its eq. (2).")
     cal_headings = param.String("0, 90, 180, 270", label="Headings (°)",
                                 doc="Designed manoeuvre: headings sailed in turn, degrees from north.")
     cal_roll_deg = param.Number(10.0, softbounds=(0.0, 45.0), label="Roll amplitude (°)",

@@ -157,3 +157,22 @@ def test_text_output_prints_the_diagnosis(files):
     assert "hint: rerun with --convention seed004_std_pitch" in out
     code, out, err = _run([TABLE1, "--be", BE, "--convention", "seed004_std_pitch"])
     assert code == 0 and "hint: rerun with --sigma-nt 372" in out
+
+
+def test_the_bound_for_the_noise_the_residuals_give_is_printed():
+    """Table 1 with the default σ = 100 nT: the residuals give σ̂ = 489 nT, so beside the CRLB
+    for 100 nT the CLI prints (and --json gives) the CRLB for σ̂, 4.9× larger (no angle errors
+    stated: the CRLB is linear in σ, to round-off); with σ̂ stated there is none to add."""
+    code, out, err = _run([TABLE1, "--be", BE])
+    assert code == 0 and err == ""
+    assert ("CRLB (1σ) for σ_B = 489 nT, estimated from the residuals (the stated 100 nT is about "
+            "4.9× too small):") in out
+    assert "Bp1 1.28e+03 nT" in out
+    code, out, err = _run([TABLE1, "--be", BE, "--json"])
+    r = json.loads(out)
+    f = r["crlb_from_residuals"]
+    assert f["sigma_nT"] == pytest.approx(r["diagnosis"]["sigma_hat_nT"], rel=1e-12)
+    for c, v in r["crlb"].items():
+        assert f["crlb"][c] == pytest.approx(v * f["sigma_nT"] / 100.0, rel=1e-9), c
+    code, out, err = _run([TABLE1, "--be", BE, "--json", "--sigma-nt", f"{f['sigma_nT']!r}"])
+    assert json.loads(out)["crlb_from_residuals"] is None

@@ -210,7 +210,7 @@ def test_the_calibration_headings_at_their_extremes():
 def test_the_calibration_sources_and_the_shape_and_track_choices():
     """Every choice of the selectors that start a computation computes (each option is one the
     widget offers: there is no 'beyond')."""
-    for name in ("cal_source", "track_filter", "track_axes", "shape_type", "shape_window"):
+    for name in ("cal_source", "cal_convention", "track_filter", "track_axes", "shape_type", "shape_window"):
         s = scenario_for(name)
         tab = Tab(s, tab_of(name))
         for option in parameter(name).objects:

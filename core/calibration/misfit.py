@@ -17,7 +17,16 @@ import numpy as np
 from .estimators import lsq_calibrate
 from .model import CHUNK, COEFFICIENTS, CONVENTIONS, _attitude, _convention
 from .observability import calibration_observability
-from .validation import _K, _angle_noise, _attitudes, _be, _min_attitudes, _noise, _readings
+from .validation import (
+    _K,
+    NOISE_RANGE_NT,
+    _angle_noise,
+    _attitudes,
+    _be,
+    _min_attitudes,
+    _noise,
+    _readings,
+)
 
 #: σ̂ / σ above this (at least; more for few readings, see :func:`fit_diagnosis`) says the
 #: readings are noisier than stated, so the CRLB for σ is optimistic.
@@ -69,6 +78,10 @@ class FitDiagnosis:
     suggested_be : tuple of float or None
         Be (nT) with a common slip undone (down negated, north and east swapped) when that
         makes the model fit; None otherwise.
+    reading_sigma_hat_nt : float
+        The reading noise σ_B the residuals give, the stated angle errors' share taken out:
+        √(σ̂² − σ_a²·mean‖J‖²/3) (nT); NaN when 3N = rank or the angle errors alone explain the
+        residual. What to state as the noise when :attr:`noise_misstated`.
     """
 
     level: str
@@ -85,6 +98,18 @@ class FitDiagnosis:
     best_convention: str
     suggested_convention: object = None
     suggested_be: object = None
+    reading_sigma_hat_nt: float = float("nan")
+
+    @property
+    def noise_misstated(self):
+        """Whether the stated noise is off by more than chance (σ̂/σ outside [1/threshold,
+        threshold]) while the model fits (σ̂/σ ≤ :data:`MISFIT_RATIO`): then the CRLB for
+        :attr:`reading_sigma_hat_nt` is the honest bound, and the one for the stated σ is
+        optimistic (or pessimistic) by about σ̂/σ. False for a misfit: no noise level makes the
+        bounds of a model that does not fit mean anything."""
+        return bool(self.dof > 0 and np.isfinite(self.ratio) and self.ratio <= MISFIT_RATIO
+                    and not 1.0 / self.threshold <= self.ratio <= self.threshold
+                    and np.isfinite(self.reading_sigma_hat_nt))
 
 
 def _noise_threshold(dof):
@@ -245,6 +270,11 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
             + " Add roll or pitch that varies between attitudes.")
     level = next((k for k in ("misfit", "warning", "note") if msgs[k]), "ok")
     messages = tuple(m for k in ("misfit", "warning", "note") for m in msgs[k])
+    angle_var = var - sb ** 2  # the stated angle errors' share of σ² (nT²)
+    reading = (float(np.sqrt(sigma_hat ** 2 - angle_var)) if dof > 0 and sigma_hat ** 2 > angle_var
+               else float("nan"))
+    if not NOISE_RANGE_NT[0] <= reading <= NOISE_RANGE_NT[1]:  # (also NaN)
+        reading = float("nan")
     return FitDiagnosis(level, messages, rms, sigma, sigma_hat, ratio, threshold, dof, rank,
                         unbounded, conv_rms, min(conv_rms, key=conv_rms.get), suggest_conv,
-                        suggest_be)
+                        suggest_be, reading)

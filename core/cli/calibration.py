@@ -76,6 +76,12 @@ def _cli_result(B, att, be, *, sigma_nt, angle_sigma_deg, iterations, convention
         except ValueError:  # K not invertible: no geomagnetic solution to report
             errors[key] = None
     err, err_l = errors["kalman"], errors["lsq"]
+    from_res = None
+    if diag.noise_misstated:  # the bound for the noise the residuals give, beside the stated one's
+        s = diag.reading_sigma_hat_nt
+        from_res = {"sigma_nT": s, "ratio": diag.ratio, "crlb": {
+            c: _finite_or_none(v) for c, v in zip(COEFFICIENTS, calibration_crlb(
+                att, be, noise_nt=s, angle_noise_rad=sa, K=lsq.K, convention=convention))}}
     return {
         "convention": convention, "n_attitudes": int(att.shape[0]), "be_nT": be.tolist(),
         "K": kal.K.tolist(), "Bp": kal.Bp.tolist(), "K_lsq": lsq.K.tolist(), "Bp_lsq": lsq.Bp.tolist(),
@@ -83,6 +89,7 @@ def _cli_result(B, att, be, *, sigma_nt, angle_sigma_deg, iterations, convention
         "rank": obs.rank, "unobservable": list(obs.descriptions),
         "crlb": {c: _finite_or_none(s) for c, s in zip(COEFFICIENTS, crlb)},
         "crlb_noise": {"sigma_nT": sigma_nt, "angle_sigma_deg": angle_sigma_deg},
+        "crlb_from_residuals": from_res,
         "kalman": {"iterations": iterations, "sigma_nT": sigma_nt, "x0": "zero",
                    "P0_diag": list(DEFAULT_P0_DIAG), "Q": 0.0},
         "be_rms_nT": None if err is None else err.rms_nt,
@@ -109,7 +116,7 @@ def _hint(diag, sigma_nt):
     if diag.suggested_be:
         opts.append("--be " + ",".join(f"{v:g}" for v in diag.suggested_be))
     if not opts and diag.level == "warning" and np.isfinite(diag.ratio) and diag.ratio > diag.threshold:
-        opts.append(f"--sigma-nt {diag.sigma_hat_nt:.3g}")
+        opts.append(f"--sigma-nt {diag.reading_sigma_hat_nt:.3g}")
     return " ".join(opts) or None
 
 
@@ -129,9 +136,18 @@ def _print_text(r, out):
     w("K =\n" + mat(r["K_lsq"]))
     w("Bp = " + vec(r["Bp_lsq"]) + f"   (residual RMS {r['residual_rms_nT_lsq']:.1f} nT)")
     n = r["crlb_noise"]
-    w(f"CRLB (1σ) for σ_B = {n['sigma_nT']:g} nT, σ_angle = {n['angle_sigma_deg']:g}°:")
-    w("  " + ", ".join(f"{c} {'∞' if v is None else f'{v:.3g}'}{' nT' if c.startswith('Bp') else ''}"
-                       for c, v in r["crlb"].items()))
+    bounds = lambda crlb: "  " + ", ".join(  # noqa: E731
+        f"{c} {'∞' if v is None else f'{v:.3g}'}{' nT' if c.startswith('Bp') else ''}"
+        for c, v in crlb.items())
+    w(f"CRLB (1σ) for σ_B = {n['sigma_nT']:.4g} nT, σ_angle = {n['angle_sigma_deg']:.4g}°:")
+    w(bounds(r["crlb"]))
+    f = r["crlb_from_residuals"]
+    if f is not None:
+        big = f["ratio"] > 1
+        w(f"CRLB (1σ) for σ_B = {f['sigma_nT']:.3g} nT, estimated from the residuals (the stated "
+          f"{n['sigma_nT']:.4g} nT is about {f['ratio'] if big else 1 / f['ratio']:.2g}× too "
+          f"{'small' if big else 'large'}):")
+        w(bounds(f["crlb"]))
     if r["be_max_rel"] is None:
         w("geomagnetic solution Be = (K A)⁻¹ (B − Bp): none (K is not invertible)")
     else:
