@@ -20,7 +20,7 @@ DESIGN_HELP = """
 drag one to move it, select it and press Backspace to delete it; or edit the table (z is a depth,
 positive down). The map is the Cramér–Rao bound (1σ) on the 3-D position, horizontal, depth or
 speed error of a target at depth z, with the sensor noise and N instants of the Advanced section —
-the numbers an analyst reports — on a log colour scale. White hatching: the 3-D bound exceeds {limit:.0%}
+the numbers an analyst reports — on a log colour scale. White dots: the 3-D bound exceeds {limit:.0%}
 of the range to the nearest station, where a linearised bound no longer predicts a tracker's error
 (far-field runaway; read it as "not trackable from here"). The red ellipse is the horizontal error
 ellipse of a target at the point set under the table (*Error ellipse at x, y*). *Find best spacing* scans the dual layout's spacing d over this region and refines the

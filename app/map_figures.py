@@ -39,14 +39,25 @@ from .compute import KIND_NAMES, RUNAWAY_LIMIT, Panels, colour_range
 
 #: Veil codes of a pixel (the veil image): 0 observable, 1 and 2 unobservable (the two colours of
 #: its stripes), 3 no value (on a station, or blank where the paper's Δ ≤ 0), 4 and 5 a CRLB
-#: beyond RUNAWAY_LIMIT of the range (the linearised bound runs away): see VEIL_PALETTE.
+#: beyond RUNAWAY_LIMIT of the range (the linearised bound runs away: 4 its white dots, 5 between
+#: them): see VEIL_PALETTE.
 OK, VEIL_DARK, VEIL_LIGHT, NO_VALUE, RUNAWAY, RUNAWAY_GAP = 0, 1, 2, 3, 4, 5
 #: Unobservable points are striped grey, opaque enough that the round-off beneath is not read as
 #: colour; points with no value are left to the image's own white (NaN); runaway points are
-#: hatched white the other way, the colour beneath still readable. Distinct by design.
+#: dotted white (:func:`runaway_dots`), the colour beneath still readable. Distinct by design:
+#: runaway was hatched the other way, and two kinds of diagonal stripes were confused (issue 25).
 VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000", "#ffffffb0", "#00000000")
 NAN_COLOUR = "#ffffff"
 STRIPE = 6  # pixels of the map grid per stripe of the veil
+DOT = 3  # pixels of the map grid per side of a runaway dot (one every 2 DOT, in both directions)
+
+
+def runaway_dots(shape):
+    """Where the white dots of the runaway marks are, on a map grid of ``shape`` (bool): squares
+    of DOT × DOT points on a 2 DOT grid, a pattern no stripe of the unobservable veil resembles
+    (the Maps, Layout design and Track tabs all mark runaway points with it)."""
+    i, j = np.indices(shape)
+    return ((i // DOT) % 2 == 0) & ((j // DOT) % 2 == 0)
 
 #: The hover of a map, on its veil layer (a veil code is never NaN: Bokeh shows a NaN value as
 #: "NaN" without asking the formatter): what the point is, or its value, the normalised image
@@ -185,11 +196,21 @@ def _maps(p: Panels):
     return maps, ("x", "y" if p.plane.kind == "xy" else "z")
 
 
+#: The diverging palette of a signed comparison, low to high: B better is blue, B worse red,
+#: whichever way the measure runs (RdBu11 runs blue to red).
+B_BETTER_LOW, B_BETTER_HIGH = RdBu11, RdBu11[::-1]
+
+
 def ranges(p: Panels):
-    """[(low, high, palette)] of each map's colour scale: A and B share theirs."""
+    """[(low, high, palette)] of each map's colour scale: A and B share theirs.
+
+    A signed difference is blue where B is better and red where it is worse for every measure:
+    lower is better for the CRLB (log10 σ_B/σ_A < 0), higher for the others (it was one palette
+    for all, so "B better" was red on the CRLB map and blue on the others)."""
     diff_range, paper_diff = _diff_colours(p)
     value = (p.clim[0], p.clim[1], Viridis256[::-1] if p.log_scale else Viridis256)  # CRLB: low good
-    diff = (diff_range[0], diff_range[1], Viridis256 if paper_diff else RdBu11[::-1])
+    signed = B_BETTER_LOW if p.measure == "crlb_position" else B_BETTER_HIGH
+    diff = (diff_range[0], diff_range[1], Viridis256 if paper_diff else signed)
     return [value, value, diff]
 
 
@@ -210,14 +231,15 @@ def normalised(values, low, high):
 
 def veil_codes(observable, values, runaway=None):
     """The veil image (float32 codes, see :data:`VEIL_PALETTE`): diagonal stripes where the point
-    is unobservable, NO_VALUE where it is observable but has no value, stripes the other way
+    is unobservable, NO_VALUE where it is observable but has no value, dots (:func:`runaway_dots`)
     where ``runaway`` (bool, optional) flags it, OK elsewhere."""
     n_v, n_u = observable.shape
     i, j = np.arange(n_v)[:, None], np.arange(n_u)[None, :]
     stripes = ((i + j) // STRIPE) % 2
     good = np.where(np.isfinite(values), OK, NO_VALUE)
     if runaway is not None:
-        good = np.where(runaway & np.isfinite(values), RUNAWAY + ((i - j) // STRIPE) % 2, good)
+        good = np.where(runaway & np.isfinite(values),
+                        np.where(runaway_dots(observable.shape), RUNAWAY, RUNAWAY_GAP), good)
     return np.where(observable, good, VEIL_DARK + stripes).astype(np.float32)
 
 
