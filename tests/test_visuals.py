@@ -118,3 +118,34 @@ def test_the_track_help_quotes_the_moments_and_noise_and_where_they_are_set():
     s.sensor = next(k for k, v in track.SENSORS.items() if v == "B")
     text = track.note_text(s)
     assert f"{s.noise_b:g} nT" in text and "A·m²" in text
+
+
+@pytest.mark.parametrize("text, why", [("abc", "is not a number"), ("1,5", "use a point for decimals"),
+                                       ("", "empty"), ("nan", "not a finite number")])
+def test_text_typed_in_a_number_box_is_refused_with_its_reason(text, why):
+    # Bokeh's numeric box dropped "abc" in the browser, silently
+    from app.inputs import number_input
+
+    s = Scenario()
+    column = number_input(s, "Ph", css_classes=["w-Ph"])
+    box, slider = column.objects
+    box.value = text
+    assert why in s.message and s.message.startswith("P_h (A·m)") and s.refused == ["Ph"]
+    assert s.Ph == 100.0 and box.value == "100" and slider.value == 100.0  # the last good value
+    box.value = "150"  # a number is taken, and the message goes
+    assert s.Ph == 150.0 and slider.value == 150.0 and s.message == ""
+
+
+def test_a_whole_number_box_refuses_a_fraction_and_shows_values_exactly():
+    from app.inputs import number_input, shown_text
+
+    s = Scenario()
+    box = number_input(s, "resolution").objects[0]
+    old = s.resolution
+    box.value = "2.5"
+    assert "not a whole number" in s.message and s.resolution == old
+    assert shown_text(1e-7) == "1e-07" and shown_text(2.8284271247461903) == "2.83"
+    assert shown_text(-0.001) == "-0.001" and shown_text(-0.5) == "-0.5" and shown_text(0.0) == "0"
+    s = Scenario(speed=2.8284271247461903)
+    box = number_input(s, "speed").objects[0]
+    assert box.value == "2.83" and s.speed == 2.8284271247461903  # showing it rounded changes nothing
