@@ -14,6 +14,15 @@ per image per change, through public Bokeh only.
 
 Every layer of a map (value, veil) always covers the same rectangle as the map (issue 16, defect
 1: the veil was re-sent only when its image or x changed, and stayed where the last plane had it).
+
+Aspect (issue 25). A metre is as long across as up on an x–y map: the ranges are Bokeh
+``DataRange1d`` fitted to the view box (:func:`view_box`, corners drawn invisibly) with the
+figures' ``match_aspect``, so BokehJS widens one range until the frame's pixel aspect is the
+data's, at any width of the page (the frames were ~130 × 190 px over ±300 m square, circles drawn
+as upright ellipses). An x–z section (often far wider than deep) is drawn with a stated vertical
+exaggeration, a round number (:func:`exaggeration`) in its z axis label, set through
+``aspect_scale``. The colour bar lies under the map, not beside it: the map is wider, and the
+bar's labels no longer touch the frame.
 """
 
 from __future__ import annotations
@@ -22,14 +31,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from bokeh.models import (
+    BasicTicker,
+    BoxZoomTool,
     ColorBar,
     ColumnDataSource,
     CustomJSHover,
     CustomJSTickFormatter,
     HoverTool,
     Label,
+    DataRange1d,
     LinearColorMapper,
-    Range1d,
     SaveTool,
     Title,
 )
@@ -104,25 +115,53 @@ class MapFigures:
     captions: tuple
     saves: tuple
     labels: tuple = ()  # per map: a Label inside its frame, shown when it is veiled everywhere
-    view: object = None  # the (plane, view box) last drawn: a new one resets zoom and pan
+    view: object = None  # the (plane, view box, exaggeration) last drawn: a new one resets zoom and pan
+    view_source: object = None  # the view box's corners, drawn invisibly: the ranges fit them
+
+
+#: The figures' size before scaling to the page's width (``scale_width``): frames within ~8 % of square
+#: from ~300 px per map (a 1280 px screen) to ~400 (1600 px); ``match_aspect`` keeps
+#: a metre square either way, widening one range).
+WIDTH, HEIGHT = 420, 560
 
 
 def _figure(x_range, y_range):
     from bokeh.plotting import figure
 
-    fig = figure(x_range=x_range, y_range=y_range, width=420, height=465, sizing_mode="scale_width",
-                 tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
+    fig = figure(x_range=x_range, y_range=y_range, width=WIDTH, height=HEIGHT, sizing_mode="scale_width",
+                 tools="pan,wheel_zoom,reset", match_aspect=True, title="",
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
-                 min_border_right=4, toolbar_location="right")
+                 min_border_right=12, toolbar_location="right")
+    box_zoom = BoxZoomTool(match_aspect=True)  # a box zoom keeps the aspect too
+    fig.add_tools(box_zoom)
     fig.title.text_font_size = "10pt"
     fig.xaxis.ticker.desired_num_ticks = 4  # labels of a narrow map (1280 px screen) must not run together
     fig.toolbar.autohide = True
     return fig
 
 
+def exaggeration(plane):
+    """The vertical exaggeration an x–z section is drawn with: 1, 2, 5, 10, 20, … nearest (in
+    log) to its width over its depth, never below 1 (1 for an x–y map: a metre is a metre)."""
+    if plane.kind != "xz":
+        return 1
+    ratio = (plane.u[1] - plane.u[0]) / max(plane.v[1] - plane.v[0], 1e-9)
+    if ratio <= 1.5:
+        return 1
+    nice = [m * 10 ** k for k in range(0, 8) for m in (1, 2, 5)]
+    return min(nice, key=lambda e: abs(np.log(e / ratio)))
+
+
+def _ranges():
+    """Fresh ranges (BokehJS fits them again: a new view forgets the user's zoom)."""
+    return DataRange1d(range_padding=0), DataRange1d(range_padding=0)
+
+
 def build():
     """Three empty linked maps (one shared x and y range: zoom and pan together)."""
-    x_range, y_range = Range1d(-1, 1), Range1d(-1, 1)
+    x_range, y_range = _ranges()
+    view_source = ColumnDataSource(dict(x=[-1.0, 1.0], y=[-1.0, 1.0]), name="map-view")
+    corners = []
     value_bar, diff_bar = (LinearColorMapper(palette=Viridis256, low=0, high=1, nan_color=NAN_COLOUR)
                            for _ in range(2))
     veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=len(VEIL_PALETTE) - 1)
@@ -142,6 +181,7 @@ def build():
         v = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
         s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
                         line_color="black", line_width=1.5)
+        corners.append(fig.scatter("x", "y", source=view_source, size=0, alpha=0))  # what the ranges fit
         fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
                                                       log=False, texts=dict(unobservable="", none="", runaway="")))
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
@@ -150,10 +190,12 @@ def build():
         save = SaveTool(filename="observability_map")
         fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
                                        visible=False), save)
-        bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", width=12,
-                       title_text_font_size="9pt", formatter=CustomJSTickFormatter(code=_TICK_JS,
-                                                                                   args=dict(log=False)))
-        fig.add_layout(bar, "right")
+        bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", orientation="horizontal",
+                       height=10, padding=4, margin=8, title_standoff=3, title_text_font_size="8pt",
+                       title_text_font_style="normal", major_label_text_font_size="8pt",
+                       formatter=CustomJSTickFormatter(code=_TICK_JS, args=dict(log=False)))
+        bar.ticker = BasicTicker(desired_num_ticks=5)
+        fig.add_layout(bar, "below")
         caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
         fig.add_layout(caption, "below")
         # Inside the frame: what a map veiled everywhere is (a newcomer took it for broken)
@@ -163,7 +205,10 @@ def build():
         fig.add_layout(label)
         for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label)):
             out[key].append(model)
-    return MapFigures(layout=tuple(out["figs"]), figures=tuple(out["figs"]), images=tuple(out["images"]),
+    for rng in (x_range, y_range):
+        rng.renderers = corners
+    return MapFigures(view_source=view_source,
+                      layout=tuple(out["figs"]), figures=tuple(out["figs"]), images=tuple(out["images"]),
                       veils=tuple(out["veils"]), stations=tuple(out["stations"]),
                       bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
                       hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
@@ -355,6 +400,8 @@ def set_maps(figs: MapFigures, prepared):
     d = _prepared(prepared)
     p, maps, (xname, vname) = d.panels, d.maps, d.axes
     where = geometry(p.plane)
+    stretch = exaggeration(p.plane)
+    vertical = f", vertical ×{stretch:g}" if stretch != 1 else ""
     for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, d.ranges)):
         fig = figs.figures[which]
         figs.images[which].data = dict(image=[d.images[which]], **where)
@@ -374,7 +421,7 @@ def set_maps(figs: MapFigures, prepared):
         fig.title.text = title + (" (paper)" if paper else "")
         fig.title.text_color = "#b03a2e" if paper else "#222222"
         fig.outline_line_color, fig.outline_line_width = ("#b03a2e", 3) if paper else ("#e5e5e5", 1)
-        fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
+        fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)" + vertical
         label = (p.value_labels[which] if p.value_labels else p.value_label) if which < 2 else p.diff_label
         log = which < 2 and p.log_scale
         bar = figs.colorbars[which]
@@ -394,9 +441,14 @@ def set_maps(figs: MapFigures, prepared):
         if figs.labels and (figs.labels[which].text, figs.labels[which].visible) != (said, bool(said)):
             figs.labels[which].update(text=said, visible=bool(said))
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
-    view = (p.plane, view_box(p))
+    view = (p.plane, view_box(p), stretch)
     if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom
         u0, u1, v0, v1 = view[1]
-        figs.figures[0].x_range.update(start=u0, end=u1)
-        figs.figures[0].y_range.update(start=v0, end=v1)
+        figs.view_source.data = dict(x=[u0, u1], y=[min(v0, v1), max(v0, v1)])
+        x_range, y_range = _ranges()
+        y_range.flipped = p.plane.kind == "xz"  # depth down
+        for rng in (x_range, y_range):
+            rng.renderers = list(figs.figures[0].x_range.renderers)
+        for fig in figs.figures:
+            fig.update(x_range=x_range, y_range=y_range, aspect_scale=1.0 / stretch)
         figs.view = view

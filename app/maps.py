@@ -10,7 +10,7 @@ import numpy as np
 import panel as pn
 from bokeh.layouts import row
 
-from . import map_figures, offloop, views
+from . import export, map_figures, offloop, views
 from .compute import FIELDS, RUNAWAY_LIMIT, Snapshot
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
@@ -219,3 +219,9 @@ def to_csv(scenario, cache):
 def to_netcdf(scenario, cache):
     """The maps of ``scenario`` as NetCDF (the download button's file)."""
     return views.to_netcdf(*_current(scenario, cache))
+
+
+def to_png(scenario, cache):
+    """The three maps of ``scenario`` as one high-resolution PNG (:mod:`app.export`; the save tool
+    of a map writes its ~400 px canvas)."""
+    return export.to_png(cache.get(Snapshot.of(scenario)))

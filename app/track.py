@@ -284,10 +284,13 @@ def _outputs(scenario: Scenario):
     steps) is said above them and the last plots stay."""
     problem = pn.pane.Alert("", alert_type="warning", visible=False, sizing_mode="stretch_width",
                             css_classes=["w-track-problem"])
-    summary = pn.pane.Markdown("", sizing_mode="stretch_width")
+    #: Said (under the spinner) until the first track is shown: the first visit computes it
+    summary = pn.pane.Markdown("*Computing the track, its bound and the trackers' runs …*",
+                               sizing_mode="stretch_width", css_classes=["w-track-summary"])
     plan = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=560)
     error = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=340)
-    outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width")
+    # min_height: the spinner over it is seen before the first plots come (it was a ring ~10 px high)
+    outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width", min_height=400)
     task = offloop.Task("track", busy=[outputs])
 
     def say(text):
@@ -351,13 +354,20 @@ def track_tab(scenario: Scenario):
     widgets = pn.Param(scenario, parameters=list(TRACK_PARAMS), show_name=False, widgets=options)
     note = pn.pane.Markdown(pn.bind(lambda *_: note_text(scenario), *[scenario.param[n] for n in NOTE_INPUTS]),
                             sizing_mode="stretch_width", css_classes=["w-track-note"])
+    def outputs():
+        return _outputs(scenario)
+
     return pn.Row(
         pn.Column(widgets, refusal(scenario, TRACK_PARAMS, "w-message-track"), width=320),
         pn.Column(
             note,
             # lazy: not computed until the tab is first shown (each change of the maps' inputs
-            # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release)
-            pn.panel(lambda: _outputs(scenario), lazy=True, sizing_mode="stretch_width"),
+            # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release).
+            # A ParamFunction: pn.panel(lambda: ..., lazy=True) made an ``interactive`` of the
+            # zero-argument lambda, which ran it at once, in every new session; its plots were
+            # then drawn in the tab's first render, 2-3 s blank with no spinner (issue 25). Now
+            # the first render is the inputs and a spinner, and the plots follow.
+            pn.param.ParamFunction(outputs, lazy=True, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         ),
         sizing_mode="stretch_width",  # stretch_both made Panel override the Tabs' sizing (logged)

@@ -149,3 +149,47 @@ def test_a_whole_number_box_refuses_a_fraction_and_shows_values_exactly():
     s = Scenario(speed=2.8284271247461903)
     box = number_input(s, "speed").objects[0]
     assert box.value == "2.83" and s.speed == 2.8284271247461903  # showing it rounded changes nothing
+
+
+def test_a_new_session_does_not_compute_the_track_before_its_tab_is_shown():
+    # pn.panel(lambda: ..., lazy=True) ran the lambda at once (an ``interactive``): every new
+    # session ran the Monte-Carlo, and the tab's first render carried its plots (2-3 s blank)
+    track._compute.cache_clear()
+    s = Scenario(track_runs=2, track_filter="ekf", track_duration=60.0)
+    tab = track.track_tab(s)
+    assert track._compute.cache_info().currsize == 0
+    tab.get_root()  # shown: computed now (outside a server, at once)
+    assert track._compute.cache_info().currsize == 1
+
+
+def test_the_png_export_is_high_resolution_and_draws_the_pages_numbers():
+    import io
+
+    from PIL import Image
+
+    from app import export
+
+    p = c.compute(Snapshot.of(Scenario(resolution=41)))
+    img = Image.open(io.BytesIO(export.to_png(p).getvalue()))
+    assert img.size[0] >= 1600  # the save tool's PNG was 403 × 446
+    fig = export.figure(p)
+    d = map_figures.prepare(p)
+    for which, ax in enumerate(fig.axes[:3]):
+        shown = ax.images[0].get_array()
+        values = d.maps[which][0]
+        np.testing.assert_array_equal(np.ma.getmaskarray(shown), ~np.isfinite(values))
+        np.testing.assert_allclose(shown.compressed(), values[np.isfinite(values)])
+        assert ax.images[0].get_clim() == pytest.approx(d.ranges[which][:2])
+        assert ax.get_aspect() == 1.0  # a metre is a metre
+    assert fig.axes[0].get_title().startswith("A: single station")
+
+
+def test_the_png_export_of_an_x_z_section_states_its_vertical_exaggeration():
+    from app import export
+
+    p = c.compute(Snapshot.of(Scenario(resolution=31, plane="x–z", z_min=100.0, z_max=400.0)))
+    fig = export.figure(p)
+    ax = fig.axes[0]
+    assert ax.get_aspect() == 2.0 and ax.get_ylabel() == "z (m), vertical ×2"
+    top, bottom = ax.get_ylim()
+    assert top > bottom  # depth down
