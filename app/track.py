@@ -195,9 +195,11 @@ def plan_view(out):
                             label="stations").opts(marker="triangle", color="black", size=12))
     (x0, x1), (y0, y1) = out["window"]
     return hv.Overlay(layers).opts(
-        title="Track, PCRLB along it, and the trackers' estimates, over the snapshot CRLB map",
-        # the legend beside the frame: inside it covered the estimates (issue 25)
-        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="right", responsive=True)
+        title="Track, PCRLB and estimates over the snapshot CRLB map",  # fits at 1280 px (was cut)
+        # the legend under the frame: inside it covered the estimates (issue 25); beside it, it
+        # squeezed the frame to ~120 px at 1280 × 800
+        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="bottom", legend_cols=3,
+        responsive=True)
 
 
 def map_layer(d):
