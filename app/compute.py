@@ -162,7 +162,7 @@ def difference(a, b, measure, mode):
     if DIFFERENCES[mode] == "paper" and measure in ("log10_det", "d_optimal"):
         return (core.log10_positive_difference(b.value, a.value), "log10(|B| − |A|), blank where ≤ 0",
                 "log10(|B| − |A|)")
-    return core.log10_ratio(b.value, a.value), "log10(B / A) (signed log-ratio)", "log10(B / A)"
+    return core.log10_ratio(b.value, a.value), "log10(B / A) (> 0: B better)", "log10(B / A)"
 
 
 def blank_reason(measure, mode):
@@ -294,7 +294,7 @@ def runaway_note(results, masks):
         if mask.any():
             lines.append(f"{name}: at {mask.sum() / max(res.observable.sum(), 1):.0%} of the observable "
                          f"points the CRLB exceeds {RUNAWAY_LIMIT:.0%} of the range to the nearest "
-                         "station (hatched white).")
+                         "station (dotted white).")
     if lines:
         lines.append("There the linearised bound no longer predicts a tracker's error: the field "
                      "changes by ~2× across such an error, and an estimator runs away along the "

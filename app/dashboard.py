@@ -14,7 +14,7 @@ import panel as pn
 import param
 from bokeh.models.formatters import PrintfTickFormatter
 
-from . import maps, url
+from . import export, maps, url
 from .calibration import calibration_tab
 from .compute import KIND_NAMES, MAP_INPUTS, SHARED
 from .design import design_tab
@@ -300,10 +300,11 @@ def create_app():
             return fn(scenario, cache)
 
         button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
-                                         label={"csv": "CSV", "nc": "NetCDF"}[ext], button_type="light")
+                                         label={"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
+                                         button_type="light", css_classes=[f"w-download-{ext}"])
         return button
 
-    downloads = pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf))
+    downloads = pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png))
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
         # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
@@ -313,7 +314,8 @@ def create_app():
                            visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
                            sizing_mode="stretch_width", margin=0),
                  maps.refusal(scenario, None, "w-message"), *sections,
-                 pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the save tool on each map)"),
+                 pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
+                                            f"{export.WIDTH_PX} px wide; one map as shown: its save tool)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
         main=[tabs],
         sidebar_width=360,

@@ -20,7 +20,7 @@ DESIGN_HELP = """
 drag one to move it, select it and press Backspace to delete it; or edit the table (z is a depth,
 positive down). The map is the Cramér–Rao bound (1σ) on the 3-D position, horizontal, depth or
 speed error of a target at depth z, with the sensor noise and N instants of the Advanced section —
-the numbers an analyst reports — on a log colour scale. White hatching: the 3-D bound exceeds {limit:.0%}
+the numbers an analyst reports — on a log colour scale. White dots: the 3-D bound exceeds {limit:.0%}
 of the range to the nearest station, where a linearised bound no longer predicts a tracker's error
 (far-field runaway; read it as "not trackable from here"). The red ellipse is the horizontal error
 ellipse of a target at the point set under the table (*Error ellipse at x, y*). *Find best spacing* scans the dual layout's spacing d over this region and refines the
@@ -72,6 +72,21 @@ def optimise_text(result, criterion):
     return text
 
 
+#: Under the "Find best spacing" button until it has a result.
+SPACING_HINT = "Press *Find best spacing* (about a second)."
+
+
+def spacing_text(sp):
+    """The line under the button on a best spacing (compute.Spacing): d, criterion, a bound hit,
+    and where its plots are."""
+    r = sp.result
+    edge = (" — at the edge of the scanned range: a better spacing may lie beyond it"
+            if r.at_bound else "")
+    return (f"**Best spacing: d = {r.d:.1f} m** ({sp.label} = {r.value:.4g}){edge}. Its curve and "
+            "the error maps of this layout and the paper's (d = 15 m, one colour scale) are shown "
+            "beside or below.")
+
+
 def design_tab(scenario, cache, widgets):
     """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
     widget spec of pn.Param (the sidebar's)."""
@@ -119,23 +134,28 @@ def design_tab(scenario, cache, widgets):
     message = refusal(scenario, OWN, "w-design-message")
     run = pn.widgets.Button(name="Find best spacing", button_type="primary")
     # The optimisers take ~1 s (best spacing) to ~10 s (free layouts): off the event loop
-    # (app.offloop), a spinner over what they will change meanwhile.
-    found = pn.Column(pn.pane.Markdown("Press *Find best spacing* (about a second)."),
-                      sizing_mode="stretch_width", min_height=60)
-    spacing_task = offloop.Task("design", busy=[found, run])
+    # (app.offloop), a spinner over what they will change meanwhile. The result is said right
+    # under the button, where the user is looking (the hint there gives way to it); its curve and
+    # maps follow (at 1280 px they wrap below the fold: the line says where they are).
+    said = pn.pane.Markdown(SPACING_HINT, sizing_mode="stretch_width", css_classes=["w-spacing-result"])
+    found = pn.Column(sizing_mode="stretch_width", css_classes=["w-spacing-plots"])
+    spacing_task = offloop.Task("design", busy=[said, found, run])
 
     def spacing_views(snapshot):
         sp = cache.get(snapshot, compute.best_spacing)
         clim = views.common_clim(sp.best, sp.paper)  # one scale: the comparison must not mislead
         best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m", clim=clim, size=260)
         paper = views.error_map(sp.paper, "Paper: d = 15 m", clim=clim, size=260)
-        return (views.spacing_plot(sp), best * views.station_layer(sp.best.stations),
-                paper * views.station_layer(sp.paper.stations))
+        return spacing_text(sp), (views.spacing_plot(sp), best * views.station_layer(sp.best.stations),
+                                  paper * views.station_layer(sp.paper.stations))
 
-    def spacing_shown(plots):
+    def spacing_shown(shown):
+        text, plots = shown
+        said.object = text
         found[:] = [pn.FlexBox(*[pn.pane.HoloViews(p) for p in plots], sizing_mode="stretch_width")]
 
     def spacing_failed(exc):
+        said.object = ""
         found[:] = [pn.pane.HTML(alert(f"Best spacing not found: {type(exc).__name__}: {exc}", "danger"),
                                  sizing_mode="stretch_width")]
 
@@ -186,7 +206,7 @@ def design_tab(scenario, cache, widgets):
                                       sizing_mode="stretch_width"),
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(criteria, run, optimise, outcome, width=360), found,
+        pn.FlexBox(pn.Column(criteria, run, said, optimise, outcome, width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )

@@ -14,6 +14,15 @@ per image per change, through public Bokeh only.
 
 Every layer of a map (value, veil) always covers the same rectangle as the map (issue 16, defect
 1: the veil was re-sent only when its image or x changed, and stayed where the last plane had it).
+
+Aspect (issue 25). A metre is as long across as up on an x–y map: the ranges are Bokeh
+``DataRange1d`` fitted to the view box (:func:`view_box`, corners drawn invisibly) with the
+figures' ``match_aspect``, so BokehJS widens one range until the frame's pixel aspect is the
+data's, at any width of the page (the frames were ~130 × 190 px over ±300 m square, circles drawn
+as upright ellipses). An x–z section (often far wider than deep) is drawn with a stated vertical
+exaggeration, a round number (:func:`exaggeration`) in its z axis label, set through
+``aspect_scale``. The colour bar lies under the map, not beside it: the map is wider, and the
+bar's labels no longer touch the frame.
 """
 
 from __future__ import annotations
@@ -22,14 +31,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from bokeh.models import (
+    BasicTicker,
+    BoxZoomTool,
     ColorBar,
     ColumnDataSource,
     CustomJSHover,
     CustomJSTickFormatter,
+    DataRange1d,
     HoverTool,
     Label,
     LinearColorMapper,
-    Range1d,
     SaveTool,
     Title,
 )
@@ -39,14 +50,25 @@ from .compute import KIND_NAMES, RUNAWAY_LIMIT, Panels, colour_range
 
 #: Veil codes of a pixel (the veil image): 0 observable, 1 and 2 unobservable (the two colours of
 #: its stripes), 3 no value (on a station, or blank where the paper's Δ ≤ 0), 4 and 5 a CRLB
-#: beyond RUNAWAY_LIMIT of the range (the linearised bound runs away): see VEIL_PALETTE.
+#: beyond RUNAWAY_LIMIT of the range (the linearised bound runs away: 4 its white dots, 5 between
+#: them): see VEIL_PALETTE.
 OK, VEIL_DARK, VEIL_LIGHT, NO_VALUE, RUNAWAY, RUNAWAY_GAP = 0, 1, 2, 3, 4, 5
 #: Unobservable points are striped grey, opaque enough that the round-off beneath is not read as
 #: colour; points with no value are left to the image's own white (NaN); runaway points are
-#: hatched white the other way, the colour beneath still readable. Distinct by design.
+#: dotted white (:func:`runaway_dots`), the colour beneath still readable. Distinct by design:
+#: runaway was hatched the other way, and two kinds of diagonal stripes were confused (issue 25).
 VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000", "#ffffffb0", "#00000000")
 NAN_COLOUR = "#ffffff"
 STRIPE = 6  # pixels of the map grid per stripe of the veil
+DOT = 3  # pixels of the map grid per side of a runaway dot (one every 2 DOT, in both directions)
+
+
+def runaway_dots(shape):
+    """Where the white dots of the runaway marks are, on a map grid of ``shape`` (bool): squares
+    of DOT × DOT points on a 2 DOT grid, a pattern no stripe of the unobservable veil resembles
+    (the Maps, Layout design and Track tabs all mark runaway points with it)."""
+    i, j = np.indices(shape)
+    return ((i // DOT) % 2 == 0) & ((j // DOT) % 2 == 0)
 
 #: The hover of a map, on its veil layer (a veil code is never NaN: Bokeh shows a NaN value as
 #: "NaN" without asking the formatter): what the point is, or its value, the normalised image
@@ -93,25 +115,53 @@ class MapFigures:
     captions: tuple
     saves: tuple
     labels: tuple = ()  # per map: a Label inside its frame, shown when it is veiled everywhere
-    view: object = None  # the (plane, view box) last drawn: a new one resets zoom and pan
+    view: object = None  # the (plane, view box, exaggeration) last drawn: a new one resets zoom and pan
+    view_source: object = None  # the view box's corners, drawn invisibly: the ranges fit them
+
+
+#: The figures' size before scaling to the page's width (``scale_width``): frames within ~8 % of square
+#: from ~300 px per map (a 1280 px screen) to ~400 (1600 px); ``match_aspect`` keeps
+#: a metre square either way, widening one range).
+WIDTH, HEIGHT = 420, 560
 
 
 def _figure(x_range, y_range):
     from bokeh.plotting import figure
 
-    fig = figure(x_range=x_range, y_range=y_range, width=420, height=465, sizing_mode="scale_width",
-                 tools="pan,wheel_zoom,box_zoom,reset", match_aspect=False, title="",
+    fig = figure(x_range=x_range, y_range=y_range, width=WIDTH, height=HEIGHT, sizing_mode="scale_width",
+                 tools="pan,wheel_zoom,reset", match_aspect=True, title="",
                  background_fill_color="white", border_fill_color="white", min_border_left=56,
-                 min_border_right=4, toolbar_location="right")
+                 min_border_right=12, toolbar_location="right")
+    box_zoom = BoxZoomTool(match_aspect=True)  # a box zoom keeps the aspect too
+    fig.add_tools(box_zoom)
     fig.title.text_font_size = "10pt"
     fig.xaxis.ticker.desired_num_ticks = 4  # labels of a narrow map (1280 px screen) must not run together
     fig.toolbar.autohide = True
     return fig
 
 
+def exaggeration(plane):
+    """The vertical exaggeration an x–z section is drawn with: 1, 2, 5, 10, 20, … nearest (in
+    log) to its width over its depth, never below 1 (1 for an x–y map: a metre is a metre)."""
+    if plane.kind != "xz":
+        return 1
+    ratio = (plane.u[1] - plane.u[0]) / max(plane.v[1] - plane.v[0], 1e-9)
+    if ratio <= 1.5:
+        return 1
+    nice = [m * 10 ** k for k in range(0, 8) for m in (1, 2, 5)]
+    return min(nice, key=lambda e: abs(np.log(e / ratio)))
+
+
+def _ranges():
+    """Fresh ranges (BokehJS fits them again: a new view forgets the user's zoom)."""
+    return DataRange1d(range_padding=0), DataRange1d(range_padding=0)
+
+
 def build():
     """Three empty linked maps (one shared x and y range: zoom and pan together)."""
-    x_range, y_range = Range1d(-1, 1), Range1d(-1, 1)
+    x_range, y_range = _ranges()
+    view_source = ColumnDataSource(dict(x=[-1.0, 1.0], y=[-1.0, 1.0]), name="map-view")
+    corners = []
     value_bar, diff_bar = (LinearColorMapper(palette=Viridis256, low=0, high=1, nan_color=NAN_COLOUR)
                            for _ in range(2))
     veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=len(VEIL_PALETTE) - 1)
@@ -131,6 +181,7 @@ def build():
         v = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
         s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
                         line_color="black", line_width=1.5)
+        corners.append(fig.scatter("x", "y", source=view_source, size=0, alpha=0))  # what the ranges fit
         fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
                                                       log=False, texts=dict(unobservable="", none="", runaway="")))
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
@@ -139,10 +190,12 @@ def build():
         save = SaveTool(filename="observability_map")
         fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
                                        visible=False), save)
-        bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", width=12,
-                       title_text_font_size="9pt", formatter=CustomJSTickFormatter(code=_TICK_JS,
-                                                                                   args=dict(log=False)))
-        fig.add_layout(bar, "right")
+        bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", orientation="horizontal",
+                       height=10, padding=4, margin=8, title_standoff=3, title_text_font_size="8pt",
+                       title_text_font_style="normal", major_label_text_font_size="8pt",
+                       formatter=CustomJSTickFormatter(code=_TICK_JS, args=dict(log=False)))
+        bar.ticker = BasicTicker(desired_num_ticks=5)
+        fig.add_layout(bar, "below")
         caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
         fig.add_layout(caption, "below")
         # Inside the frame: what a map veiled everywhere is (a newcomer took it for broken)
@@ -152,7 +205,10 @@ def build():
         fig.add_layout(label)
         for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label)):
             out[key].append(model)
-    return MapFigures(layout=tuple(out["figs"]), figures=tuple(out["figs"]), images=tuple(out["images"]),
+    for rng in (x_range, y_range):
+        rng.renderers = corners
+    return MapFigures(view_source=view_source,
+                      layout=tuple(out["figs"]), figures=tuple(out["figs"]), images=tuple(out["images"]),
                       veils=tuple(out["veils"]), stations=tuple(out["stations"]),
                       bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
                       hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
@@ -185,11 +241,21 @@ def _maps(p: Panels):
     return maps, ("x", "y" if p.plane.kind == "xy" else "z")
 
 
+#: The diverging palette of a signed comparison, low to high: B better is blue, B worse red,
+#: whichever way the measure runs (RdBu11 runs blue to red).
+B_BETTER_LOW, B_BETTER_HIGH = RdBu11, RdBu11[::-1]
+
+
 def ranges(p: Panels):
-    """[(low, high, palette)] of each map's colour scale: A and B share theirs."""
+    """[(low, high, palette)] of each map's colour scale: A and B share theirs.
+
+    A signed difference is blue where B is better and red where it is worse for every measure:
+    lower is better for the CRLB (log10 σ_B/σ_A < 0), higher for the others (it was one palette
+    for all, so "B better" was red on the CRLB map and blue on the others)."""
     diff_range, paper_diff = _diff_colours(p)
     value = (p.clim[0], p.clim[1], Viridis256[::-1] if p.log_scale else Viridis256)  # CRLB: low good
-    diff = (diff_range[0], diff_range[1], Viridis256 if paper_diff else RdBu11[::-1])
+    signed = B_BETTER_LOW if p.measure == "crlb_position" else B_BETTER_HIGH
+    diff = (diff_range[0], diff_range[1], Viridis256 if paper_diff else signed)
     return [value, value, diff]
 
 
@@ -210,14 +276,15 @@ def normalised(values, low, high):
 
 def veil_codes(observable, values, runaway=None):
     """The veil image (float32 codes, see :data:`VEIL_PALETTE`): diagonal stripes where the point
-    is unobservable, NO_VALUE where it is observable but has no value, stripes the other way
+    is unobservable, NO_VALUE where it is observable but has no value, dots (:func:`runaway_dots`)
     where ``runaway`` (bool, optional) flags it, OK elsewhere."""
     n_v, n_u = observable.shape
     i, j = np.arange(n_v)[:, None], np.arange(n_u)[None, :]
     stripes = ((i + j) // STRIPE) % 2
     good = np.where(np.isfinite(values), OK, NO_VALUE)
     if runaway is not None:
-        good = np.where(runaway & np.isfinite(values), RUNAWAY + ((i - j) // STRIPE) % 2, good)
+        good = np.where(runaway & np.isfinite(values),
+                        np.where(runaway_dots(observable.shape), RUNAWAY, RUNAWAY_GAP), good)
     return np.where(observable, good, VEIL_DARK + stripes).astype(np.float32)
 
 
@@ -333,6 +400,8 @@ def set_maps(figs: MapFigures, prepared):
     d = _prepared(prepared)
     p, maps, (xname, vname) = d.panels, d.maps, d.axes
     where = geometry(p.plane)
+    stretch = exaggeration(p.plane)
+    vertical = f", vertical ×{stretch:g}" if stretch != 1 else ""
     for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, d.ranges)):
         fig = figs.figures[which]
         figs.images[which].data = dict(image=[d.images[which]], **where)
@@ -352,7 +421,7 @@ def set_maps(figs: MapFigures, prepared):
         fig.title.text = title + (" (paper)" if paper else "")
         fig.title.text_color = "#b03a2e" if paper else "#222222"
         fig.outline_line_color, fig.outline_line_width = ("#b03a2e", 3) if paper else ("#e5e5e5", 1)
-        fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)"
+        fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)" + vertical
         label = (p.value_labels[which] if p.value_labels else p.value_label) if which < 2 else p.diff_label
         log = which < 2 and p.log_scale
         bar = figs.colorbars[which]
@@ -372,9 +441,14 @@ def set_maps(figs: MapFigures, prepared):
         if figs.labels and (figs.labels[which].text, figs.labels[which].visible) != (said, bool(said)):
             figs.labels[which].update(text=said, visible=bool(said))
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
-    view = (p.plane, view_box(p))
+    view = (p.plane, view_box(p), stretch)
     if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom
         u0, u1, v0, v1 = view[1]
-        figs.figures[0].x_range.update(start=u0, end=u1)
-        figs.figures[0].y_range.update(start=v0, end=v1)
+        figs.view_source.data = dict(x=[u0, u1], y=[min(v0, v1), max(v0, v1)])
+        x_range, y_range = _ranges()
+        y_range.flipped = p.plane.kind == "xz"  # depth down
+        for rng in (x_range, y_range):
+            rng.renderers = list(figs.figures[0].x_range.renderers)
+        for fig in figs.figures:
+            fig.update(x_range=x_range, y_range=y_range, aspect_scale=1.0 / stretch)
         figs.view = view

@@ -6,10 +6,11 @@ import asyncio
 import html
 from functools import partial
 
+import numpy as np
 import panel as pn
 from bokeh.layouts import row
 
-from . import map_figures, offloop, views
+from . import export, map_figures, offloop, views
 from .compute import MAPS, RUNAWAY_LIMIT, Snapshot
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
@@ -41,24 +42,35 @@ the save tool of each map writes a PNG named after the scenario, with its parame
 All logarithms are base 10.
 """
 
-#: What the marks on the maps mean (the veil and the blanks are distinct on purpose).
-LEGEND = (
-    '<div class="maps-legend" style="font-size:13px;color:#333;display:flex;flex-wrap:wrap;gap:18px">'
-    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
-    'border:1px solid #888;background:repeating-linear-gradient(45deg,#6b6b6b 0 4px,#b4b4b4 4px 8px)">'
-    '</span> unobservable (rank Γ &lt; 7 states; &lt; 8 for a magnetic sensor): the colours beneath '
-    'are round-off</span>'
-    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
-    'border:1px solid #888;background:#fff"></span> no value: on a station, or Δ ≤ 0 (B no better)'
-    '</span>'
-    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
-    'border:1px solid #888;background:repeating-linear-gradient(-45deg,#ffffff 0 4px,#46327e 4px 8px)">'
-    f'</span> CRLB &gt; {RUNAWAY_LIMIT:.0%} of the range to the nearest station: the bound does not predict a '
-    'tracker\'s error (far-field runaway)</span>'
-    '<span>△ station</span>'
-    '<span><span style="display:inline-block;width:22px;height:14px;vertical-align:middle;'
-    'border:3px solid #b03a2e"></span> the paper\'s figure</span></div>'
-)
+_SWATCH = 'display:inline-block;width:22px;height:14px;vertical-align:middle;border:1px solid #888;'
+#: The runaway marks' swatch: white dots over a map colour, as drawn (app.map_figures.runaway_dots).
+RUNAWAY_SWATCH = (_SWATCH + "background:radial-gradient(circle,#ffffff 0 2px,transparent 2.5px) 0 0/6px 6px,"
+                  "#46327e")
+
+
+def legend(p=None):
+    """What the marks on the maps ``p`` mean (the veil and the blanks are distinct on purpose);
+    the runaway dots only when a map has some (CRLB maps only: ``p.runaway``; with no ``p``,
+    every entry). It was shown for every measure."""
+    runaway = p is None or any(bool(np.any(r)) for r in p.runaway)
+    return (
+        '<div class="maps-legend" style="font-size:13px;color:#333;display:flex;flex-wrap:wrap;gap:18px">'
+        f'<span><span style="{_SWATCH}background:repeating-linear-gradient(45deg,#6b6b6b 0 4px,#b4b4b4 4px 8px)">'
+        '</span> unobservable (rank Γ &lt; 7 states; &lt; 8 for a magnetic sensor): the colours beneath '
+        'are round-off</span>'
+        f'<span><span style="{_SWATCH}background:#fff"></span> no value: on a station, or Δ ≤ 0 (B no better)'
+        '</span>'
+        + (f'<span class="maps-legend-runaway"><span style="{RUNAWAY_SWATCH}"></span> CRLB &gt; '
+           f'{RUNAWAY_LIMIT:.0%} of the range to the nearest station: the bound does not predict a '
+           'tracker\'s error (far-field runaway)</span>' if runaway else '')
+        + '<span>△ station</span>'
+        f'<span><span style="{_SWATCH.replace("border:1px solid #888;", "")}border:3px solid #b03a2e"></span>'
+        ' the paper\'s figure</span></div>'
+    )
+
+
+#: Every entry of the legend (for a page that does not follow the measure).
+LEGEND = legend()
 
 
 def alert(text, kind):
@@ -107,6 +119,8 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     # the maps once more, synchronously, before redraw could start).
     note = pn.pane.HTML(alert(_notes(first), "warning"), visible=bool(_notes(first)),
                         sizing_mode="stretch_width", css_classes=["w-note"])
+    # The marks' legend, redrawn with the maps: runaway dots only on CRLB maps (issue 25)
+    key = pn.pane.HTML(legend(first), sizing_mode="stretch_width", css_classes=["w-legend"])
     # Always laid out, at the height of its one-line banner: the maps no longer jump ~45 px when
     # a paper figure's banner comes and goes
     paper = pn.pane.HTML(_paper_line(first), sizing_mode="stretch_width", min_height=PAPER_HEIGHT,
@@ -176,12 +190,13 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                 p = panels.panels
                 note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
                 paper.object = _paper_line(p)
+                key.object = legend(p)
                 now = remedies(p)
                 known.visible, crlb.visible = now["known"], now["crlb"]
 
     scenario.watch(redraw, MAPS)
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
-    tab = pn.Column(paper, plots, pn.pane.HTML(LEGEND, sizing_mode="stretch_width"), note,
+    tab = pn.Column(paper, plots, key, note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                     sizing_mode="stretch_width")
     tab.figures = figs  # for tests
@@ -205,3 +220,9 @@ def to_csv(scenario, cache):
 def to_netcdf(scenario, cache):
     """The maps of ``scenario`` as NetCDF (the download button's file)."""
     return views.to_netcdf(*_current(scenario, cache))
+
+
+def to_png(scenario, cache):
+    """The three maps of ``scenario`` as one high-resolution PNG (:mod:`app.export`; the save tool
+    of a map writes its ~400 px canvas)."""
+    return export.to_png(cache.get(Snapshot.of(scenario)))

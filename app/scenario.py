@@ -169,6 +169,12 @@ class Part(param.Parameterized):
         """Why this part's values disagree with each other (e.g. an empty x–z range); else []."""
         return []
 
+    def refuse(self, name, why):
+        """Say, as the owner's refusal message next to input ``name``, why a typed text was not
+        taken (e.g. not a number); the value is unchanged."""
+        self._owner.param.update(message=f"{self.param[name].label}: {why}. Kept the last good value.",
+                                 refused=[name])
+
 
 class Target(Part):
     """The target: its sources (electric moments P_h, P_v; a magnetic moment vector), its motion

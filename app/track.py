@@ -146,17 +146,15 @@ def plan_view(out):
     bound = np.where(np.isfinite(res.pcrlb_m), res.pcrlb_m, np.nan)
     x, y = hv.Dimension("x", unit="m"), hv.Dimension("y", unit="m")
     pts = hv.Points(
-        {"x": truth[:, 0], "y": truth[:, 1], "time": t, "pcrlb": bound,
-         "log10_pcrlb": np.log10(bound), "range": out["range_m"],
+        {"x": truth[:, 0], "y": truth[:, 1], "time": t, "pcrlb": bound, "range": out["range_m"],
          "trusted": np.where(breaks, f"no: bound > {RUNAWAY_LIMIT:g} × range", "yes")},
         kdims=[x, y],
-        vdims=[hv.Dimension("log10_pcrlb", label="log10 PCRLB", unit="log10 m"),
-               hv.Dimension("time", unit="s"), hv.Dimension("pcrlb", label="PCRLB σ", unit="m"),
+        vdims=[hv.Dimension("pcrlb", label="PCRLB σ", unit="m"), hv.Dimension("time", unit="s"),
                hv.Dimension("range", label="range to nearest station", unit="m"),
                hv.Dimension("trusted", label="bound predicts errors")],
         label="true track (colour: PCRLB)",
-    ).opts(color="log10_pcrlb", cmap="viridis", colorbar=True, size=5, tools=["hover"],
-           clabel="log10 PCRLB position σ (m)")
+    ).opts(color="pcrlb", cmap="viridis", logz=True, colorbar=True, size=5, tools=["hover"],
+           clabel="PCRLB position σ (m), log scale")  # ticks in metres (they were log10 m under "(m)")
     layers = [map_layer(out["map"]), hv.Path([truth[:, :2]], kdims=[x, y]).opts(color=TRUTH, line_width=1)]
     est = res.tracks["estimate"]
     if res.summary["filter"] == "bank":
@@ -181,13 +179,16 @@ def plan_view(out):
                             label="stations").opts(marker="triangle", color="black", size=12))
     (x0, x1), (y0, y1) = out["window"]
     return hv.Overlay(layers).opts(
-        title="Track, PCRLB along it, and the trackers' estimates, over the snapshot CRLB map",
-        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="top_left", responsive=True)
+        title="Track, PCRLB and estimates over the snapshot CRLB map",  # fits at 1280 px (was cut)
+        # the legend under the frame: inside it covered the estimates (issue 25); beside it, it
+        # squeezed the frame to ~120 px at 1280 × 800
+        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="bottom", legend_cols=3,
+        responsive=True)
 
 
 def map_layer(d):
     """The snapshot CRLB map beneath the track (grey, darker = smaller bound; hover: log10 m),
-    hatched where it exceeds RUNAWAY_LIMIT × the range, as on the Maps and Layout design tabs."""
+    dotted white where it exceeds RUNAWAY_LIMIT × the range, as on the Maps and Layout design tabs."""
     err = np.where(np.isfinite(d.errors.position), d.errors.position, np.nan)
     with np.errstate(divide="ignore"):
         log_err = np.log10(err)
@@ -269,10 +270,13 @@ def _outputs(scenario: Scenario):
     steps) is said above them and the last plots stay."""
     problem = pn.pane.Alert("", alert_type="warning", visible=False, sizing_mode="stretch_width",
                             css_classes=["w-track-problem"])
-    summary = pn.pane.Markdown("", sizing_mode="stretch_width")
+    #: Said (under the spinner) until the first track is shown: the first visit computes it
+    summary = pn.pane.Markdown("*Computing the track, its bound and the trackers' runs …*",
+                               sizing_mode="stretch_width", css_classes=["w-track-summary"])
     plan = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=560)
     error = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=340)
-    outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width")
+    # min_height: the spinner over it is seen before the first plots come (it was a ring ~10 px high)
+    outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width", min_height=400)
     task = offloop.Task("track", busy=[outputs])
 
     def say(text):
@@ -302,6 +306,31 @@ def _outputs(scenario: Scenario):
     return pn.Column(problem, outputs, sizing_mode="stretch_width")
 
 
+#: The parts whose values :func:`note_text` quotes (the target's moments and depth, the sensor noise).
+NOTE_READS = ("target", "sensor")
+
+
+def note_text(s):
+    """The tab's help, quoting the target's moments and the sensor noise it uses: they are set in
+    the sidebar's Target and Advanced sections (the help said "set above", and the noise is in
+    the collapsed Advanced section on the left)."""
+    kind = SENSORS[s.sensor]
+    if kind == "E":
+        source = (f"the target's moments P = ({s.Ph:g}, {s.Pv:g}) A·m (sidebar, *Target*) and the "
+                  f"sensor noise {s.noise:g} V/m (sidebar, *Advanced*)")
+    else:
+        noise = {"B": f"{s.noise_b:g} nT", "G": f"{s.noise_g:g} nT/m",
+                 "BG": f"{s.noise_b:g} nT and {s.noise_g:g} nT/m"}[kind]
+        source = (f"the target's moment m = ({s.mx:g}, {s.my:g}, {s.mz:g}) A·m² (sidebar, *Target*) "
+                  f"and the sensor noise {noise} (sidebar, *Advanced*)")
+    return (f"A straight track over the design tab's stations at the target depth z = {s.z:g} m, "
+            f"with {source}. The PCRLB (Tichavský) is the best achievable position σ along it; the "
+            "trackers are run on simulated measurements. Beneath: the snapshot CRLB map (3-D position "
+            "σ over N instants at the track's velocity, darker = smaller), dotted white where it "
+            f"exceeds {RUNAWAY_LIMIT:.0%} of the range to the nearest station (the linearised bound "
+            "does not predict there).")
+
+
 def track_tab(scenario: Scenario):
     """The Track tab's layout for a shared :class:`Scenario` (a Panel layout); its outputs are
     built (and first computed) when the tab is first shown."""
@@ -310,21 +339,24 @@ def track_tab(scenario: Scenario):
                if isinstance(scenario.track.param[name], param.Number)}
     options["track_alpha"] = {"type": pn.widgets.FloatInput, "step": 1e-4, "format": "0.[0000]"}
     widgets = pn.Param(scenario.track, parameters=own, show_name=False, widgets=options)
-    note = pn.pane.Markdown(
-        "A straight track over the design tab's stations at the target depth z, with the "
-        "target's moments and the sensor noise set above. The PCRLB (Tichavský) is the best "
-        "achievable position σ along it; the trackers are run on simulated measurements. "
-        "Beneath: the snapshot CRLB map (3-D position σ over N instants at the track's velocity, "
-        f"darker = smaller), hatched white where it exceeds {RUNAWAY_LIMIT:.0%} of the range to the nearest "
-        "station (the linearised bound does not predict there).",
-        sizing_mode="stretch_width")
+    note = pn.pane.Markdown(note_text(scenario.snapshot(NOTE_READS)), sizing_mode="stretch_width",
+                            css_classes=["w-track-note"])
+    scenario.watch(lambda *_: setattr(note, "object", note_text(scenario.snapshot(NOTE_READS))), NOTE_READS)
+
+    def outputs():
+        return _outputs(scenario)
+
     return pn.Row(
         pn.Column(widgets, refusal(scenario, own, "w-message-track"), width=320),
         pn.Column(
             note,
             # lazy: not computed until the tab is first shown (each change of the maps' inputs
-            # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release)
-            pn.panel(lambda: _outputs(scenario), lazy=True, sizing_mode="stretch_width"),
+            # re-ran the Monte-Carlo here, on a hidden tab: ~100 ms of every slider release).
+            # A ParamFunction: pn.panel(lambda: ..., lazy=True) made an ``interactive`` of the
+            # zero-argument lambda, which ran it at once, in every new session; its plots were
+            # then drawn in the tab's first render, 2-3 s blank with no spinner (issue 25). Now
+            # the first render is the inputs and a spinner, and the plots follow.
+            pn.param.ParamFunction(outputs, lazy=True, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         ),
         sizing_mode="stretch_width",  # stretch_both made Panel override the Tabs' sizing (logged)

@@ -12,7 +12,7 @@ import xarray as xr
 
 from . import compute
 from .compute import RUNAWAY_LIMIT, Panels
-from .map_figures import STRIPE
+from .map_figures import runaway_dots
 from .scenario import ERROR_QUANTITIES
 
 hv.extension("bokeh", logo=False)
@@ -128,11 +128,10 @@ def error_map(d, title, quantity="3-D position error (m)", clim=None, size=320):
 
 
 def runaway_layer(d):
-    """White hatching where the design's 3-D position CRLB exceeds RUNAWAY_LIMIT × the range to
+    """White dots where the design's 3-D position CRLB exceeds RUNAWAY_LIMIT × the range to
     the nearest station (:func:`app.compute.runaway`; the same marks as the Maps tab's)."""
     far = compute.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
-    i, j = np.indices(far.shape)
-    hatch = far & (((i - j) // STRIPE) % 2 == 0)
+    hatch = far & runaway_dots(far.shape)
     label = f"CRLB > {RUNAWAY_LIMIT:.0%} of range"
     return hv.Image(np.flipud(hatch.astype(float)), bounds=_bounds(d.plane), kdims=list(axes(d.plane)),
                     vdims=[hv.Dimension("runaway", label=label)]).opts(
@@ -166,7 +165,7 @@ def error_ellipse(errors, x, y, extent, range_m=None):
     if range_m is not None and float(errors.position) > RUNAWAY_LIMIT * range_m:
         text += (f" That is over {RUNAWAY_LIMIT:.0%} of the range to the nearest station "
                  f"({range_m:.3g} m): the linearised bound does not predict a tracker's error here "
-                 "(far-field runaway; hatched on the map).")
+                 "(far-field runaway; dotted white on the map).")
     return ell.opts(color="red", line_width=2), text
 
 

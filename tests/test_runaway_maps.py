@@ -39,7 +39,7 @@ def test_crlb_maps_hatch_exactly_the_points_whose_bound_exceeds_30_percent_of_th
     veils = map_figures.prepare(p).veils
     hatched = np.isin(veils[1], (map_figures.RUNAWAY, map_figures.RUNAWAY_GAP))
     np.testing.assert_array_equal(hatched, rb)
-    assert {map_figures.RUNAWAY, map_figures.RUNAWAY_GAP} <= set(np.unique(veils[1]))  # striped
+    assert {map_figures.RUNAWAY, map_figures.RUNAWAY_GAP} <= set(np.unique(veils[1]))  # dotted
     assert f"{rb.sum() / p.b.observable.sum():.0%} of the observable points" in p.far_note
     assert "not as an error to quote" in p.far_note
 
@@ -70,7 +70,8 @@ def test_the_layout_design_map_hatches_the_same_points():
     hatch = np.flipud(layer.data)  # hv.Image rows run from the top
     assert hatch.shape == far.shape
     assert not (hatch.astype(bool) & ~far).any()  # hatched only where flagged …
-    assert hatch[far].mean() == pytest.approx(0.5, abs=0.1)  # … in stripes over all of it
+    # … in dots over all of it (DOT × DOT squares on a 2 DOT grid: a quarter of the points)
+    assert hatch[far].mean() == pytest.approx(0.25, abs=0.1)
 
 
 def test_a_clicked_far_point_says_its_bound_does_not_predict_an_error():
@@ -121,4 +122,4 @@ def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
     assert image.vdims[0].unit == "log10 m"
     np.testing.assert_array_equal(np.flipud(hatch.data) > 0,
                                   c.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
-                                  & (np.add.outer(np.arange(len(v)), -np.arange(len(u))) // map_figures.STRIPE % 2 == 0))
+                                  & map_figures.runaway_dots((len(v), len(u))))

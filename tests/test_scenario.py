@@ -190,7 +190,7 @@ def test_maps_for_every_measure_and_plane():
             assert len(maps) == 3 and vname == ("y" if plane == "x–y" else "z")
             assert clim[0] < clim[1] and diff_range[0] < diff_range[1]
             map_figures.fill(figs, p)
-            assert figs.figures[2].yaxis.axis_label == f"{vname} (m)"
+            assert figs.figures[2].yaxis.axis_label.startswith(f"{vname} (m)")  # x–z: ", vertical ×2"
             assert figs.images[1].data["image"][0].dtype == np.float32
             low, high, _ = map_figures.ranges(p)[1]
             np.testing.assert_array_equal(figs.images[1].data["image"][0],
@@ -304,16 +304,21 @@ def test_every_layer_of_a_map_covers_the_maps_rectangle(first, then):
 
 
 def test_the_xz_plane_has_depth_increasing_downwards_and_shows_every_station():
+    # the ranges are fitted in the browser (DataRange1d, match_aspect: app/map_figures.py) to the
+    # view box's corners; tests/test_browser.py checks the fitted ranges
     figs = map_figures.build()
     _fill(figs, plane="x–z", z_min=100.0, z_max=400.0, h=100.0)
     y = figs.figures[0].y_range
-    assert y.start > y.end  # the top of the plot is the shallow end
+    assert y.flipped  # the top of the plot is the shallow end
+    assert all(f.y_range is y for f in figs.figures)  # zoom and pan together
+    top, bottom = min(figs.view_source.data["y"]), max(figs.view_source.data["y"])
     marker = 13 / 400 * (400 - 100)  # the triangle's size, in metres of a ~400 px high plot
-    assert y.end <= 100.0 - marker / 2, "the stations at h = z_min are not cut at the top"
-    assert y.start >= 400.0 and figs.figures[2].yaxis.axis_label == "z (m)"
+    assert top <= 100.0 - marker / 2, "the stations at h = z_min are not cut at the top"
+    assert bottom >= 400.0 and figs.figures[2].yaxis.axis_label == "z (m), vertical ×2"
+    assert figs.figures[0].aspect_scale == 0.5  # 600 m wide, 300 m deep: drawn ×2 in depth
     _fill(figs, plane="x–y")
     y = figs.figures[0].y_range
-    assert y.start < y.end
+    assert not y.flipped and figs.figures[0].aspect_scale == 1.0 and figs.figures[0].match_aspect
 
 
 def test_crlb_maps_are_coloured_by_log10_metres_and_say_why_a_value_is_missing():

@@ -28,7 +28,7 @@ DRAWN_JS = """() => {
     let n = 0; for (const c of veil.data_source.data.image[0]) if (c == 1 || c == 2) n++;
     const label = p.center.find(m => m.text !== undefined && m.x_units !== undefined);
     const caption = p.below.find(m => m.text !== undefined);
-    const bar = p.right.find(m => m.color_mapper);
+    const bar = [...p.right, ...p.below].find(m => m.color_mapper);  // under the map
     return {title: p.title.text, caption: caption ? caption.text : "",
             label: label && label.visible ? label.text : "", bar: bar ? bar.title : "", veiled: n};
   });

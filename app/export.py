@@ -1,0 +1,105 @@
+"""A high-resolution PNG of the three maps, drawn by matplotlib from the arrays the page draws.
+
+The save tool of a Bokeh map writes its canvas as shown: ~400 × 450 px at a 1600 px screen, too
+coarse for a report (issue 25). Bokeh's own ``export_png`` needs a browser and a webdriver on the
+server; here the same numbers (:func:`app.map_figures.prepare`: values, colour ranges and palettes,
+veil codes, stations, titles, axis labels, captions) are drawn again with matplotlib's Agg canvas
+(no browser, no pyplot state: safe on a worker thread), at :data:`WIDTH_PX` pixels across.
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from . import map_figures
+
+#: Pixels across the exported PNG (three maps side by side: ~900 px each).
+WIDTH_PX = 2700
+DPI = 200
+
+
+def _rgba(hex_colour):
+    h = hex_colour.lstrip("#")
+    alpha = int(h[6:8], 16) / 255 if len(h) == 8 else 1.0
+    return tuple(int(h[k:k + 2], 16) / 255 for k in (0, 2, 4)) + (alpha,)
+
+
+def _tick_text(log):
+    """The colour bar's tick labels as the page writes them (map_figures._TICK_JS)."""
+    def text(tick, _pos=None):
+        if not log:
+            return f"{float(f'{tick:.6g}'):g}".replace("-", "\u2212")
+        m = 10.0 ** tick
+        return f"{m:.0e}" if m >= 1e4 or m < 1e-2 else f"{float(f'{m:.2g}'):g}"
+    return text
+
+
+def figure(p):
+    """A matplotlib Figure of the maps of ``p`` (Panels, or their :func:`map_figures.prepare`)."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import FuncFormatter
+
+    d = p if isinstance(p, map_figures.Prepared) else map_figures.prepare(p)
+    panels = d.panels
+    where = map_figures.geometry(panels.plane)
+    x0, y0 = where["x"][0], where["y"][0]
+    extent = (x0, x0 + where["dw"][0], y0, y0 + where["dh"][0])
+    stretch = map_figures.exaggeration(panels.plane)
+    xname, vname = d.axes
+    u0, u1, v0, v1 = map_figures.view_box(panels)
+    veil_colours = np.array([_rgba(c) for c in map_figures.VEIL_PALETTE])
+    fig = Figure(figsize=(WIDTH_PX / DPI, 0.5 * WIDTH_PX / DPI), dpi=DPI, facecolor="white")
+    axes = fig.subplots(1, 3)
+    for which, (ax, (values, _obs, stations, title), (low, high, palette)) in enumerate(
+            zip(axes, d.maps, d.ranges)):
+        cmap = ListedColormap(list(palette)).with_extremes(bad="white")
+        shown = np.ma.masked_invalid(np.asarray(values, dtype=float))
+        img = ax.imshow(shown, origin="lower", extent=extent, cmap=cmap, vmin=low, vmax=high,
+                        interpolation="nearest", aspect=stretch)
+        codes = d.veils[which].astype(int)
+        ax.imshow(veil_colours[codes], origin="lower", extent=extent, interpolation="nearest",
+                  aspect=stretch)
+        ax.scatter(stations[:, 0], stations[:, 1], marker="^", s=60, facecolor="white",
+                   edgecolor="black", linewidth=1.2, zorder=3)
+        ax.set_xlim(min(u0, u1), max(u0, u1))
+        ax.set_ylim(v0, v1)  # x–z: (deep, shallow): depth down
+        paper = which in panels.paper[0]
+        ax.set_title(title + (" (paper)" if paper else ""), fontsize=9, fontweight="bold",
+                     color="#b03a2e" if paper else "#222222")
+        if paper:
+            for spine in ax.spines.values():
+                spine.set(color="#b03a2e", linewidth=2.5)
+        ax.set_xlabel(f"{xname} (m)", fontsize=8)
+        ax.set_ylabel(f"{vname} (m)" + (f", vertical ×{stretch:g}" if stretch != 1 else ""), fontsize=8)
+        ax.tick_params(labelsize=7)
+        label = ((panels.value_labels[which] if panels.value_labels else panels.value_label)
+                 if which < 2 else panels.diff_label)
+        log = which < 2 and panels.log_scale
+        bar = fig.colorbar(img, ax=ax, orientation="horizontal", fraction=0.05, pad=0.16,
+                           format=FuncFormatter(_tick_text(log)))
+        bar.set_label(f"{label}, log scale" if log else label, fontsize=7)
+        bar.ax.tick_params(labelsize=6.5)
+        bar.ax.annotate(map_figures._wrapped(panels.captions[which], 70), xy=(0, 0), xycoords="axes fraction",
+                        xytext=(0, -30), textcoords="offset points", fontsize=6, color="#555555",
+                        va="top", ha="left")  # under the colour bar's label
+        said = map_figures.veiled_text(panels, which)
+        if said:
+            ax.text(0.03, 0.03, said, transform=ax.transAxes, fontsize=6.5, va="bottom", ha="left",
+                    bbox=dict(facecolor="white", alpha=0.9, edgecolor="#888888"))
+    fig.subplots_adjust(left=0.05, right=0.99, top=0.93, bottom=0.24, wspace=0.28)
+    return fig
+
+
+def to_png(p) -> io.BytesIO:
+    """PNG bytes of :func:`figure` (WIDTH_PX wide)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = figure(p)
+    FigureCanvasAgg(fig)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI, facecolor="white")
+    buf.seek(0)
+    return buf

@@ -1,0 +1,244 @@
+"""Issue 25, item 4, in headless Chromium: map aspect and size at 1280 × 800 and 1600 × 1000, the
+high-resolution PNG, the legend, a refused text in a number box, the Track tab's first visit, the
+best spacing's result; and the docs' screenshots of the Maps, Layout design and Track tabs at both
+sizes (docs/screenshot-*.png, *-1280.png)."""
+
+import io
+import os
+import time
+from pathlib import Path
+from urllib.parse import urlencode
+
+import pytest
+
+from tests.server import CHROMIUM, chromium_browser, served_app
+
+pytest.importorskip("playwright.sync_api")
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+SIZES = {"": {"width": 1600, "height": 1000}, "-1280": {"width": 1280, "height": 800}}
+
+pytestmark = pytest.mark.skipif(
+    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
+    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
+)
+
+#: Per map (A, B, difference): frame size (px), pixels per metre across and up, the z axis
+#: label, whether the colour bar is under the frame, and the colour bar's box (top) against the
+#: frame's bottom, read from the live Bokeh views.
+GEOMETRY_JS = """() => { const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(pv => { const f = pv.frame.bbox, m = pv.model;
+    const bar = m.below.find(r => r.color_mapper);
+    return {frame: [f.width, f.height],
+      ppm: [f.width / Math.abs(m.x_range.end - m.x_range.start),
+            f.height / Math.abs(m.y_range.end - m.y_range.start)],
+      ylabel: m.left[0].axis_label, bar_below: bar !== undefined,
+      bar_beside: m.right.some(r => r.color_mapper)}; }); }"""
+MAPS_READY = """() => window.Bokeh && Bokeh.documents.length > 0 && Array.from(Bokeh.documents[0].all_models)
+  .filter(m => m.name === 'map-image' && m.data.image[0].length > 4).length === 3"""
+
+
+@pytest.fixture(scope="module")
+def server():
+    with served_app() as (url, _):
+        yield url + "/app"
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    with chromium_browser() as browser:
+        yield browser
+
+
+def _open(chromium, url, size=""):
+    pg = chromium.new_page(viewport=SIZES[size])
+    errors = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.goto(url)
+    pg.wait_for_function(MAPS_READY, timeout=60_000)
+    pg.errors = errors
+    return pg
+
+
+def _geometry(pg):
+    deadline = time.time() + 15
+    while True:  # the ranges are fitted after layout: wait until they are
+        maps = pg.evaluate(GEOMETRY_JS)[:3]
+        if all(all(v == v and v > 0 for v in g["ppm"]) for g in maps) or time.time() > deadline:
+            return maps
+        time.sleep(0.2)
+
+
+@pytest.mark.parametrize("size", list(SIZES))
+def test_x_y_maps_are_at_equal_aspect_and_larger_with_their_colour_bar_below(chromium, server, size):
+    # a: circles were upright ellipses (0.21 px/m across, 0.28 up at 1280 × 800); b: each map
+    # was ~130 × 190 px there, its colour bar's labels against the frame
+    pg = _open(chromium, server, size)
+    try:
+        maps = _geometry(pg)
+        for g in maps:
+            across, up = g["ppm"]
+            assert up == pytest.approx(across, rel=0.01), g  # a metre is a metre (1 %: px rounding)
+            assert g["bar_below"] and not g["bar_beside"], g
+        width, height = maps[0]["frame"]
+        if size == "-1280":
+            assert width >= 190 and height >= 170, maps[0]  # was 129 × 171
+        else:
+            assert width >= 300 and height >= 300, maps[0]  # was 236 × 289
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
+def test_an_x_z_section_states_its_vertical_exaggeration_and_is_drawn_with_it(chromium, server):
+    query = urlencode({"plane": "x–z", "z_min": 100.0, "z_max": 400.0})
+    pg = _open(chromium, f"{server}?{query}")
+    try:
+        pg.wait_for_function("() => Array.from(Bokeh.documents[0].all_models).some("
+                             "m => m.axis_label === 'z (m), vertical ×2')", timeout=30_000)
+        for g in _geometry(pg):
+            across, up = g["ppm"]
+            assert up == pytest.approx(2 * across, rel=0.01), g  # 600 m across, 300 m deep: ×2
+            assert g["ylabel"] == "z (m), vertical ×2"
+    finally:
+        pg.close()
+
+
+def test_the_png_download_is_high_resolution(chromium, server):
+    from PIL import Image
+
+    pg = _open(chromium, server)
+    try:
+        with pg.expect_download(timeout=60_000) as info:
+            pg.locator(".w-download-png button").first.click()
+        download = info.value
+        assert download.suggested_filename == "fig_5_x_y_log10_det.png"
+        img = Image.open(io.BytesIO(Path(download.path()).read_bytes()))
+        assert img.size[0] >= 1600, img.size  # the save tool's PNG is the canvas: 403 × 446
+    finally:
+        pg.close()
+
+
+def _legend(pg):
+    return pg.locator(".w-legend .maps-legend").first.text_content()  # in the pane's shadow root
+
+
+def test_the_runaway_legend_shows_only_with_runaway_marks(chromium, server):
+    # d: shown for every measure; the runaway marks exist on CRLB maps only
+    pg = _open(chromium, server)
+    try:
+        assert "unobservable" in _legend(pg) and "runaway" not in _legend(pg)
+        pg.locator(".w-measure select").first.select_option("CRLB position error (m)")
+        deadline = time.time() + 30
+        while "runaway" not in _legend(pg):
+            assert time.time() < deadline, _legend(pg)
+            time.sleep(0.2)
+    finally:
+        pg.close()
+
+
+def test_text_typed_in_a_number_box_is_refused_with_its_reason(chromium, server):
+    # l: the browser's numeric box dropped "abc" without a word
+    pg = _open(chromium, server, "-1280")
+    try:
+        box = pg.locator(".w-Ph input").first
+        box.fill("abc")
+        box.press("Enter")
+        msg = pg.locator(".w-message-Ph").filter(visible=True).first
+        msg.wait_for(timeout=15_000)
+        assert "“abc” is not a number" in msg.locator(".alert").text_content()
+        deadline = time.time() + 10
+        while box.input_value() != "100":  # the last good value back in the box
+            assert time.time() < deadline, box.input_value()
+            time.sleep(0.1)
+    finally:
+        pg.close()
+
+
+TRACK_STATE_JS = """() => { const ms = Array.from(Bokeh.documents[0].all_models);
+  return [ms.some(m => m.title && m.title.text && m.title.text.startsWith('Track, PCRLB')),
+          ms.some(m => (m.css_classes || []).includes('pn-loading')),
+          ms.some(m => (m.css_classes || []).includes('w-track-summary'))]; }"""
+
+
+def test_the_track_tab_shows_a_spinner_until_its_first_plots(chromium, server):
+    # j: blank for 2-3 s on the first visit: the tab's first render carried the plots (computed
+    # in every new session), with no indicator
+    pg = _open(chromium, server, "-1280")
+    try:
+        start = time.time()
+        pg.get_by_text("Track", exact=True).first.click()
+        seen = []
+        while time.time() - start < 60:
+            plots, loading, summary = pg.evaluate(TRACK_STATE_JS)
+            seen.append((round(time.time() - start, 2), plots, loading, summary))
+            if plots:
+                break
+            time.sleep(0.05)
+        shown = [t for t, plots, loading, summary in seen if loading and summary and not plots]
+        assert shown, seen  # the tab showed, busy, before its plots came
+        # within 1.5 s of the click (it was 2.3-3.3 s, then everything at once; a busy machine
+        # may take longer to send the tab's inputs: a generous bound, still under the old blank)
+        assert shown[0] <= 1.5, seen
+        assert seen[-1][1], seen  # and the plots came
+        pg.wait_for_function(f"() => !({TRACK_STATE_JS})()[1]", timeout=15_000)  # spinner gone
+    finally:
+        pg.close()
+
+
+def test_the_best_spacing_is_said_under_its_button(chromium, server):
+    # k: the result appeared below the fold (1280 × 800), the button's neighbourhood unchanged
+    pg = _open(chromium, server, "-1280")
+    try:
+        pg.get_by_text("Layout design", exact=True).first.click()
+        button = pg.get_by_role("button", name="Find best spacing")
+        button.wait_for(timeout=30_000)
+        said = pg.locator(".w-spacing-result").first
+        text = lambda: pg.evaluate("() => Array.from(Bokeh.documents[0].all_models).find("  # noqa: E731
+                                   "m => (m.css_classes || []).includes('w-spacing-result')).text")
+        assert "Press" in text()
+        button.scroll_into_view_if_needed()
+        button.click()
+        deadline = time.time() + 60
+        while "Best spacing: d =" not in text():
+            assert time.time() < deadline, text()
+            time.sleep(0.2)
+        assert "Press" not in text()
+        box = said.bounding_box()
+        assert 0 <= box["y"] and box["y"] + box["height"] <= SIZES["-1280"]["height"], box  # in view
+    finally:
+        pg.close()
+
+
+def _title_js(text):
+    return ("() => Array.from(Bokeh.documents[0].all_models).some(m => m.title && m.title.text "
+            f"&& m.title.text.includes({text!r}))")
+
+
+def test_screenshots_of_the_maps_design_and_track_tabs(chromium, server):
+    """docs/screenshot-{default,fig5,design,track}{,-1280}.png, at 1600 × 1000 and 1280 × 800."""
+    for size in SIZES:
+        pg = _open(chromium, server, size)
+        try:
+            time.sleep(1.0)
+            pg.screenshot(path=str(DOCS / f"screenshot-default{size}.png"))
+            pg.get_by_role("button", name="Fig. 2").click()  # elsewhere first: Fig. 5 is a change
+            pg.wait_for_function(_title_js("P = (100, 100)"), timeout=30_000)
+            pg.get_by_role("button", name="Fig. 5").click()
+            pg.wait_for_function(_title_js("B: dual, d = 15 m"), timeout=30_000)
+            time.sleep(1.5)
+            pg.screenshot(path=str(DOCS / f"screenshot-fig5{size}.png"))
+            pg.get_by_text("Layout design", exact=True).first.click()
+            pg.get_by_role("button", name="Find best spacing").wait_for(timeout=30_000)
+            time.sleep(2.0)
+            pg.screenshot(path=str(DOCS / f"screenshot-design{size}.png"))
+            pg.get_by_text("Track", exact=True).first.click()
+            pg.wait_for_function(f"() => ({TRACK_STATE_JS})()[0] && !({TRACK_STATE_JS})()[1]", timeout=60_000)
+            time.sleep(1.5)
+            pg.screenshot(path=str(DOCS / f"screenshot-track{size}.png"))
+            assert pg.errors == []
+        finally:
+            pg.close()
