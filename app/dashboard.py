@@ -245,6 +245,18 @@ def panel_extension():
     pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
 
 
+def first_visit(tabs, titles, holders, builders):
+    """Fill each (empty) tab of ``holders`` (title -> Column) with ``builders[title]()`` the
+    first time it is the active tab of ``tabs`` (a new session builds only the tab it shows)."""
+    def fill(active):
+        title = titles[active]
+        if title in holders and not holders[title].objects:
+            holders[title][:] = [builders[title]()]
+
+    tabs.param.watch(lambda event: fill(event.new), ["active"])
+    fill(tabs.active)
+
+
 def create_app():
     scenario = Scenario()
     cache = SHARED  # results are shared by every session of the process (app.compute)
@@ -269,15 +281,20 @@ def create_app():
     # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
     titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
+    # The other tabs are built on their first visit (first_visit), and then stay in the page:
+    # Panel's dynamic Tabs detach a hidden tab's models from the document, and a change made
+    # to them there (a preset) patched Panel's shared stylesheets to cdn.holoviz.org, for
+    # every model of the page (issue 25, Offline).
+    later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB), design_tab(scenario, cache, _widgets()),
+                                         sizing_mode="stretch_width", margin=0),
+             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
+                                         sizing_mode="stretch_width", margin=0),
+             titles[3]: lambda: calibration_tab(scenario),
+             titles[4]: lambda: shape_tab(scenario)}
+    holders = {t: pn.Column(sizing_mode="stretch_width", margin=0) for t in later}
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
-                   (titles[1], pn.Column(sensor_banner(scenario, DESIGN_TAB),
-                                         design_tab(scenario, cache, _widgets()),
-                                         sizing_mode="stretch_width", margin=0)),
-                   (titles[2], pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
-                                         sizing_mode="stretch_width", margin=0)),
-                   (titles[3], calibration_tab(scenario)),
-                   (titles[4], shape_tab(scenario)),
-                   dynamic=True, sizing_mode="stretch_width")
+                   *holders.items(), sizing_mode="stretch_width")
+    first_visit(tabs, titles, holders, later)
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,
