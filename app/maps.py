@@ -12,6 +12,7 @@ from bokeh.layouts import row
 
 from . import export, map_figures, offloop, views
 from .compute import MAPS, RUNAWAY_LIMIT, Snapshot
+from .scenario import defaults
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
@@ -101,6 +102,13 @@ def _notes(p):
     return "\n".join(t for t in (p.note, p.far_note) if t)
 
 
+#: Where to start, on the page as it opens (a newcomer took the hatched maps for broken).
+START = ("<b>Start here:</b> A is one station, B two stations 15 m apart; one station cannot tell range "
+         "from source strength (hatched: unobservable), two can. Hover a map for its value; the "
+         "buttons on the left load the paper's other figures, the tabs above go on to layouts, "
+         "tracking, calibration and sizing.")
+
+
 def _paper_line(p):
     if not p.paper[1]:  # no preset, or one that is not a figure of the paper (seed 001's trial)
         return ""
@@ -123,6 +131,12 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     key = pn.pane.HTML(legend(first), sizing_mode="stretch_width", css_classes=["w-legend"])
     # Always laid out, at the height of its one-line banner: the maps no longer jump ~45 px when
     # a paper figure's banner comes and goes
+    def opening():  # the page as it opens: every input of the maps at its default
+        return scenario.values(MAPS) == defaults(MAPS)
+
+    # under the maps (above them it would move them when it goes)
+    start = pn.pane.HTML(alert(START, "info"), visible=opening(), sizing_mode="stretch_width",
+                         css_classes=["w-start"])
     paper = pn.pane.HTML(_paper_line(first), sizing_mode="stretch_width", min_height=PAPER_HEIGHT,
                          css_classes=["w-paper"])
     known = pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
@@ -190,13 +204,14 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                 p = panels.panels
                 note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
                 paper.object = _paper_line(p)
+                start.visible = opening()
                 key.object = legend(p)
                 now = remedies(p)
                 known.visible, crlb.visible = now["known"], now["crlb"]
 
     scenario.watch(redraw, MAPS)
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
-    tab = pn.Column(paper, plots, key, note,
+    tab = pn.Column(paper, plots, start, key, note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                     sizing_mode="stretch_width")
     tab.figures = figs  # for tests

@@ -156,6 +156,9 @@ def test_page_loads_with_three_maps_and_units(page):
     veiled = page.evaluate(VEILED_JS)
     assert veiled[0] == 200 * 200  # and is veiled everywhere (rank 6)
     assert veiled[1] == 0  # the dual map nowhere
+    # the page says where to start (issue 25: a newcomer took the hatched maps for broken), and
+    # only as it opens
+    page.locator(".w-start").get_by_text("one station cannot tell range from source strength").wait_for(timeout=5_000)
 
 
 def test_dragging_the_ph_slider_changes_the_maps(page):

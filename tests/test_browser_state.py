@@ -334,4 +334,5 @@ def test_the_maps_do_not_jump_when_the_paper_banner_comes_and_goes(page):
     page.wait_for_function("() => window.location.search.includes('Ph=123')", timeout=15_000)
     time.sleep(1.0)
     assert page.locator(".w-paper .alert").count() == 0  # no paper figure any more
+    assert not page.locator(".w-start").is_visible()  # nor the opening's "Start here"
     assert abs(canvas.bounding_box()["y"] - with_banner) <= 1
