@@ -385,7 +385,10 @@ def main(argv=None):
             if vals.size != 1:
                 raise ValueError(f"--set takes one value; got {item!r}")
             base[name] = float(vals[0])
-        given = (xaxis, yaxis, *((k, [v]) for k, v in base.items() if v is not None))
+        # the swept values, and the fixed ones of the parameters not swept (a swept parameter's
+        # default is not used: z swept over 2…6 m in an 8.4 m sea is not refused for z = 120 m)
+        given = (xaxis, yaxis, *((k, [v]) for k, v in base.items()
+                                 if v is not None and k not in (xaxis[0], yaxis[0])))
         for name, vals in given:
             if name in POSITIVE and np.any(np.asarray(vals) <= 0):
                 raise ValueError(f"parameter {name} must be > 0 ({PARAMETERS[name][1]}); "
