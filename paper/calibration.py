@@ -10,6 +10,8 @@ import numpy as np
 
 from core import calibration as cal
 
+from .sea import ROUNDOFF
+
 SIM = cal.SEED004_SIMULATION
 T1 = cal.SEED004_TABLE1
 #: Seed of the one simulation run shown (seed 004 reports one run).
@@ -177,7 +179,8 @@ def section(nums=None):
     names = cal.COEFFICIENTS
     w(f"Four level headings (N, E, S, W; Be of the simulation): rank Γ = **{f['rank']}** of 12 "
       f"(column-scaled SVD, tolerance {cal.CAL_RANK_RTOL:g}; smallest singular value "
-      f"{f['smallest_sv']:.1e}, round-off). Unobservable: {f['words'][0]}. A constant heel of 8° "
+      + (f"< {ROUNDOFF:g}" if f['smallest_sv'] < ROUNDOFF else f"{f['smallest_sv']:.1e}")
+      + f", round-off). Unobservable: {f['words'][0]}. A constant heel of 8° "
       f"on all four headings is still rank {f['rank_constant_heel']}; roll 10° and pitch 5° "
       f"varying over 12 attitudes (`heading_manoeuvre`) give rank {f['rank_roll_pitch']}.\n")
     w("| coefficient | " + " | ".join(names) + " |")

@@ -43,6 +43,27 @@ def _parser():
     return p
 
 
+#: Relative tolerance of claims.json's numbers in ``--check``: a rerun's sums in another order
+#: (BLAS threads, compiled or cached kernels) move the last bits (1e-16 relative, 1e-12 seen on a
+#: rank-deficient Γ's direction cosine); a change of the model moves them by far more.
+CLAIMS_RTOL = 1e-9
+
+
+def same_numbers(a, b, rtol=CLAIMS_RTOL):
+    """Whether two JSON values are equal, floats to ``rtol`` (relative) or 1e-300 absolute."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(same_numbers(a[k], b[k], rtol) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(same_numbers(x, y, rtol) for x, y in zip(a, b))
+    if isinstance(a, float) or isinstance(b, float):
+        if not isinstance(a, (int, float)) or not isinstance(b, (int, float)):
+            return False
+        if a != a or b != b:  # NaN (json writes it): equal only to NaN
+            return a != a and b != b
+        return a == b or abs(a - b) <= rtol * max(abs(a), abs(b)) + 1e-300
+    return a == b
+
+
 def stale_sections(text, committed, sections):
     """Headings (or indices) of the rendered ``sections`` texts not found verbatim in the
     committed report, in order: the check of :func:`run` with ``check=True``."""
@@ -126,7 +147,7 @@ def run(out, n=121, doc=None, dpi=100, html=True, inline=False, quiet=False, com
         text = report.render(ctx, chosen)
         committed = _read(doc)
         stale = stale_sections(text if sections is None else committed, committed, parts)
-        if _read(cpath) != numbers:
+        if not same_numbers(json.loads(_read(cpath) or "null"), json.loads(numbers)):
             stale.append(f"{cpath} (the numbers behind the verdicts)")
         return {"doc": doc, "claims": cpath, "stale": stale}
     with open(cpath, "w", encoding="utf-8") as fh:

@@ -34,6 +34,10 @@ TRIAL_MOMENTS = (100.0, 0.0)  # a horizontal pair of electrodes: Pv = 0 (still u
 TRIAL_POINTS = ((-57.1, -280.0), (-57.1, -100.0), (-20.0, -30.0), (10.0, 15.0))
 
 
+#: Below this, a column-scaled σ_min/σ_max is round-off (a few ulps of 1): shown as such.
+ROUNDOFF = 1e-15
+
+
 def point_measures(state, stations, sea, steps=STEPS):
     """Rank, log10 η, column-scaled smallest singular value (σ_min/σ_max), CRLB position error
     and horizontal semi-major axis (m) of the all-rows Γ at one state."""
@@ -82,7 +86,10 @@ def _png(path, plane, ratio):
 def _row(label, m):
     crlb = "∞ (unobservable)" if not np.isfinite(m["crlb"]) else f"{m['crlb']:.3g}"
     hor = "∞" if not np.isfinite(m["horizontal"]) else f"{m['horizontal']:.3g}"
-    return f"| {label} | {m['rank']} | {m['log10_eta']:.2f} | {m['smin']:.2e} | {crlb} | {hor} |"
+    # below ROUNDOFF the value is the SVD's round-off, which differs from run to run (BLAS threads,
+    # compiled or cached kernels): its digits would only be noise
+    smin = f"< {ROUNDOFF:g} (round-off)" if m["smin"] < ROUNDOFF else f"{m['smin']:.2e}"
+    return f"| {label} | {m['rank']} | {m['log10_eta']:.2f} | {smin} | {crlb} | {hor} |"
 
 
 def section(doc_dir=None, n=61):

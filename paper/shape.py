@@ -145,7 +145,7 @@ def section(nums=None):
             shape = (f"{_m(v['main_scale_m'], 2)} ({_m(v['main_scale_p10_p90_m'][0], 2)}–"
                      f"{_m(v['main_scale_p10_p90_m'][1], 2)}) | {v['axis_error_deg']:.1f} "
                      f"({v['axis_error_p90_deg']:.1f}) | {v['kind']} ({100 * max(v['kind_share'].values()):.0f} %) "
-                     f"| {v['nees']:.3g}") if "kind" in v else "— | — | — | —"
+                     f"| {v['nees']:.2g}") if "kind" in v else "— | — | — | —"
             w(f"| {key} | {name.upper()} | {_m(v['centroid_error_m'])} ({_m(v['centroid_error_p90_m'])}) "
               f"| {_m(v['peak_error_m'])} | {shape} |")
     w("")

@@ -298,3 +298,17 @@ def test_check_tolerates_sections_appended_by_other_modules():
         "(the report as a whole: a section is missing, extra or out of order)"]
     assert stale_sections(committed, committed.replace("| a |", "| c |"), own) == ["## Verdicts"]
     assert stale_sections(committed, committed, own[::-1]) == ["# Title"]  # out of order
+
+
+def test_the_claims_check_tolerates_last_bits_not_a_change():
+    """--check compares claims.json's numbers to CLAIMS_RTOL (a rerun's sums in another order move
+    the last bits), not byte for byte; a real change, a NaN for a number or a missing key is
+    still stale."""
+    from paper.cli import same_numbers
+
+    committed = {"a": [321.8969524958354, 1.0], "b": {"c": float("nan"), "n": 3}}
+    assert same_numbers(committed, {"a": [321.89695249583536, 0.9999999999999998],
+                                    "b": {"c": float("nan"), "n": 3}})
+    assert not same_numbers(committed, {"a": [321.9, 1.0], "b": {"c": float("nan"), "n": 3}})
+    assert not same_numbers(committed, {"a": [321.8969524958354, 1.0], "b": {"c": 0.0, "n": 3}})
+    assert not same_numbers(committed, {"a": [321.8969524958354, 1.0], "b": {"c": float("nan")}})
