@@ -103,7 +103,7 @@ def _notes(p):
 
 
 #: Where to start, on the page as it opens (a newcomer took the hatched maps for broken).
-START = ("<b>Start here:</b> A is one station, B two stations 15 m apart; one station cannot tell range "
+START = ("Start here: A is one station, B two stations 15 m apart; one station cannot tell range "
          "from source strength (hatched: unobservable), two can. Hover a map for its value; the "
          "buttons on the left load the paper's other figures, the tabs above go on to layouts, "
          "tracking, calibration and sizing.")
