@@ -251,6 +251,14 @@ def first_visit(tabs, titles, holders, builders):
     def fill(active):
         title = titles[active]
         if title in holders and not holders[title].objects:
+            # said at once (a change made on Panel's thread reaches the page while the build goes
+            # on): the first build computes the tab's first results, and right after an install
+            # it waits for their kernels to compile (the warm-up's later stages)
+            holders[title][:] = [pn.Row(
+                pn.indicators.LoadingSpinner(value=True, size=28, margin=(5, 10)),
+                pn.pane.Markdown(f"Building the {title} tab … (on the first start after an "
+                                 "install it waits for its kernels to compile)", margin=(5, 0)),
+                css_classes=["w-tab-building"])]
             holders[title][:] = [builders[title]()]
 
     tabs.param.watch(lambda event: fill(event.new), ["active"])
