@@ -85,10 +85,16 @@ def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
         slider.param.update(start=min(slider.start, v), end=max(slider.end, v), value=v)
         show(v)
 
-    def show(v):
+    def show(v, again=False):
         showing[0] = True
         try:
-            box.value = shown_text(v, integer, decimals)
+            text = shown_text(v, integer, decimals)
+            if again:
+                # Panel drops an update equal to the last value the browser sent, as an echo of
+                # it; after a refused text the last good value often is that one (typed before
+                # it), and the box kept showing the refused text: step through another text
+                box.value = text + " "
+            box.value = text
         finally:
             showing[0] = False
 
@@ -97,7 +103,7 @@ def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
             return
         v, why = parsed(event.new, integer)
         if v is None:
-            show(getattr(owner, name))  # the last good value
+            show(getattr(owner, name), again=True)  # the last good value
             owner.refuse(name, why)
         elif v != getattr(owner, name):
             setattr(owner, name, v)
