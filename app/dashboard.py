@@ -245,21 +245,13 @@ def panel_extension():
     pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
 
 
-def first_visit(tabs, titles, holders, builders):
-    """Fill each (empty) tab of ``holders`` (title -> Column) with ``builders[title]()`` the
-    first time it is the active tab of ``tabs`` (a new session builds only the tab it shows)."""
+def first_visit(tabs, titles, holders, contents):
+    """Put ``contents[title]`` into the (empty) tab ``holders[title]`` (a Column) the first time
+    it is the active tab of ``tabs``: a new page carries the models of the tab it shows only."""
     def fill(active):
         title = titles[active]
         if title in holders and not holders[title].objects:
-            # said at once (a change made on Panel's thread reaches the page while the build goes
-            # on): the first build computes the tab's first results, and right after an install
-            # it waits for their kernels to compile (the warm-up's later stages)
-            holders[title][:] = [pn.Row(
-                pn.indicators.LoadingSpinner(value=True, size=28, margin=(5, 10)),
-                pn.pane.Markdown(f"Building the {title} tab … (on the first start after an "
-                                 "install it waits for its kernels to compile)", margin=(5, 0)),
-                css_classes=["w-tab-building"])]
-            holders[title][:] = [builders[title]()]
+            holders[title][:] = [contents[title]]
 
     tabs.param.watch(lambda event: fill(event.new), ["active"])
     fill(tabs.active)
@@ -289,16 +281,17 @@ def create_app():
     # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
     titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
-    # The other tabs are built on their first visit (first_visit), and then stay in the page:
+    # The other tabs' models are made on their first visit (first_visit; their Python objects
+    # now, as dynamic Tabs did: building the Track tab on the click took ~1 s more), and stay:
     # Panel's dynamic Tabs detach a hidden tab's models from the document, and a change made
     # to them there (a preset) patched Panel's shared stylesheets to cdn.holoviz.org, for
     # every model of the page (issue 25, Offline).
-    later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB), design_tab(scenario, cache, _widgets()),
-                                         sizing_mode="stretch_width", margin=0),
-             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
-                                         sizing_mode="stretch_width", margin=0),
-             titles[3]: lambda: calibration_tab(scenario),
-             titles[4]: lambda: shape_tab(scenario)}
+    later = {titles[1]: pn.Column(sensor_banner(scenario, DESIGN_TAB), design_tab(scenario, cache, _widgets()),
+                                  sizing_mode="stretch_width", margin=0),
+             titles[2]: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
+                                  sizing_mode="stretch_width", margin=0),
+             titles[3]: calibration_tab(scenario),
+             titles[4]: shape_tab(scenario)}
     holders = {t: pn.Column(sizing_mode="stretch_width", margin=0) for t in later}
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    *holders.items(), sizing_mode="stretch_width")
