@@ -109,6 +109,10 @@ START = ("Start here: A is one station, B two stations 15 m apart; one station c
          "tracking, calibration and sizing.")
 
 
+#: The maps' inputs as the page opens.
+OPENING = defaults(MAPS)
+
+
 def _paper_line(p):
     if not p.paper[1]:  # no preset, or one that is not a figure of the paper (seed 001's trial)
         return ""
@@ -132,7 +136,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     # Always laid out, at the height of its one-line banner: the maps no longer jump ~45 px when
     # a paper figure's banner comes and goes
     def opening():  # the page as it opens: every input of the maps at its default
-        return scenario.values(MAPS) == defaults(MAPS)
+        return scenario.values(MAPS) == OPENING
 
     # under the maps (above them it would move them when it goes)
     start = pn.pane.HTML(alert(START, "info"), visible=opening(), sizing_mode="stretch_width",
