@@ -245,13 +245,15 @@ def panel_extension():
     pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
 
 
-def first_visit(tabs, titles, holders, contents):
+def first_visit(tabs, titles, holders, contents, shown=None):
     """Put ``contents[title]`` into the (empty) tab ``holders[title]`` (a Column) the first time
-    it is the active tab of ``tabs``: a new page carries the models of the tab it shows only."""
+    it is the active tab of ``tabs``: a new page carries the models of the tab it shows only.
+    ``shown``: title -> a function called then (a tab's work that waits until it is seen)."""
     def fill(active):
         title = titles[active]
         if title in holders and not holders[title].objects:
             holders[title][:] = [contents[title]]
+            (shown or {}).get(title, lambda: None)()
 
     tabs.param.watch(lambda event: fill(event.new), ["active"])
     fill(tabs.active)
@@ -286,7 +288,8 @@ def create_app():
     # Panel's dynamic Tabs detach a hidden tab's models from the document, and a change made
     # to them there (a preset) patched Panel's shared stylesheets to cdn.holoviz.org, for
     # every model of the page (issue 25, Offline).
-    later = {titles[1]: pn.Column(sensor_banner(scenario, DESIGN_TAB), design_tab(scenario, cache, _widgets()),
+    design = design_tab(scenario, cache, _widgets())
+    later = {titles[1]: pn.Column(sensor_banner(scenario, DESIGN_TAB), design,
                                   sizing_mode="stretch_width", margin=0),
              titles[2]: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
                                   sizing_mode="stretch_width", margin=0),
@@ -295,7 +298,7 @@ def create_app():
     holders = {t: pn.Column(sizing_mode="stretch_width", margin=0) for t in later}
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    *holders.items(), sizing_mode="stretch_width")
-    first_visit(tabs, titles, holders, later)
+    first_visit(tabs, titles, holders, later, shown={titles[1]: design.on_show})
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,

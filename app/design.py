@@ -116,10 +116,35 @@ def design_tab(scenario, cache, widgets):
     def ellipse(x, y, **_):
         return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.region.extent)[0]
 
-    def ellipse_text(x, y, *_):
-        rng = (float(compute.nearest_range([x, y, scenario.target.z], st.stations))
-               if len(st.stations) else None)
-        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.region.extent, rng)[1]
+    # The readout under the table: computed off the loop once the tab has been shown (not on
+    # every change of a map input while another tab is open: ~0.1 s of Python per change), by a
+    # Task, which shows the latest change's text only (computed per change on Panel's threads,
+    # an older, slower computation ending last left an older preset's numbers on the page)
+    readout = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
+    readout_task = offloop.Task("design-readout")
+    shown = []
+
+    def readout_of(key):
+        now, x, y = key
+        s = now.scenario()
+        rng = float(compute.nearest_range([x, y, s.z], s.stations)) if len(s.stations) else None
+        return views.error_ellipse(compute.error_at(now, x, y), x, y, s.extent, rng)[1]
+
+    def refresh(*_):
+        if not shown:
+            return
+        with readout_task.lock:
+            key = snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
+            readout_task.start(key, partial(readout_of, key), partial(setattr, readout, "object"))
+
+    scenario.watch(refresh, SCENE)
+    scenario.design.param.watch(refresh, ["ellipse_x", "ellipse_y"])
+
+    def on_show():
+        """The tab is on the page (app.dashboard.first_visit): its readout from now on."""
+        if not shown:
+            shown.append(True)
+            refresh()
 
     ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
     table = pn.widgets.Tabulator(
@@ -190,23 +215,19 @@ def design_tab(scenario, cache, widgets):
                             partial(optimised, criterion=criterion), optimise_failed)
 
     optimise.on_click(optimise_clicked)
-    return pn.Column(
+    tab = pn.Column(
         pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
         pn.FlexBox(pn.pane.HoloViews(errors * points * ell),
                    pn.Column(pn.Param(scenario.design, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
                              number_input(scenario.design, "ellipse_x", css_classes=["w-ellipse_x"]),
                              number_input(scenario.design, "ellipse_y", css_classes=["w-ellipse_y"]),
-                             # lazy: computed when shown, not on every change of a map input
-                             # while another tab is open (~0.1 s of Python per slider release)
-                             pn.panel(pn.bind(ellipse_text, scenario.design.param.ellipse_x,
-                                              scenario.design.param.ellipse_y,
-                                              *[scenario.ref(n) for n in scenario.values(SCENE)]),
-                                      lazy=True, css_classes=["w-ellipse-text"],
-                                      sizing_mode="stretch_width"),
+                             readout,
                              width=380),
                    sizing_mode="stretch_width"),
         pn.FlexBox(pn.Column(criteria, run, said, optimise, outcome, width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )
+    tab.on_show = on_show
+    return tab

@@ -182,7 +182,10 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         finally:
             if after_draw is not None:
                 await asyncio.sleep(URL_AFTER)  # the browser paints the maps first
-                after_draw()
+                await offloop.changes(doc, after_draw)
+
+    def spinner(on):
+        busy.param.update(value=on, visible=on)
 
     async def show_maps(snapshot, computing):
         maps = asyncio.wrap_future(computing)
@@ -191,27 +194,28 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             panels = await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
         except asyncio.TimeoutError:
             if busy is not None:
-                busy.param.update(value=True, visible=True)
+                await offloop.changes(doc, partial(spinner, True))
             try:
                 panels = await maps
             finally:
                 if busy is not None:
-                    busy.param.update(value=False, visible=False)
+                    await offloop.changes(doc, partial(spinner, False))
         async with _DRAWING:
             if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
                 return
-            with pn.io.hold():  # the colour bars first, alone: no image is repainted for them
-                map_figures.set_ranges(figs, panels)
-            await asyncio.sleep(0)  # events queued meanwhile go first
-            with pn.io.hold():
-                map_figures.set_maps(figs, panels)
-                p = panels.panels
-                note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
-                paper.object = _paper_line(p)
-                start.visible = opening()
-                key.object = legend(p)
-                now = remedies(p)
-                known.visible, crlb.visible = now["known"], now["crlb"]
+            # the colour bars first, alone: no image is repainted for them
+            await offloop.changes(doc, partial(map_figures.set_ranges, figs, panels))
+            await offloop.changes(doc, partial(show, panels))
+
+    def show(panels):
+        map_figures.set_maps(figs, panels)
+        p = panels.panels
+        note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
+        paper.object = _paper_line(p)
+        start.visible = opening()
+        key.object = legend(p)
+        now = remedies(p)
+        known.visible, crlb.visible = now["known"], now["crlb"]
 
     scenario.watch(redraw, MAPS)
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")

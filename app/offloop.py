@@ -10,13 +10,21 @@ once, so the result is shown before :func:`schedule` returns.
 
 :class:`Task` is that pattern for one part of a page: ``start(key, work, show)`` submits
 ``work()``, sets ``loading`` on the components it will change (Panel's spinner over them), and
-runs ``show(result)`` on the loop in one ``pn.io.hold()``; a newer start supersedes an older one
+runs ``show(result)`` on the loop in one batch (:func:`changes`); a newer start supersedes an older one
 (its result is dropped), and a start with the key being computed or shown does nothing. A failure
 of ``work`` goes to ``failed(exc)`` (shown on the page), never up into the server.
 
 Panel's own ``--num-threads`` pool (the README's command, the container and ``app.cluster`` all
 pass ``--num-threads 4``) runs the events' watchers; the pools here run the computations, so a
 long computation does not take one of the few threads that process other sessions' events.
+
+Every change made on the loop goes through :func:`changes`, so that all of a session's messages
+leave in the order they were made. Panel sends a change from its threads as a callback of the
+document (Bokeh's queue of the session's writes) but one made on the loop in ``pn.io.hold()``
+on a path of its own, which queues it while the socket is busy and then lets later messages
+from Bokeh's queue overtake it. A page that first gets a model (a stylesheet Panel's design
+adds to a pane on its first update) in the overtaken message then fails on the message that
+overtook it ("reference p4070 isn't known": the browser drops that update).
 """
 
 from __future__ import annotations
@@ -70,6 +78,36 @@ def schedule(doc, coroutine_function, *, after_changes=False):
         return
     with set_curdoc(doc):  # this session's: on a Panel worker thread curdoc may be another's
         pn.state.execute(coroutine_function)
+
+
+async def changes(doc, fn):
+    """Run ``fn()`` (changes to the page of ``doc``'s session) on the loop as a callback of the
+    document, with its lock and its events held, and wait for it: its messages join Bokeh's queue
+    of the session's writes, in order with the changes from Panel's threads (module docstring).
+    Outside a server, ``fn()`` runs here in ``pn.io.hold()``."""
+    if doc is None or doc.session_context is None:
+        with pn.io.hold():
+            fn()
+        return
+    done = asyncio.get_running_loop().create_future()
+
+    def run():
+        ours = not doc.callbacks.hold_value  # a hold of another caller's is released by it
+        if ours:
+            doc.hold("combine")
+        try:
+            with set_curdoc(doc):
+                fn()
+        except BaseException as exc:  # noqa: BLE001 (handed to the awaiting coroutine)
+            done.set_exception(exc)
+        else:
+            done.set_result(None)
+        finally:
+            if ours:
+                doc.unhold()
+
+    doc.add_next_tick_callback(run)
+    await done
 
 
 _NEW = object()
@@ -128,11 +166,13 @@ class Task:
             return
         if token is not self._token:  # a newer start shows its own
             return
-        with pn.io.hold():
+        def apply():
             try:
                 show(result)
             finally:
                 self._loading(False)
 
+        await changes(self.doc, apply)
 
-__all__ = ["Task", "pool", "schedule"]
+
+__all__ = ["Task", "changes", "pool", "schedule"]

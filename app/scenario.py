@@ -19,6 +19,7 @@ reaches the core, never raises in the server, and the last good maps stay.
 from __future__ import annotations
 
 import math
+import threading
 import types
 from contextlib import ExitStack, contextmanager
 
@@ -567,6 +568,9 @@ class Scenario(param.Parameterized):
             raise TypeError(f"Scenario has no input {', '.join(unknown)}")
         super().__init__()
         self._restoring = False
+        #: One update (a preset, a link) at a time, its watchers included: Panel runs two clicks'
+        #: watchers on two of its threads at once, and two presets interleaved left a mix of both
+        self._updating = threading.RLock()
         # Hard limits hold from the start: a bad value given here falls back to the default.
         notes = [n for n in (self.problem(k, v) for k, v in values.items()) if n]
         good = {k: v for k, v in values.items() if self.problem(k, v) is None}
@@ -616,7 +620,10 @@ class Scenario(param.Parameterized):
         """Set many inputs at once (a link, a preset): every watcher sees them together, the
         rules between them are checked on the whole; if one is broken nothing changes and
         :attr:`message` says why."""
-        values = {**(values or {}), **more}
+        with self._updating:
+            self._update({**(values or {}), **more})
+
+    def _update(self, values):
         notes = [p for p in (self.problem(n, v) for n, v in values.items()) if p]
         before = self.values()
         was, self._restoring = self._restoring, True  # no part checks, no rule, until all are set
