@@ -203,12 +203,21 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         async with _DRAWING:
             if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
                 return
-            # the colour bars first, alone: no image is repainted for them
-            await offloop.changes(doc, partial(map_figures.set_ranges, figs, panels))
+            # The maps' own Bokeh models in one message each step, as Panel sends a change made
+            # on the loop: they are not changed from Panel's threads, so nothing overtakes them
+            # with a model they bring (app/offloop.py). The colour bars first, alone: no image
+            # is repainted for them; then the images, all three in one message (sent through
+            # offloop.changes, one message per event, they were painted up to ~50 ms apart).
+            with pn.io.hold():
+                map_figures.set_ranges(figs, panels)
+            await asyncio.sleep(0)  # events queued meanwhile go first
+            with pn.io.hold():
+                map_figures.set_maps(figs, panels)
+            # the panes under the maps, whose first update brings Panel's stylesheets: in order
+            # with the threads' changes
             await offloop.changes(doc, partial(show, panels))
 
     def show(panels):
-        map_figures.set_maps(figs, panels)
         p = panels.panels
         note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
         paper.object = _paper_line(p)
