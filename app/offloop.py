@@ -18,8 +18,8 @@ Panel's own ``--num-threads`` pool (the README's command, the container and ``ap
 pass ``--num-threads 4``) runs the events' watchers; the pools here run the computations, so a
 long computation does not take one of the few threads that process other sessions' events.
 
-Every change made on the loop goes through :func:`changes`, so that all of a session's messages
-leave in the order they were made. Panel sends a change from its threads as a callback of the
+A change made on the loop goes through :func:`changes`, so that a session's messages leave in
+the order they were made (the maps' own Bokeh models are the exception: app/maps.py). Panel sends a change from its threads as a callback of the
 document (Bokeh's queue of the session's writes) but one made on the loop in ``pn.io.hold()``
 on a path of its own, which queues it while the socket is busy and then lets later messages
 from Bokeh's queue overtake it. A page that first gets a model (a stylesheet Panel's design

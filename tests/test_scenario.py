@@ -8,7 +8,7 @@ import xarray as xr
 
 from app import map_figures, views
 from app.compute import MAPS, SCENE, PanelCache, Snapshot, compute
-from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PRESETS, Scenario, parameter
+from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PARTS, PRESETS, Scenario, parameter
 
 
 def test_presets_set_what_the_paper_says():
@@ -578,3 +578,33 @@ def test_a_map_veiled_everywhere_says_what_it_is_inside_its_frame():
     s.apply_preset("Fig. 6")
     map_figures.fill(figs, compute(Snapshot.of(s)))
     assert not any(lab.visible for lab in figs.labels)
+
+
+def test_presets_applied_from_two_threads_at_once_leave_one_of_them_whole():
+    # Panel runs two clicks' watchers on two of its threads at once: two presets applied so must
+    # not leave a mix of both (Scenario.update takes one update at a time, watchers included)
+    import threading
+
+    names = ("Seed 001 sea trial", "Seed 003 sensors")
+    whole = []
+    for name in names:
+        s = Scenario()
+        s.apply_preset(name)
+        whole.append(s.values())
+    s = Scenario()
+    seen = []
+    s.watch(lambda *_: seen.append(s.values()), list(PARTS))  # what each watcher call sees
+    start = threading.Barrier(2)
+
+    def apply(name):
+        start.wait()
+        for _ in range(30):  # without the lock: a mix in 2 of 3 runs of 15 each
+            s.apply_preset(name)
+
+    threads = [threading.Thread(target=apply, args=(n,)) for n in names]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert s.values() in whole
+    assert all(v in whole for v in seen), "a watcher saw a mix of the two presets"
