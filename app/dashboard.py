@@ -248,12 +248,12 @@ def panel_extension():
 def first_visit(tabs, titles, holders, contents, shown=None):
     """Put ``contents[title]`` into the (empty) tab ``holders[title]`` (a Column) the first time
     it is the active tab of ``tabs``: a new page carries the models of the tab it shows only.
-    ``shown``: title -> a function called then (a tab's work that waits until it is seen)."""
+    ``shown``: title -> a function called just before (a tab's work that waits until it is seen)."""
     def fill(active):
         title = titles[active]
         if title in holders and not holders[title].objects:
-            holders[title][:] = [contents[title]]
             (shown or {}).get(title, lambda: None)()
+            holders[title][:] = [contents[title]]
 
     tabs.param.watch(lambda event: fill(event.new), ["active"])
     fill(tabs.active)

@@ -141,10 +141,12 @@ def design_tab(scenario, cache, widgets):
     scenario.design.param.watch(refresh, ["ellipse_x", "ellipse_y"])
 
     def on_show():
-        """The tab is on the page (app.dashboard.first_visit): its readout from now on."""
+        """The tab is about to be shown (app.dashboard.first_visit): its readout from now on, the
+        first one here and now, so that it is in the tab's first frame (arriving later, it
+        pushed what is under it ~85 px down, out of view at 1280 × 800)."""
         if not shown:
             shown.append(True)
-            refresh()
+            readout.object = readout_of((snap(), scenario.design.ellipse_x, scenario.design.ellipse_y))
 
     ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
     table = pn.widgets.Tabulator(

@@ -143,6 +143,9 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
             assert done.get("time") is not None, f"the {READINGS}-reading log was not solved in 180 s"
             assert busy_seen, "A's page never showed the busy indicator over the calibration's results"
             assert quick is not None, "B's slider change was not answered"
+            # the indicator goes off with the result, in a message of its own right after it
+            # (app/offloop.py, changes): a few ms, 5 s allowed for a loaded machine
+            uploader._pump(lambda: not busy(uploader.events[start:], last=True), 5)
             events = uploader.events[start:]
             assert not busy(events, last=True), "the busy indicator was left on after the result"
             print(f"attempt {attempt}: A's calibration {done['time']:.2f} s (busy after {busy_after:.2f} s), B's change {quick * 1e3:.0f} ms "
