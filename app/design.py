@@ -125,16 +125,19 @@ def design_tab(scenario, cache, widgets):
     shown = []
 
     def readout_of(key):
-        now, x, y = key
-        s = now.scenario()
+        snapshot, x, y = key
+        s = snapshot.scenario()
         rng = float(compute.nearest_range([x, y, s.z], s.stations)) if len(s.stations) else None
-        return views.error_ellipse(compute.error_at(now, x, y), x, y, s.extent, rng)[1]
+        return views.error_ellipse(compute.error_at(snapshot, x, y), x, y, s.extent, rng)[1]
+
+    def now():
+        return snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
 
     def refresh(*_):
         if not shown:
             return
         with readout_task.lock:
-            key = snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
+            key = now()
             readout_task.start(key, partial(readout_of, key), partial(setattr, readout, "object"))
 
     scenario.watch(refresh, SCENE)
@@ -146,7 +149,7 @@ def design_tab(scenario, cache, widgets):
         pushed what is under it ~85 px down, out of view at 1280 × 800)."""
         if not shown:
             shown.append(True)
-            readout.object = readout_of((snap(), scenario.design.ellipse_x, scenario.design.ellipse_y))
+            readout.object = readout_of(now())
 
     ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
     table = pn.widgets.Tabulator(
