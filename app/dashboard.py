@@ -192,17 +192,26 @@ def _section(scenario, tabs, title, names, collapsed):
             return widget(name)
         # A refused value is said right under its input, where the user typed it (at the top of
         # the sidebar it was out of sight when typing in Stations or Advanced).
-        return pn.Column(widget(name), maps.refusal(scenario, [name], f"w-message-{name}"),
-                         visible=visible(name), sizing_mode="stretch_width", margin=0)
+        w = widget(name)
+        column = w if name in NUMBERS else pn.Column(w, visible=visible(name), sizing_mode="stretch_width",
+                                                     margin=0)
+        return maps.with_refusal(scenario, column, [name], f"w-message-{name}")
 
-    rows = [row(name) for name in names]
     def any_applies(*_):
         s = scenario.snapshot()
         return any(applies(n, s, tabs.active) for n in names)
 
     any_visible = pn.bind(any_applies, *watched)
-    card = pn.Card(*rows, title=title,
-                   collapsed=collapsed, sizing_mode="stretch_width")
+    # A collapsed card's inputs are built when it is first opened (a new page carries only what
+    # it shows: the two collapsed cards held ~40 % of the sidebar's models)
+    card = pn.Card(*([] if collapsed else map(row, names)), title=title, collapsed=collapsed,
+                   sizing_mode="stretch_width")
+
+    def opened(event):
+        if not event.new and not card.objects:
+            card.objects = [row(name) for name in names]
+
+    card.param.watch(opened, ["collapsed"])
     # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
     return pn.Column(card, visible=any_visible, sizing_mode="stretch_width", margin=0)
 
@@ -245,15 +254,20 @@ def panel_extension():
     pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
 
 
-def first_visit(tabs, titles, holders, contents, shown=None):
-    """Put ``contents[title]`` into the (empty) tab ``holders[title]`` (a Column) the first time
-    it is the active tab of ``tabs``: a new page carries the models of the tab it shows only.
-    ``shown``: title -> a function called just before (a tab's work that waits until it is seen)."""
+def first_visit(tabs, titles, holders, makers):
+    """Build tab ``title``'s content with ``makers[title]()`` into its holder ``holders[title]``
+    (a Column, with a placeholder until then) the first time it is the active tab of ``tabs``: a new page
+    carries the Python objects and models of the tab it shows only (the hidden tabs were ~half
+    of a new page's server CPU, docs/performance.md)."""
+    built, lock = set(), threading.Lock()
+
     def fill(active):
         title = titles[active]
-        if title in holders and not holders[title].objects:
-            (shown or {}).get(title, lambda: None)()
-            holders[title][:] = [contents[title]]
+        with lock:  # one build per tab, whichever thread sees the click
+            if title not in holders or title in built:
+                return
+            built.add(title)
+        holders[title].objects = [makers[title]()]
 
     tabs.param.watch(lambda event: fill(event.new), ["active"])
     fill(tabs.active)
@@ -283,22 +297,25 @@ def create_app():
     # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
     titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
-    # The other tabs' models are made on their first visit (first_visit; their Python objects
-    # now, as dynamic Tabs did: building the Track tab on the click took ~1 s more), and stay:
-    # Panel's dynamic Tabs detach a hidden tab's models from the document, and a change made
-    # to them there (a preset) patched Panel's shared stylesheets to cdn.holoviz.org, for
-    # every model of the page (issue 25, Offline).
-    design = design_tab(scenario, cache, _widgets())
-    later = {titles[1]: pn.Column(sensor_banner(scenario, DESIGN_TAB), design,
-                                  sizing_mode="stretch_width", margin=0),
-             titles[2]: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
-                                  sizing_mode="stretch_width", margin=0),
-             titles[3]: calibration_tab(scenario),
-             titles[4]: shape_tab(scenario)}
-    holders = {t: pn.Column(sizing_mode="stretch_width", margin=0) for t in later}
+    # The other tabs are built on their first visit (first_visit), and stay: Panel's dynamic
+    # Tabs detach a hidden tab's models from the document, and a change made to them there (a
+    # preset) patched Panel's shared stylesheets to cdn.holoviz.org, for every model of the
+    # page (issue 25, Offline).
+    later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
+                                          design_tab(scenario, cache, _widgets()),
+                                          sizing_mode="stretch_width", margin=0),
+             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
+                                          sizing_mode="stretch_width", margin=0),
+             titles[3]: lambda: calibration_tab(scenario),
+             titles[4]: lambda: shape_tab(scenario)}
+    # What a hidden tab says until its first visit has built it (~0.1-0.5 s)
+    holders = {t: pn.Column(pn.pane.HTML(f"Opening the {t} tab…", css_classes=["w-tab-opening"],
+                                         styles={"color": "#555", "font-size": "15px"}),
+                            sizing_mode="stretch_width", margin=0)
+               for t in later}
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    *holders.items(), sizing_mode="stretch_width")
-    first_visit(tabs, titles, holders, later, shown={titles[1]: design.on_show})
+    first_visit(tabs, titles, holders, later)
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,

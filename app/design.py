@@ -116,13 +116,12 @@ def design_tab(scenario, cache, widgets):
     def ellipse(x, y, **_):
         return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.region.extent)[0]
 
-    # The readout under the table: computed off the loop once the tab has been shown (not on
-    # every change of a map input while another tab is open: ~0.1 s of Python per change), by a
-    # Task, which shows the latest change's text only (computed per change on Panel's threads,
-    # an older, slower computation ending last left an older preset's numbers on the page)
-    readout = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
+    # The readout under the table, by a Task, which shows the latest change's text only
+    # (computed per change on Panel's threads, an older, slower computation ending last left an
+    # older preset's numbers on the page). The first one here and now: the tab is built when it
+    # is first shown (app.dashboard.first_visit), and the readout is in its first frame
+    # (arriving later, it pushed what is under it ~85 px down, out of view at 1280 × 800).
     readout_task = offloop.Task("design-readout")
-    shown = []
 
     def readout_of(key):
         snapshot, x, y = key
@@ -134,22 +133,13 @@ def design_tab(scenario, cache, widgets):
         return snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
 
     def refresh(*_):
-        if not shown:
-            return
         with readout_task.lock:
             key = now()
             readout_task.start(key, partial(readout_of, key), partial(setattr, readout, "object"))
 
+    readout = pn.pane.Markdown(readout_of(now()), sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
     scenario.watch(refresh, SCENE)
     scenario.design.param.watch(refresh, ["ellipse_x", "ellipse_y"])
-
-    def on_show():
-        """The tab is about to be shown (app.dashboard.first_visit): its readout from now on, the
-        first one here and now, so that it is in the tab's first frame (arriving later, it
-        pushed what is under it ~85 px down, out of view at 1280 × 800)."""
-        if not shown:
-            shown.append(True)
-            readout.object = readout_of(now())
 
     ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
     table = pn.widgets.Tabulator(
@@ -234,5 +224,4 @@ def design_tab(scenario, cache, widgets):
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )
-    tab.on_show = on_show
     return tab

@@ -380,15 +380,16 @@ def _prepared(p):
 
 
 def set_ranges(figs: MapFigures, p):
-    """The colour bars' ranges and palettes (they draw no image: nothing is repainted but them).
-    ``p``: Panels or their :func:`prepare`."""
+    """The colour bars' ranges and palettes (the images come normalised to them: module
+    docstring). ``p``: Panels or their :func:`prepare`."""
     for bar, (low, high, palette) in zip(figs.bar_mappers, _prepared(p).ranges[1:]):
         bar.update(**_changed(bar, dict(low=low, high=high, palette=palette)))
 
 
-def fill(figs: MapFigures, p: Panels):
-    """Write one scenario's maps into the figures, in place."""
-    d = prepare(p)
+def fill(figs: MapFigures, p):
+    """Write one scenario's maps into the figures, in place. ``p``: Panels or their
+    :func:`prepare`."""
+    d = _prepared(p)
     set_ranges(figs, d)
     set_maps(figs, d)
 

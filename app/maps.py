@@ -26,11 +26,6 @@ URL_AFTER = 0.1
 #: Computes the maps of every session, off the event loop (core serialises the kernels anyway).
 _COMPUTE = offloop.pool("maps", 4)
 
-#: Maps are drawn on the event loop one session at a time, in two steps with a turn of the loop
-#: between them. Maps computed at about the same time used to be drawn in one go (~10-20 ms of
-#: Python each), and every other session's events waited behind all of them.
-_DRAWING = asyncio.Lock()
-
 READING_GUIDE = """
 **Reading the maps.** Each map shows, over target positions, a measure of how well the tracking
 state (position, velocity, source strengths) can be recovered from the stations' electric-field
@@ -83,18 +78,42 @@ def alert(text, kind):
             f'{html.escape(text).replace(chr(10), "<br>")}</div>')
 
 
+def _refused_here(message, refused, names):
+    return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
+
+
 def refusal(scenario, names, css):
     """The Scenario's refusal message, shown here when it is about one of ``names`` (an input, or
     a tab's inputs: each shows only its own; ``None``: a message about no input, e.g. the page's
     link)."""
     def shows(message, refused):
-        return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
+        return _refused_here(message, refused, names)
 
     return pn.pane.HTML(
         pn.bind(lambda m, r: alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
                 if shows(m, r) else "", scenario.param.message, scenario.param.refused),
         visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
         sizing_mode="stretch_width", css_classes=[css])
+
+
+def with_refusal(scenario, column, names, css):
+    """``column`` (a Column holding an input) with :func:`refusal`'s message about ``names`` at its
+    end while there is one: the message pane is made on the first refusal and put in the column
+    only while it says something (a page of inputs carried one hidden pane each)."""
+    inputs, pane = list(column.objects), []
+
+    def update(*_):
+        if _refused_here(scenario.message, scenario.refused, names):
+            if not pane:
+                pane.append(refusal(scenario, names, css))
+            if len(column.objects) == len(inputs):
+                column.objects = [*inputs, pane[0]]
+        elif len(column.objects) > len(inputs):
+            column.objects = inputs
+
+    scenario.param.watch(update, ["message", "refused"])
+    update()
+    return column
 
 
 def _notes(p):
@@ -200,22 +219,21 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             finally:
                 if busy is not None:
                     await offloop.changes(doc, partial(spinner, False))
-        async with _DRAWING:
-            if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
-                return
-            # The maps' own Bokeh models in one message each step, as Panel sends a change made
-            # on the loop: they are not changed from Panel's threads, so nothing overtakes them
-            # with a model they bring (app/offloop.py). The colour bars first, alone: no image
-            # is repainted for them; then the images, all three in one message (sent through
-            # offloop.changes, one message per event, they were painted up to ~50 ms apart).
-            with pn.io.hold():
-                map_figures.set_ranges(figs, panels)
-            await asyncio.sleep(0)  # events queued meanwhile go first
-            with pn.io.hold():
-                map_figures.set_maps(figs, panels)
-            # the panes under the maps, whose first update brings Panel's stylesheets: in order
-            # with the threads' changes
-            await offloop.changes(doc, partial(show, panels))
+        # Each session's draw is a callback of its own on the loop (~10 ms of Python): other
+        # sessions' events queued meanwhile go between them
+        if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
+            return
+        # The maps' own Bokeh models in one message, as Panel sends a change made on the
+        # loop: they are not changed from Panel's threads, so nothing overtakes them with a
+        # model they bring (app/offloop.py). Colour bars and images together: the bars are
+        # drawn inside the figures, and sent first, alone, they repainted all three plots
+        # with the old images (~20 ms in the browser); through offloop.changes (one message
+        # per event) the images were painted up to ~50 ms apart.
+        with pn.io.hold():
+            map_figures.fill(figs, panels)
+        # the panes under the maps, whose first update brings Panel's stylesheets: in order
+        # with the threads' changes
+        await offloop.changes(doc, partial(show, panels))
 
     def show(panels):
         p = panels.panels

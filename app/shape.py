@@ -1,7 +1,7 @@
 """The Shape tab (seed 003, issue 27): locating and sizing an extended magnetic target from a
 moving gradiometer.
 
-``shape_tab(scenario)`` returns the tab's layout, built when the tab is first shown. Its inputs
+``shape_tab(scenario)`` returns the tab's layout (the page builds it when the tab is first shown). Its inputs
 are the ``shape_*`` parameters of the shared :class:`app.scenario.Scenario` (numbers refused
 outside ``ACCEPTED`` with a message, as everywhere; the rules between them are checked by
 :func:`case_of`, and said in the tab). It shows
@@ -36,7 +36,7 @@ from core.shape.model import LAG
 from . import offloop
 from .compute import KERNEL_LOCK, SHARED, Snapshot
 from .inputs import number_input
-from .maps import alert, refusal
+from .maps import alert, with_refusal
 from .scenario import Scenario, Shape
 
 hv.extension("bokeh", logo=False)
@@ -398,7 +398,8 @@ def _input(scenario, name):
     else:
         fmt = "0.[00000]" if name == "shape_noise" else "0.[00]"
         w = number_input(scenario.shape, name, fmt=fmt, css_classes=[f"w-{name}"])
-    return pn.Column(w, refusal(scenario, [name], "w-message-shape"), margin=0, sizing_mode="stretch_width")
+    column = w if name not in CHOICES else pn.Column(w, margin=0, sizing_mode="stretch_width")
+    return with_refusal(scenario, column, [name], "w-message-shape")
 
 
 def _inputs(scenario):
@@ -471,6 +472,6 @@ def _build(scenario):
 
 
 def shape_tab(scenario: Scenario):
-    """The Shape tab's layout for a shared :class:`Scenario`; built (and first computed) when
-    the tab is first shown."""
-    return pn.panel(lambda: _build(scenario), lazy=True, sizing_mode="stretch_width")
+    """The Shape tab's layout for a shared :class:`Scenario` (the page builds it when the tab
+    is first shown: app.dashboard.first_visit); starts its first computation."""
+    return _build(scenario)

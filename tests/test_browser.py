@@ -234,7 +234,6 @@ def test_screenshots_for_the_readme(page):
     DOCS.mkdir(exist_ok=True)
     page.screenshot(path=str(DOCS / "screenshot-default.png"))
     page.get_by_role("button", name="Fig. 2").click()  # somewhere else first, so Fig. 5 is a change
-    wait_value(page, "Pv_b", 100.0)
     before = wait_maps(page, lambda drawn: "P = (100, 100)" in drawn[1][0])
     page.get_by_role("button", name="Fig. 5").click()
     wait_maps(page, lambda drawn: drawn[1][0] == "B: dual, d = 15 m" and changed(before)(drawn))
@@ -336,7 +335,7 @@ def test_every_layer_of_a_map_covers_the_same_rectangle_after_plane_changes(page
         for plot in layers(page):
             assert len(plot["layers"]) == 2 and plot["layers"][0] == plot["layers"][1], plot
     page.get_by_role("button", name="Fig. 2").click()
-    wait_value(page, "Pv_b", 100.0)
+    wait_maps(page, lambda drawn: "P = (100, 100)" in drawn[1][0])
     page.get_by_role("button", name="Fig. 3").click()
     wait_maps(page, lambda drawn: "moments × 10" in drawn[1][0])
     time.sleep(0.5)
