@@ -24,6 +24,7 @@ from .scenario import (
     COMPARISONS,
     MEASURE_LABELS,
     PART_OF,
+    PRESET_INPUTS,
     PRESETS,
     SENSORS,
     Scenario,
@@ -45,39 +46,34 @@ SECTIONS = (
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
 
 
-#: Seconds after a session closes that the memory of the closed sessions is collected, once for
-#: all the sessions that closed meanwhile (see :func:`_collect_closed_sessions`).
-COLLECT_AFTER_S = 10.0
-_collection = {"scheduled": False}
-_collection_lock = threading.Lock()
+#: Seconds after a session closes that the memory freed by closed sessions is handed back to the
+#: OS, once for all the sessions that closed meanwhile: after Panel's own collection of their
+#: cyclic graphs (``gc.collect``, scheduled by Panel 5 s after the last session destroyed).
+TRIM_AFTER_S = 10.0
+_trim = {"scheduled": False}
+_trim_lock = threading.Lock()
 
 
 def _release_freed_memory():
     """Hand memory freed by closed sessions back to the OS (glibc keeps it in its arenas)."""
+    with _trim_lock:
+        _trim["scheduled"] = False
     try:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
     except (OSError, AttributeError):  # not glibc: nothing to do
         pass
 
 
-def _collect_closed_sessions():
-    with _collection_lock:
-        _collection["scheduled"] = False
-    gc.collect()  # the maps of closed sessions are large, cyclic Bokeh/param graphs
-    _release_freed_memory()
-
-
-def _schedule_collection():
-    """Collect closed sessions' memory COLLECT_AFTER_S from now, once for every session that
-    closes in between. A full collection walks every live object of every open session (~0.4 s
-    of the event loop with 10 open, measured), so one per closed session made each close stall
-    everyone; Python's own collector would free them too, but only when it next runs a full
-    collection, and the memory came back much later (docs/performance.md)."""
-    with _collection_lock:
-        if _collection["scheduled"]:
+def _schedule_trim():
+    """Release the closed sessions' memory TRIM_AFTER_S from now, once for every session that
+    closes in between. No collection of our own: Panel runs one after a close (a full
+    collection walks every live object of every open session, ~0.15-0.4 s of the GIL: a second
+    one per close doubled what a close cost everyone else; docs/performance.md)."""
+    with _trim_lock:
+        if _trim["scheduled"]:
             return
-        _collection["scheduled"] = True
-    timer = threading.Timer(COLLECT_AFTER_S, _collect_closed_sessions)
+        _trim["scheduled"] = True
+    timer = threading.Timer(TRIM_AFTER_S, _release_freed_memory)
     timer.daemon = True  # a server that stops does not wait for it
     timer.start()
 
@@ -278,7 +274,7 @@ def create_app():
     cache = SHARED  # results are shared by every session of the process (app.compute)
 
     def session_closed(ctx):
-        _schedule_collection()
+        _schedule_trim()
 
     pn.state.on_session_destroyed(session_closed)
 
@@ -321,15 +317,21 @@ def create_app():
                                       tabs=tabs, titles=titles,
                                       waits=lambda names: bool(set(names) & MAP_INPUTS)))
 
-    def preset_button(name):
-        style = pn.bind(lambda *_: "solid" if scenario.active_preset() == name else "outline",
-                        *[scenario.ref(k) for k in PRESETS[name]])
-        return pn.widgets.Button(name=name, button_type="primary", button_style=style,
-                                 width=90 if len(name) <= 6 else 150,  # a seed's name is longer
-                                 css_classes=[f"w-preset-{name[-1]}"],
-                                 on_click=lambda e: scenario.apply_preset(name))
+    buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
+                                       width=90 if len(name) <= 6 else 150,  # a seed's name is longer
+                                       css_classes=[f"w-preset-{name[-1]}"],
+                                       on_click=lambda e, n=name: scenario.apply_preset(n))
+               for name in PRESETS}
 
-    presets = pn.FlexBox(*[preset_button(name) for name in PRESETS], sizing_mode="stretch_width")
+    def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
+        active = scenario.active_preset()
+        for name, button in buttons.items():
+            button.button_style = "solid" if name == active else "outline"
+
+    for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
+        part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
+    restyle()
+    presets = pn.FlexBox(*buttons.values(), sizing_mode="stretch_width")
     sections = [_section(scenario, tabs, *section) for section in SECTIONS]
     def download(ext, fn):
         # named after the scenario (was always observability_maps.*), set as the file is made

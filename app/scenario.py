@@ -786,7 +786,7 @@ class Scenario(param.Parameterized):
 
     def active_preset(self):
         """The paper figure (a :data:`PRESETS` name) whose parameters the scenario holds, or None."""
-        return preset_of(types.SimpleNamespace(**self.values()))
+        return preset_of(types.SimpleNamespace(**{k: self.value(k) for k in PRESET_INPUTS}))
 
     def snapshot(self, parts=None):
         """The values of ``parts`` (default all) with the methods that build core's inputs."""
@@ -804,6 +804,10 @@ def preset_values(name):
     shared = [a for a, cls in PARTS.items() if not cls.own_presets]
     return {**defaults(shared), **{k: [list(v) for v in val] if k == "stations" else val
                                    for k, val in PRESETS[name].items()}}
+
+
+#: Every input some preset sets (what :meth:`Scenario.active_preset` reads).
+PRESET_INPUTS = tuple(sorted({k for preset in PRESETS.values() for k in preset}))
 
 
 def preset_of(values, names=None):

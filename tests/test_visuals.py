@@ -193,3 +193,30 @@ def test_the_png_export_of_an_x_z_section_states_its_vertical_exaggeration():
     assert ax.get_aspect() == 2.0 and ax.get_ylabel() == "z (m), vertical ×2"
     top, bottom = ax.get_ylim()
     assert top > bottom  # depth down
+
+
+@pytest.mark.filterwarnings(  # Panel 1.9 deprecates button_type/button_style (as test_calibration_tab)
+    "ignore:.*deprecated and will be removed in version 2.0:PendingDeprecationWarning")
+def test_the_preset_button_of_the_scenario_is_solid_and_no_other():
+    # one watcher restyles the eight buttons (each button's own binding re-read every input of
+    # the scenario: ~half of a slider change's watcher time on the server)
+    import panel as pn
+
+    from app.dashboard import create_app
+    from app.scenario import PRESETS
+
+    app = create_app()
+    s = app.scenario
+    buttons = [b for b in pn.Column(*app.sidebar).select(pn.widgets.Button) if b.name in PRESETS]
+    assert len(buttons) == len(PRESETS)
+
+    def solid():
+        return [b.name for b in buttons if b.button_style == "solid"]
+
+    assert solid() == ["Fig. 5"]  # the page opens on Fig. 5's scenario
+    s.apply_preset("Seed 001 sea trial")
+    assert solid() == ["Seed 001 sea trial"]
+    s.apply_preset("Fig. 2")
+    assert solid() == ["Fig. 2"]
+    s.target.Ph = 123.0
+    assert solid() == []
