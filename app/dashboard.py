@@ -46,18 +46,16 @@ SECTIONS = (
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
 
 
-#: Seconds after a session closes that the memory freed by closed sessions is handed back to the
-#: OS, once for all the sessions that closed meanwhile: after Panel's own collection of their
-#: cyclic graphs (``gc.collect``, scheduled by Panel 5 s after the last session destroyed).
-TRIM_AFTER_S = 10.0
-_trim = {"scheduled": False}
+#: Seconds after the last session closed that the memory freed by closed sessions is handed back
+#: to the OS: after Panel's own collection of their cyclic graphs (``gc.collect``, which Panel
+#: runs 5 s after the last session it destroyed).
+TRIM_AFTER_S = 15.0
+_trim = {"timer": None}
 _trim_lock = threading.Lock()
 
 
 def _release_freed_memory():
     """Hand memory freed by closed sessions back to the OS (glibc keeps it in its arenas)."""
-    with _trim_lock:
-        _trim["scheduled"] = False
     try:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
     except (OSError, AttributeError):  # not glibc: nothing to do
@@ -65,15 +63,14 @@ def _release_freed_memory():
 
 
 def _schedule_trim():
-    """Release the closed sessions' memory TRIM_AFTER_S from now, once for every session that
-    closes in between. No collection of our own: Panel runs one after a close (a full
-    collection walks every live object of every open session, ~0.15-0.4 s of the GIL: a second
-    one per close doubled what a close cost everyone else; docs/performance.md)."""
+    """Release the closed sessions' memory TRIM_AFTER_S after the last close (each close moves
+    it on, as Panel's collection). No collection of our own: a full collection walks every live
+    object of every open session, ~0.15-0.4 s of the GIL, and a second one per close doubled
+    what a close cost everyone else (docs/performance.md)."""
     with _trim_lock:
-        if _trim["scheduled"]:
-            return
-        _trim["scheduled"] = True
-    timer = threading.Timer(TRIM_AFTER_S, _release_freed_memory)
+        if _trim["timer"] is not None:
+            _trim["timer"].cancel()
+        timer = _trim["timer"] = threading.Timer(TRIM_AFTER_S, _release_freed_memory)
     timer.daemon = True  # a server that stops does not wait for it
     timer.start()
 

@@ -28,8 +28,9 @@ are destroyed within seconds, then:
 5. after the sessions close: the server's RSS (the sum over the replicas) must come back within
    10 % of the baseline.
 
-Targets (issue 15, for ``--think 2``): every update answered, update latency p95 ≤ 300 ms, the
-other session's cheap event p95 ≤ 100 ms, a new session ready in ≤ 3 s, memory within 10 %.
+Targets (issue 29, for ``--think 5``: one change every 5 s per session, ~4 updates/s from 20):
+every update answered, update latency p95 ≤ 1 s, the other session's cheap event p95 ≤ 300 ms, a
+new session ready in ≤ 3 s, memory within 10 %.
 
 Prints PASS/FAIL lines and exits 1 if any target is missed. Uses private parts of the Bokeh
 client (``ClientSession._connection``) to wait for server pushes with a timeout: the public
@@ -63,8 +64,9 @@ SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "
 ANSWER_TIMEOUT = 60.0  # s an update may take before it counts as unanswered
 #: s each of the sessions opened at once (before the load) may take to get its page complete.
 CONNECT_TIMEOUT = 300.0
-#: Issue 15's targets at realistic load (seconds).
-UPDATE_P95, CHEAP_P95, NEWCOMER_MAX = 0.300, 0.100, 3.0
+#: Issue 29's targets for a busy team (seconds): 20 sessions, one change every 5 s each
+#: (``--think 5``, ~4 updates/s), through nginx. (Issue 15 asked 0.3 / 0.1 s at ``--think 2``.)
+UPDATE_P95, CHEAP_P95, NEWCOMER_MAX = 1.0, 0.300, 3.0
 MEASURES = list(MEASURE_LABELS)
 #: Every input of the sidebar's open cards (the page is complete when each has reached the
 #: client; a collapsed card's inputs are built when it is opened).
