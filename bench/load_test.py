@@ -88,8 +88,7 @@ class Client:
         self.conn._socket._socket.protocol.set_nodelay(True)  # as a browser's socket: no Nagle delay
         self.doc = self.session.document
         self.events = []  # (attr, model id, new) of every server push
-        self.doc.on_change(lambda ev: self.events.append(
-            (getattr(ev, "attr", None), getattr(getattr(ev, "model", None), "id", None), getattr(ev, "new", None))))
+        self.doc.on_change(self._record)
         # A browser announces itself; the server then builds the rest of the page (the sidebar's
         # inputs: app.dashboard's build_rest), and until then Panel holds threaded updates.
         self._send(MessageSentEvent(self.doc, "bokeh_event", DocumentReady()))
@@ -108,6 +107,14 @@ class Client:
         present = {c for m in self.doc.models for c in (getattr(m, "css_classes", None) or [])}
         images = sum(isinstance(m, ColumnDataSource) and m.name == "map-image" for m in self.doc.models)
         return images == 3 and all(f"w-{name}" in present for name in SIDEBAR_INPUTS)
+
+    def _record(self, ev):
+        attr, new = getattr(ev, "attr", None), getattr(ev, "new", None)
+        self.events.append((attr, getattr(getattr(ev, "model", None), "id", None), new))
+        if attr == "children":  # a pane put into the page (a refusal's message, made on the first
+            for m in new or ():  # refusal: app.maps.with_refusal) comes with its text
+                if isinstance(getattr(m, "text", None), str):
+                    self.events.append(("text", m.id, m.text))
 
     def _pump(self, done, timeout):
         """Process the server's messages until ``done()`` or ``timeout`` s; returns ``done()``."""

@@ -150,6 +150,7 @@ def test_absurd_link_falls_back_to_defaults(chromium, server, query):
         time.sleep(0.5)
         assert page.evaluate(INJECTED_JS) == []
         assert dialogs == [] and errors == [], (dialogs, errors)
+        page.get_by_text("Advanced", exact=True).click()  # its inputs are built when it is opened
         shown = (page.locator(".w-Ph input").first.input_value(),
                  page.locator(".w-resolution input").first.input_value())
         defaults = (("100", "200"), ("100.0", "200"))
