@@ -1,4 +1,5 @@
-"""The dashboard's state: small param parts, one per concern, composed into one Scenario.
+"""The dashboard's state: the small param parts of :mod:`app.parts`, one per concern, composed
+into one Scenario; the paper's presets.
 
 No Panel import. The parts (:data:`PARTS`) are the shared scenario — :class:`Target`,
 :class:`Stations`, :class:`Medium`, :class:`Sensor`, :class:`Region` — and one part per tab's
@@ -8,12 +9,11 @@ own settings (:class:`Maps`, :class:`Design`, :class:`Track`, :class:`Calibratio
 preset are derived from every part. Parameter names are unique across the parts, so a link
 writes them flat (``?Ph=100&track_heading=33``) and links of earlier versions still open.
 
-Refusals (the base class :class:`Part`): numeric parameters carry only *soft* bounds (the slider
-range); a value typed outside a part's :attr:`Part.accepted` hard limits (what the core and a
-sane grid accept), or one that breaks a rule between values (the x–z range, the water column),
-is never kept: the last good value is restored and the reason is said in
-:attr:`Scenario.message`, naming the inputs in :attr:`Scenario.refused`. So a bad value never
-reaches the core, never raises in the server, and the last good maps stay.
+Refusals: a value outside a part's hard limits (:attr:`app.parts.Part.accepted`), or one that
+breaks a rule between values (the x–z range, the water column), is never kept: the last good
+value is restored and the reason is said in :attr:`Scenario.message`, naming the inputs in
+:attr:`Scenario.refused`. So a bad value never reaches the core, never raises in the server,
+and the last good maps stay.
 """
 
 from __future__ import annotations
@@ -28,50 +28,40 @@ from param.parameterized import batch_call_watchers
 
 import core
 
-#: Most stations a custom layout may have.
-MAX_STATIONS = 8
-
-#: Inputs that are depths below the sea surface (m): a negative value is above the surface.
-DEPTHS = ("h", "z", "z_min", "z_max")
-
-MEASURE_LABELS = {
-    "log10|det Γ| (paper)": "log10_det",
-    "Observability index log10 η": "log10_eta",
-    "D-optimal ½·log10 det F": "d_optimal",
-    "CRLB position error (m)": "crlb_position",
-}
-COMPARISONS = {
-    "Dual − single (Fig. 5)": "dual_vs_single",
-    "Moments ×k − original (Fig. 3)": "moments_scaled",
-    "Moment split B − A (Fig. 4)": "moment_split",
-    "Spacing d − reference d (Fig. 6)": "spacing",
-    "Sensor kind B − A (seed 003)": "sensor_kinds",
-}
-CRITERIA = {
-    "Mean D-optimal over the region": "mean_dopt",
-    "Worst-case D-optimal over the region": "worst_dopt",
-    "Area with CRLB error under threshold": "area_crlb",
-}
-#: Error maps of the design tab: label -> core.CrlbErrors attribute.
-ERROR_QUANTITIES = {
-    "3-D position error (m)": "position",
-    "Horizontal error, semi-major axis (m)": "semi_major",
-    "Depth error σz (m)": "sigma_z",
-    "Speed error σ|v| (m/s)": "sigma_speed",
-}
-#: Sensor kinds (spec §11, core.Sensor): label -> core kind.
-SENSORS = {"electric (E, V/m)": "E", "magnetometer (B, nT)": "B", "gradiometer (G, nT/m)": "G",
-           "magnetometer + gradiometer (BG)": "BG"}
-#: Moments of a magnetic target named by the "moments known" state set.
-MAGNETIC_KNOWN = ("mx", "my", "mz")
-#: Measures that use the paper's square Γ (electric only): a magnetic kind moves off them.
-SQUARE_MEASURES = ("log10|det Γ| (paper)", "Observability index log10 η")
-DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
-MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
-STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
-SEA_MODELS = ("whole space", "layered")
-#: Depth parameters that must lie in the water column [0, D] in a layered sea.
-_COLUMN = ("z", "h", "z_min", "z_max")
+# The parts live in app/parts.py; their names are this module's too (``from app.scenario import
+# Target``), as before the split.
+from .parts import (  # noqa: F401
+    _COLUMN,
+    ACCEPTED,
+    COMPARISONS,
+    CRITERIA,
+    DEPTHS,
+    DIFFERENCES,
+    ERROR_QUANTITIES,
+    MAGNETIC_KNOWN,
+    MAX_STATIONS,
+    MEASURE_LABELS,
+    MODELS,
+    PART_OF,
+    PARTS,
+    SEA_MODELS,
+    SENSORS,
+    SQUARE_MEASURES,
+    STATE_SETS,
+    Calibration,
+    Design,
+    Maps,
+    Medium,
+    Part,
+    Region,
+    Sensor,
+    Shape,
+    Stations,
+    Target,
+    Track,
+    defaults,
+    parameter,
+)
 
 _COMMON = dict(Ph=100.0, Pv=20.0, h=100.0, z=120.0, speed=2.0 * math.sqrt(2.0), heading=45.0,
                T=1.0, plane="x–y", extent=300.0, measure="log10|det Γ| (paper)",
@@ -115,442 +105,6 @@ PAPER_MAPS = {
     "Fig. 6": ((2,), "the difference map is the paper's Fig. 6: dual d = 50 m minus d = 10 m"),
 }
 
-
-
-def _num(default, soft, label, doc, **kw):
-    return param.Number(default, softbounds=soft, label=label, doc=doc, **kw)
-
-
-class Part(param.Parameterized):
-    """One concern's inputs, checked: a value outside :attr:`accepted` (or, for a part that
-    overrides :meth:`problem`, any value it refuses) is reported to the owning
-    :class:`Scenario`, which restores the last good value and says why."""
-
-    #: Hard limits: name -> (lowest, highest, unit). Depths (spec §7: z positive down, the sea
-    #: surface at z = 0) are never negative: there is no sea above the surface.
-    accepted = {}
-    #: Parameters checked beyond :attr:`accepted` (by an overridden :meth:`problem`).
-    also_checked = ()
-    #: A tab with a problem (and presets) of its own: the paper-figure presets leave it alone.
-    own_presets = False
-
-    def __init__(self, owner=None, **params):
-        super().__init__(**params)
-        self._owner = owner
-        checked = [*self.accepted, *self.also_checked]
-        if checked and owner is not None:
-            self.param.watch(lambda *events: owner.checked(events), checked)
-
-    @classmethod
-    def names(cls):
-        """This part's parameters (its inputs)."""
-        return tuple(n for n in cls.param if n != "name")
-
-    @classmethod
-    def problem(cls, name, value):
-        """None if ``value`` is acceptable for ``name`` on its own, else a plain-text reason."""
-        if name not in cls.accepted:
-            return None
-        lo, hi, unit = cls.accepted[name]
-        label = cls.param[name].label
-        is_int = isinstance(cls.param[name], param.Integer)
-        ok_type = isinstance(value, int) if is_int else isinstance(value, (int, float))
-        if isinstance(value, bool) or not ok_type or not math.isfinite(value):
-            kind = "a whole number" if is_int else "a number"
-            return f"{label} must be {kind}; got {str(value)[:40]!r}"
-        if name in DEPTHS and value < 0:
-            return (f"{label} = {value:.10g} is above the sea surface: depths are measured down from "
-                    f"the surface, {lo:g} … {hi:g} {unit}")
-        if not lo <= value <= hi:
-            # the value to 10 digits: "100000" for 100000.1 read as if the bound had been refused
-            return f"{label} = {value:.10g} is outside the accepted range {lo:g} … {hi:g} {unit}".rstrip()
-        return None
-
-    def rules(self):
-        """Why this part's values disagree with each other (e.g. an empty x–z range); else []."""
-        return []
-
-    def refuse(self, name, why):
-        """Say, as the owner's refusal message next to input ``name``, why a typed text was not
-        taken (e.g. not a number); the value is unchanged."""
-        self._owner.param.update(message=f"{self.param[name].label}: {why}. Kept the last good value.",
-                                 refused=[name])
-
-
-class Target(Part):
-    """The target: its sources (electric moments P_h, P_v; a magnetic moment vector), its motion
-    and its depth."""
-
-    accepted = {
-        "Ph": (0.0, 1e5, "A·m"),
-        "Pv": (0.0, 1e5, "A·m"),
-        "mx": (-1e7, 1e7, "A·m²"),
-        "my": (-1e7, 1e7, "A·m²"),
-        "mz": (-1e7, 1e7, "A·m²"),
-        "speed": (0.01, 100.0, "m/s"),
-        "heading": (-180.0, 180.0, "°"),
-        "z": (0.0, 5000.0, "m"),
-    }
-
-    Ph = _num(100.0, (0, 1000), "P_h (A·m)", "Horizontal dipole moment of the target, A·m.")
-    Pv = _num(20.0, (0, 1000), "P_v (A·m)", "Vertical dipole moment of the target, A·m.")
-    mx = _num(-3000.0, (-20000, 20000), "m_x (A·m²)", "Magnetic moment of the target, x, A·m².")
-    my = _num(1000.0, (-20000, 20000), "m_y (A·m²)", "Magnetic moment of the target, y, A·m².")
-    mz = _num(5000.0, (-20000, 20000), "m_z (A·m²)", "Magnetic moment of the target, z (down), A·m².")
-    speed = _num(2.0 * math.sqrt(2.0), (0.1, 20), "Speed (m/s)", "Target speed, m/s (> 0).")
-    heading = _num(45.0, (-180, 180), "Heading (°)",
-                   "Course over ground, degrees from +x towards +y; the horizontal dipole points along it.")
-    z = _num(120.0, (0, 1000), "Target depth z (m)", "Target depth for the x–y plane, m (same axis as h).")
-
-
-class Stations(Part):
-    """Where the sensors are: the paper's single / dual station at depth h and spacing d, and
-    the custom layout of the Layout design and Track tabs."""
-
-    accepted = {
-        "h": (0.0, 5000.0, "m"),
-        "d": (0.1, 5000.0, "m"),
-    }
-    also_checked = ("stations",)
-
-    @classmethod
-    def problem(cls, name, value):
-        if name != "stations":
-            return super().problem(name, value)
-        lo, hi, _ = Region.accepted["y"]  # x, y and z alike
-        if not 1 <= len(value) <= MAX_STATIONS:
-            if len(value) > MAX_STATIONS:
-                return f"At most {MAX_STATIONS} stations: a {len(value)}th was refused"
-            return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
-        for i, st in enumerate(value):
-            ok = isinstance(st, (list, tuple)) and len(st) == 3 and all(
-                isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
-                and lo <= c <= hi for c in st)
-            if not ok:
-                return (f"Station {i + 1} must be three numbers (x, y, z) in {lo:g} … {hi:g} m; "
-                        f"got {str(st)[:60]!r}")
-            if st[2] < 0:
-                return (f"Station {i + 1}: depth z = {st[2]:g} m is above the sea surface; depths are "
-                        f"measured down from the surface (z ≥ 0)")
-        return None
-
-    h = _num(100.0, (0, 1000), "Station depth h (m)", "Depth of every station, m.")
-    d = _num(15.0, (0.5, 300), "Station spacing d (m)", "Station 2 sits at (d, 0, h); station 1 at (0, 0, h).")
-    layout = param.Selector(objects=["single", "dual"], default="dual", label="Layout for Figs. 3–4",
-                            doc="Station layout used by the moment comparisons.")
-    stations = param.List([[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]], item_type=list,
-                          label="Stations (x, y, z) (m)",
-                          doc="Custom layout for the design tab: 1 to 8 stations anywhere, m.")
-
-
-class Medium(Part):
-    """The sea (spec §7) and the electric field model."""
-
-    accepted = {
-        "sea_depth": (0.5, 10000.0, "m"),
-        "seabed_sigma": (0.0, 1000.0, "S/m"),
-        "sigma": (1e-3, 100.0, "S/m"),
-    }
-
-    sea_model = param.Selector(objects=list(SEA_MODELS), default="whole space", label="Sea",
-                               doc="Whole space (the paper) or layered: insulating air above, a "
-                                   "seabed below; z and h are then depths in [0, D].")
-    sea_depth = _num(200.0, (1, 500), "Sea depth D (m)", "Water depth D of the layered sea, m.")
-    seabed_sigma = _num(1.0, (0, 10), "Seabed conductivity σb (S/m)",
-                        "Conductivity of the seabed half-space, S/m (0: insulating).")
-    sigma = _num(4.0, (0.1, 10), "Conductivity σ (S/m)", "Sea conductivity, S/m; shifts log10|det Γ| only.")
-    model = param.Selector(objects=list(MODELS), default="exact dipole", label="Field model",
-                           doc="'paper' reproduces the printed equations, which are not a dipole field.")
-
-
-class Sensor(Part):
-    """What every station measures, how noisy, how often, and what is unknown (spec §11)."""
-
-    accepted = {
-        "noise": (1e-12, 1e-2, "V/m"),
-        "noise_b": (1e-6, 1e3, "nT"),
-        "noise_g": (1e-6, 1e3, "nT/m"),
-        "T": (1e-3, 1000.0, "s"),
-        "steps": (1, 20, "instants"),
-    }
-
-    sensor = param.Selector(objects=list(SENSORS), default="electric (E, V/m)", label="Sensor",
-                            doc="What every station measures: the electric field (the paper), the "
-                                "magnetic field, its gradient tensor, or both (spec §11).")
-    noise = _num(1e-7, (1e-9, 1e-5), "Sensor noise (V/m)", "Noise standard deviation per component, V/m.")
-    noise_b = _num(0.01, (1e-3, 10), "Magnetometer noise (nT)",
-                   "Noise standard deviation per field component, nT.")
-    noise_g = _num(0.01, (1e-3, 10), "Gradiometer noise (nT/m)",
-                   "Noise standard deviation per tensor component, nT/m.")
-    T = _num(1.0, (0.1, 10), "Sample interval T (s)", "Time between measurements, s.")
-    steps = param.Integer(3, softbounds=(1, 10), label="Instants N (Fisher)",
-                          doc="Number of instants for the Fisher measures.")
-    state_set = param.Selector(objects=list(STATE_SETS), default="all 7 unknown", label="Unknown states",
-                               doc="Treat the moments as known to make one station observable.")
-
-
-class Region(Part):
-    """The grid of target positions the maps and the design cover."""
-
-    accepted = {
-        "y": (-5000.0, 5000.0, "m"),
-        "extent": (1.0, 10000.0, "m"),
-        "z_min": (0.0, 5000.0, "m"),
-        "z_max": (0.0, 5000.0, "m"),
-        "resolution": (20, 400, "points per axis"),
-    }
-
-    plane = param.Selector(objects=["x–y", "x–z"], default="x–y", label="Map plane",
-                           doc="x–y: horizontal plane at target depth z. x–z: vertical plane at fixed y.")
-    y = _num(50.0, (-500, 500), "Fixed y (m)", "y of the x–z plane, m.")
-    extent = _num(300.0, (10, 2000), "Half-width of x (and y) (m)", "Maps span ±extent in x (and y), m.")
-    z_min = _num(100.0, (0, 1000), "x–z plane: z from (m)", "Shallowest target depth of the x–z plane, m.")
-    z_max = _num(400.0, (0, 2000), "x–z plane: z to (m)", "Deepest target depth of the x–z plane, m.")
-    resolution = param.Integer(200, softbounds=(20, 400), label="Grid points per axis",
-                               doc="Map resolution; at most 400 per axis.")
-
-    def rules(self):
-        if self.z_min >= self.z_max:
-            return ["x–z plane: 'z to' must be deeper than 'z from'"]
-        return []
-
-
-class Maps(Part):
-    """The Maps tab's own settings: the measure, the comparison and scenario B."""
-
-    accepted = {
-        "k": (1e-3, 1e3, ""),
-        "Ph_b": (0.0, 1e5, "A·m"),
-        "Pv_b": (0.0, 1e5, "A·m"),
-        "d_ref": (0.1, 5000.0, "m"),
-        "mx_b": (-1e7, 1e7, "A·m²"),
-        "my_b": (-1e7, 1e7, "A·m²"),
-        "mz_b": (-1e7, 1e7, "A·m²"),
-    }
-
-    measure = param.Selector(objects=list(MEASURE_LABELS), default="log10|det Γ| (paper)", label="Measure",
-                             doc="What the maps show.")
-    comparison = param.Selector(objects=list(COMPARISONS), default="Dual − single (Fig. 5)", label="Compare",
-                                doc="Which two scenarios the maps A and B and their difference show.")
-    difference = param.Selector(objects=list(DIFFERENCES), default="log10 Δ|det| (paper, Δ ≤ 0 blank)",
-                                label="Difference map", doc="How B is compared with A.")
-    k = _num(10.0, (0.1, 100), "Moment factor k", "Fig. 3: B has both moments × k.")
-    Ph_b = _num(70.7, (0, 1000), "B: P_h (A·m)", "Fig. 4: horizontal moment of scenario B, A·m.")
-    Pv_b = _num(70.7, (0, 1000), "B: P_v (A·m)", "Fig. 4: vertical moment of scenario B, A·m.")
-    d_ref = _num(10.0, (0.5, 300), "Reference spacing (m)", "Fig. 6: spacing of scenario A, m.")
-    sensor_b = param.Selector(objects=list(SENSORS), default="magnetometer + gradiometer (BG)",
-                              label="B: sensor", doc="Sensor comparison: the kind of scenario B.")
-    mx_b = _num(0.0, (-20000, 20000), "B: m_x (A·m²)", "Moment split, magnetic: m_x of scenario B, A·m².")
-    my_b = _num(0.0, (-20000, 20000), "B: m_y (A·m²)", "Moment split, magnetic: m_y of scenario B, A·m².")
-    mz_b = _num(6000.0, (-20000, 20000), "B: m_z (A·m²)", "Moment split, magnetic: m_z of scenario B, A·m².")
-
-
-class Design(Part):
-    """The Layout design tab's own settings."""
-
-    accepted = {
-        "n_stations": (1, MAX_STATIONS, "stations"),
-        "ellipse_x": (-5000.0, 5000.0, "m"),
-        "ellipse_y": (-5000.0, 5000.0, "m"),
-        "threshold": (0.01, 1e5, "m"),
-    }
-
-    criterion = param.Selector(objects=list(CRITERIA), default="Mean D-optimal over the region",
-                               label="Spacing criterion", doc="What the best spacing maximises.")
-    error_quantity = param.Selector(objects=list(ERROR_QUANTITIES), default="3-D position error (m)",
-                                    label="Error map", doc="Which Cramér–Rao error the design map shows.")
-    layout_kind = param.Selector(objects=["line", "triangle", "square", "free"], default="square",
-                                 label="Optimise: layout shape",
-                                 doc="Shape of the N-station layout to optimise ('free': any positions, slow).")
-    n_stations = param.Integer(4, softbounds=(1, 8), label="Optimise: stations N",
-                               doc="Number of stations of the layout to optimise, 1 to 8.")
-    ellipse_x = param.Number(100.0, softbounds=(-1000.0, 1000.0),
-                             label="Error ellipse at x (m)",
-                             doc="x of the target whose horizontal error ellipse is drawn, m.")
-    ellipse_y = param.Number(100.0, softbounds=(-1000.0, 1000.0),
-                             label="Error ellipse at y (m)",
-                             doc="y of the target whose horizontal error ellipse is drawn, m.")
-    threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
-                     "For 'area within threshold': position error (1σ, m) that counts as good.")
-
-
-class Track(Part):
-    """The Track tab's own settings (app/track.py): a straight track over the custom stations,
-    at the target depth z, with the target's moments and the sensor above."""
-
-    accepted = {
-        "track_x0": (-5000.0, 5000.0, "m"),
-        "track_y0": (-5000.0, 5000.0, "m"),
-        "track_heading": (-180.0, 180.0, "°"),
-        "track_speed": (0.1, 50.0, "m/s"),
-        "track_duration": (2.0, 600.0, "s"),
-        "track_sigma_a": (0.0, 10.0, "m/s²"),
-        "track_alpha": (0.0, 100.0, "moment²/step"),
-        "track_runs": (1, 20, "runs"),
-    }
-
-    track_x0 = param.Number(-250.0, softbounds=(-1000.0, 1000.0),
-                            label="Track start x (m)", doc="x of the track's start, m.")
-    track_y0 = param.Number(-120.0, softbounds=(-1000.0, 1000.0),
-                            label="Track start y (m)", doc="y of the track's start, m.")
-    track_heading = param.Number(25.0, softbounds=(-180.0, 180.0), label="Track heading (°)",
-                                 doc="Course of the straight track, degrees from +x towards +y.")
-    track_speed = param.Number(2.0, softbounds=(0.1, 20.0),
-                               label="Track speed (m/s)", doc="Target speed along the track, m/s.")
-    track_duration = param.Number(250.0, softbounds=(10.0, 600.0),
-                                  label="Track duration (s)",
-                                  doc="Length of the track in time, s (one measurement every T).")
-    track_axes = param.Selector(objects=[3, 2], default=3, label="Sensor axes",
-                                doc="3: every station measures Ex, Ey, Ez; 2: horizontal Ex, Ey only.")
-    track_sigma_a = param.Number(0.1, softbounds=(0.0, 1.0),
-                                 label="Acceleration noise σa (m/s²)",
-                                 doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).")
-    track_alpha = param.Number(0.001, softbounds=(0.0, 0.1),
-                               label="Moment random walk α (moment²/step)",
-                               doc="Variance of the moments' random walk per step: (A·m)² for the "
-                                   "electric dipole (seed 001: 0.001), (A·m²)² for a magnetic one.")
-    track_filter = param.Selector(objects=["bank", "ekf", "puekf"], default="bank", label="Tracker",
-                                  doc="bank: seed 001's 12 filters, no prior, ML selection; ekf / "
-                                      "puekf: one filter from a prior about the truth.")
-    track_runs = param.Integer(5, softbounds=(1, 20), label="Monte-Carlo runs",
-                               doc="Noise realisations shown and averaged in the TRMSE, 1 to 20.")
-
-
-class Calibration(Part):
-    """The Calibration tab's own problem (seed 004, app/calibration.py); its headings text is
-    parsed, and refused, by that tab."""
-
-    own_presets = True
-
-    accepted = {
-        "cal_roll_deg": (0.0, 45.0, "°"),
-        "cal_pitch_deg": (0.0, 30.0, "°"),
-        "cal_n_attitudes": (1, 120, "attitudes"),
-        "cal_noise_nt": (0.1, 5000.0, "nT"),
-        "cal_angle_noise_deg": (0.0, 2.0, "°"),
-        "cal_be_n": (-1e5, 1e5, "nT"),
-        "cal_be_e": (-1e5, 1e5, "nT"),
-        "cal_be_d": (-1e5, 1e5, "nT"),
-        "cal_iterations": (1, 5000, "iterations"),
-        "cal_p0_bp_nt": (0.01, 1e6, "nT"),
-        "cal_seed": (0, 1_000_000, ""),
-    }
-
-    cal_source = param.Selector(
-        objects=["Designed manoeuvre", "Seed 004 simulation", "Seed 004 Table 1", "Uploaded CSV"],
-        default="Seed 004 simulation", label="Calibration data",
-        doc="Designed or simulated manoeuvres use seed 004's simulated ship (K, Bp) as the truth.")
-    cal_convention = param.Selector(
-        objects=list(core.calibration.CONVENTIONS), default="seed004", label="Attitude convention",
-        doc="How heading, roll and pitch make A (core.calibration.CONVENTIONS); seed004 is its eq. (2).")
-    cal_headings = param.String("0, 90, 180, 270", label="Headings (°)",
-                                doc="Designed manoeuvre: headings sailed in turn, degrees from north.")
-    cal_roll_deg = param.Number(10.0, softbounds=(0.0, 45.0), label="Roll amplitude (°)",
-                                doc="Designed manoeuvre: roll = amplitude · cos(2πn/N), degrees.")
-    cal_pitch_deg = param.Number(5.0, softbounds=(0.0, 30.0), label="Pitch amplitude (°)",
-                                 doc="Designed manoeuvre: pitch = amplitude · sin(2πn/N), degrees.")
-    cal_n_attitudes = param.Integer(12, softbounds=(1, 120), label="Attitudes N",
-                                    doc="Number of attitudes of a designed or simulated manoeuvre.")
-    cal_noise_nt = param.Number(100.0, softbounds=(0.1, 5000.0), label="Reading error bound ± (nT)",
-                                doc="Uniform reading errors within ± this, nT; the filter and the CRLB "
-                                    "use σ = bound/√3.")
-    cal_angle_noise_deg = param.Number(0.05, softbounds=(0.0, 2.0), label="Angle error bound ± (°)",
-                                       doc="Uniform errors of each recorded angle within ± this, degrees.")
-    cal_be_n = param.Number(34000.0, softbounds=(-1e5, 1e5), label="Be north (nT)",
-                            doc="Geomagnetic field, north component, nT.")
-    cal_be_e = param.Number(2000.0, softbounds=(-1e5, 1e5), label="Be east (nT)",
-                            doc="Geomagnetic field, east component, nT.")
-    cal_be_d = param.Number(35000.0, softbounds=(-1e5, 1e5), label="Be down (nT)",
-                            doc="Geomagnetic field, down component, nT.")
-    cal_iterations = param.Integer(600, softbounds=(1, 5000), label="Kalman iterations",
-                                   doc="Filter steps; the readings are reused cyclically (seed 004).")
-    cal_p0_bp_nt = param.Number(3000.0, softbounds=(0.01, 1e6), label="Prior σ of Bp in P(0) (nT)",
-                                doc="Square root of P(0)'s Bp entry, nT (K entries: 1). Small values "
-                                    "slow the filter down.")
-    cal_seed = param.Integer(4, softbounds=(0, 1_000_000), label="Random seed",
-                             doc="Seed of the simulated attitudes and errors.")
-
-
-class Shape(Part):
-    """The Shape tab's own problem (seed 003, app/shape.py): a target (a grid of 0.1 m dipole
-    cells) passed by a gradiometer on a straight track along +x; the defaults are seed 003's
-    Fig. 4."""
-
-    own_presets = True
-
-    accepted = {
-        "shape_height": (0.1, 20.0, "m"),
-        "shape_radius": (0.05, 10.0, "m"),
-        "shape_inner_height": (0.0, 20.0, "m"),
-        "shape_inner_radius": (0.0, 10.0, "m"),
-        "shape_roll": (-180.0, 180.0, "°"),
-        "shape_pitch": (-180.0, 180.0, "°"),
-        "shape_yaw": (-180.0, 180.0, "°"),
-        "shape_mx": (-1000.0, 1000.0, "A·m² per cell"),
-        "shape_my": (-1000.0, 1000.0, "A·m² per cell"),
-        "shape_mz": (-1000.0, 1000.0, "A·m² per cell"),
-        "shape_offset": (-100.0, 100.0, "m"),
-        "shape_above": (-100.0, 100.0, "m"),
-        "shape_noise": (1e-5, 10.0, "nT/m"),
-        "shape_outlier_size": (0.0, 1e5, "σ"),
-        "shape_runs": (1, 20, "passes"),
-        "shape_seed": (0, 1_000_000, ""),
-    }
-
-    shape_type = param.Selector(objects=["cylinder", "disc"], default="cylinder", label="Target type",
-                                doc="Seed 003: a cylinder has H > R (read as a line), a disc H ≤ R "
-                                    "(read as a plane). Switching sets typical sizes if H, R disagree.")
-    shape_height = _num(3.0, (0.1, 6.0), "Height H (m)", "Target height H along its axis, m.")
-    shape_radius = _num(0.5, (0.05, 3.0), "Radius R (m)", "Target radius R, m.")
-    shape_inner_height = _num(0.0, (0.0, 6.0), "Cavity height H_in (m, 0: solid)",
-                              "Hollow target: height of the coaxial cavity, m (0 with R_in = 0: solid).")
-    shape_inner_radius = _num(0.0, (0.0, 3.0), "Cavity radius R_in (m, 0: solid)",
-                              "Hollow target: radius of the coaxial cavity, m (< R).")
-    shape_roll = _num(30.0, (-180, 180), "Roll θ (°)", "Attitude: roll about x, degrees (R = Rz·Ry·Rx).")
-    shape_pitch = _num(45.0, (-180, 180), "Pitch β (°)", "Attitude: pitch about y, degrees.")
-    shape_yaw = _num(60.0, (-180, 180), "Yaw φ (°)", "Attitude: yaw about z, degrees.")
-    shape_mx = _num(-3.0, (-10, 10), "Cell moment mx (A·m²)", "Moment of each 0.1 m cell, x (A·m²).")
-    shape_my = _num(1.0, (-10, 10), "Cell moment my (A·m²)", "Moment of each 0.1 m cell, y (A·m²).")
-    shape_mz = _num(5.0, (-10, 10), "Cell moment mz (A·m²)", "Moment of each 0.1 m cell, z (A·m²).")
-    shape_offset = _num(5.0, (-30, 30), "Track lateral offset y (m)",
-                        "y of the straight track along x (the target's centre is the origin), m.")
-    shape_above = _num(5.0, (-30, 30), "Track height above the target (m)",
-                       "Height of the track above the target's centre, m (z = −height: z is down).")
-    shape_noise = param.Number(0.01, softbounds=(1e-3, 1.0), label="Noise σ (nT/m)",
-                               doc="Gaussian noise of each tensor component, nT/m (seed 003: 0.01).")
-    shape_outliers = param.String("", label="Outliers at platform x (m)",
-                                  doc="Comma-separated x positions (m) of the samples that get an "
-                                      "outlier on all five components (Fig. 5: −20, −10, 0); empty: none.")
-    shape_outlier_size = _num(500.0, (0, 2000), "Outlier size (σ)",
-                              "Added to each hit component, in units of the noise σ (Fig. 5: 500).")
-    shape_window = param.Selector(objects=["one sample", "seed 003 window (lag 5)"],
-                                  default="one sample", label="Filter update",
-                                  doc="One sample: the honest update. Seed 003's window of three lagged "
-                                      "readings (eq. 15): every sample counts three times.")
-    shape_runs = param.Integer(1, softbounds=(1, 20), label="Monte-Carlo passes",
-                               doc="Noise realisations: errors and shape are their medians, 1 to 20.")
-    shape_seed = param.Integer(0, softbounds=(0, 100), label="Random seed", doc="Seed of the noise.")
-
-
-#: The parts of a scenario: attribute -> class. Their parameter names are unique across them.
-PARTS = {"target": Target, "stations": Stations, "medium": Medium, "sensor": Sensor,
-         "region": Region, "maps": Maps, "design": Design, "track": Track,
-         "calibration": Calibration, "shape": Shape}
-#: Each parameter's part: name -> attribute of :data:`PARTS`.
-PART_OF = {n: attr for attr, cls in PARTS.items() for n in cls.names()}
-assert len(PART_OF) == sum(len(cls.names()) for cls in PARTS.values()), "parameter names must be unique"
-#: Every part's hard limits: name -> (lowest, highest, unit).
-ACCEPTED = {n: lim for cls in PARTS.values() for n, lim in cls.accepted.items()}
-
-
-def parameter(name):
-    """The class-level param.Parameter of input ``name`` (its label, default, type)."""
-    return PARTS[PART_OF[name]].param[name]
-
-
-def defaults(parts=None):
-    """Every input's default: name -> value (of the parts named ``parts``; default all)."""
-    return {n: PARTS[a].param[n].default for a in (parts or PARTS) for n in PARTS[a].names()}
 
 
 class Scenario(param.Parameterized):
