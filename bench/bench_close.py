@@ -21,6 +21,7 @@ collection walks every live object of every open session).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import statistics
 import threading
 import time
@@ -35,16 +36,29 @@ from tests.server import served_app
 FAST_CLEANUP = ("--check-unused-sessions", "500", "--unused-session-lifetime", "1000")
 
 
-def liveness_max(url, stop):
-    """Poll GET /liveness every 50 ms until ``stop`` is set; return the longest answer (s)."""
-    worst = 0.0
-    while not stop.is_set():
-        t0 = time.perf_counter()
-        with urllib.request.urlopen(url + "/liveness", timeout=60) as r:
-            r.read()
-        worst = max(worst, time.perf_counter() - t0)
-        stop.wait(0.05)
-    return worst
+@contextlib.contextmanager
+def polled(url):
+    """Poll GET /liveness every 50 ms while the block runs; yields a list that then holds the
+    longest answer (s)."""
+    stop, worst = threading.Event(), []
+
+    def poll():
+        longest = 0.0
+        while not stop.is_set():
+            t0 = time.perf_counter()
+            with urllib.request.urlopen(url + "/liveness", timeout=60) as r:
+                r.read()
+            longest = max(longest, time.perf_counter() - t0)
+            stop.wait(0.05)
+        worst.append(longest)
+
+    poller = threading.Thread(target=poll)
+    poller.start()
+    try:
+        yield worst
+    finally:
+        stop.set()
+        poller.join()
 
 
 def cpu(proc):
@@ -63,27 +77,18 @@ def main(argv=None):
         proc = psutil.Process(server.pid)
         clients = [Client(url) for _ in range(args.open)]
         time.sleep(8.0)  # the opening's own work and collections are over
-        stop = threading.Event()  # idle, but answering the poller (its requests cost CPU too)
-        poller = threading.Thread(target=liveness_max, args=(url, stop))
-        poller.start()
-        c0, t0 = cpu(proc), time.perf_counter()
-        time.sleep(args.window)
-        idle = (cpu(proc) - c0) / (time.perf_counter() - t0)
-        stop.set()
-        poller.join()
+        with polled(url):  # idle, but answering the polls (they cost CPU too)
+            c0, t0 = cpu(proc), time.perf_counter()
+            time.sleep(args.window)
+            idle = (cpu(proc) - c0) / (time.perf_counter() - t0)
         print(f"{args.open} sessions open; idle server CPU, polled: {idle * 1e3:.1f} ms/s")
         costs, stalls = [], []
         for i in range(args.closes):
-            stop = threading.Event()
-            worst = []
-            poller = threading.Thread(target=lambda: worst.append(liveness_max(url, stop)))
-            c0, t0 = cpu(proc), time.perf_counter()
-            poller.start()
-            clients.pop().close()
-            time.sleep(args.window)
-            stop.set()
-            poller.join()
-            spent = cpu(proc) - c0 - idle * (time.perf_counter() - t0)
+            with polled(url) as worst:
+                c0, t0 = cpu(proc), time.perf_counter()
+                clients.pop().close()
+                time.sleep(args.window)
+                spent = cpu(proc) - c0 - idle * (time.perf_counter() - t0)
             costs.append(spent)
             stalls.append(worst[0])
             print(f"close {i + 1}: server CPU {spent * 1e3:.0f} ms, longest GET /liveness {worst[0] * 1e3:.0f} ms")
