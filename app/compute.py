@@ -17,7 +17,6 @@ import core
 
 from .scenario import (
     COMPARISONS,
-    CRITERIA,
     DIFFERENCES,
     PAPER_MAPS,
     PART_OF,
@@ -41,8 +40,6 @@ MAPS = (*SCENE, "maps")
 DESIGN = (*SCENE, "design")
 #: Every input the maps read.
 MAP_INPUTS = frozenset(n for n, part in PART_OF.items() if part in MAPS)
-#: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
-SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
 #: Largest CRLB / range at which a linearised bound still predicts a tracker's error
 #: (:func:`core.linearisation_breaks`, issue 18): beyond it the maps hatch the point.
 RUNAWAY_LIMIT = 0.3
@@ -439,85 +436,6 @@ def compute(snapshot: Snapshot) -> Panels:
                                far_note=runaway_note(((title_a, a), (title_b, b)), (ra, rb)))
 
 
-def _fisher_options(s: ScenarioValues):
-    return _core_options(s, None)
-
-
-def xy_region(s: ScenarioValues, n):
-    """The x–y plane at the target depth (for the design tab, whatever the map plane)."""
-    return core.Plane("xy", (-s.extent, s.extent), (-s.extent, s.extent), s.z, n)
-
-
-@dataclass(frozen=True)
-class Design:
-    """CRLB maps of the custom layout over the x–y plane at the target depth."""
-
-    plane: core.Plane
-    stations: np.ndarray  # (S, 3), m
-    errors: object  # core.CrlbErrors with (n, n) arrays
-
-
-def design(snapshot: Snapshot) -> Design:
-    s = snapshot.scenario()
-    stations = np.array(s.stations, dtype=float)
-    plane = xy_region(s, int(s.resolution))
-    with KERNEL_LOCK:
-        errors = core.crlb_maps(plane, stations, velocity=s.velocity(), moments=s.moments(),
-                                **_fisher_options(s))
-    return Design(plane=plane, stations=stations, errors=errors)
-
-
-def error_at(snapshot: Snapshot, x, y):
-    """CRLB errors (core.CrlbErrors of scalars) of a target at (x, y, z) for the custom layout."""
-    s = snapshot.scenario()
-    state = [x, y, s.z, *s.velocity(), *s.moments()]
-    try:
-        return core.horizontal_error_ellipse(state, np.array(s.stations, dtype=float),
-                                             **_fisher_options(s))
-    except ValueError:  # the click landed on a station
-        return None
-
-
-@dataclass(frozen=True)
-class Spacing:
-    """The best dual-station spacing over the x–y region, and the maps to compare."""
-
-    result: object  # core.SpacingResult
-    criterion: str
-    label: str
-    best: Design
-    paper: Design  # d = 15 m, the paper's Fig. 5
-
-
-def best_spacing(snapshot: Snapshot) -> Spacing:
-    s = snapshot.scenario()
-    key = CRITERIA[s.criterion]
-    region = xy_region(s, REGION_RESOLUTION)
-    common = dict(velocity=s.velocity(), moments=s.moments(), **_fisher_options(s))
-    with KERNEL_LOCK:
-        result = core.best_spacing(region, d_range=SPACING_RANGE, n_curve=SPACING_POINTS, h=s.h,
-                                   criterion=key, threshold=s.threshold, **common)
-
-    def at(d):
-        stations = core.dual_station(s.h, d)
-        plane = xy_region(s, min(int(s.resolution), 150))
-        with KERNEL_LOCK:
-            return Design(plane, stations, core.crlb_maps(plane, stations, **common))
-
-    return Spacing(result=result, criterion=key, label=core.CRITERIA[key][0], best=at(result.d),
-                   paper=at(15.0))
-
-
-def optimised_layout(snapshot: Snapshot):
-    """core.optimise_layout for the chosen shape and N over the x–y region: a core.LayoutResult."""
-    s = snapshot.scenario()
-    with KERNEL_LOCK:
-        return core.optimise_layout(s.layout_kind, int(s.n_stations), xy_region(s, 31), h=s.h,
-                                    velocity=s.velocity(), moments=s.moments(),
-                                    criterion=CRITERIA[s.criterion], threshold=s.threshold,
-                                    **_fisher_options(s))  # spacing up to what fits in the region
-
-
 def _arrays(value, seen=None):
     """The numpy arrays inside a result (dataclasses, tuples, lists, dicts), each once."""
     seen = set() if seen is None else seen
@@ -538,13 +456,13 @@ def _arrays(value, seen=None):
 
 
 class PanelCache:
-    """Recent results of the tabs' pure computations (:func:`compute`, :func:`design`, …), keyed
-    by (function, :class:`Snapshot`) and shared by every session of the process (:data:`SHARED`):
-    the default view and the presets are computed once per process, not once per visitor
-    (issue 29). Bounded by ``size`` entries and ``max_bytes`` of arrays, least recently used out
-    first. A key being computed is computed once: a second session asking for it waits for the
-    first's result. A cached result's arrays are made read-only, so that no view can change
-    what another session sees."""
+    """Recent results of the tabs' pure computations (:func:`compute`, the Layout design tab's
+    :mod:`app.design_compute`, …), keyed by (function, :class:`Snapshot`) and shared by every
+    session of the process (:data:`SHARED`): the default view and the presets are computed once
+    per process, not once per visitor (issue 29). Bounded by ``size`` entries and ``max_bytes``
+    of arrays, least recently used out first. A key being computed is computed once: a second
+    session asking for it waits for the first's result. A cached result's arrays are made
+    read-only, so that no view can change what another session sees."""
 
     def __init__(self, size=16, max_bytes=48 * 2**20):
         self.size, self.max_bytes = size, max_bytes
@@ -604,5 +522,5 @@ class PanelCache:
 SHARED = PanelCache()
 
 
-__all__ = ["DESIGN", "MAP_INPUTS", "MAPS", "SCENE", "PanelCache", "Panels", "SHARED", "Snapshot", "best_spacing", "compute",
-           "design", "difference", "error_at"]
+__all__ = ["DESIGN", "MAP_INPUTS", "MAPS", "SCENE", "PanelCache", "Panels", "SHARED", "Snapshot",
+           "compute", "difference"]

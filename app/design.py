@@ -9,7 +9,7 @@ import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
-from . import compute, offloop, views
+from . import compute, design_compute, offloop, views
 from .compute import DESIGN, RUNAWAY_LIMIT, SCENE, Snapshot
 from .inputs import number_input
 from .maps import alert, refusal
@@ -77,8 +77,8 @@ SPACING_HINT = "Press *Find best spacing* (about a second)."
 
 
 def spacing_text(sp):
-    """The line under the button on a best spacing (compute.Spacing): d, criterion, a bound hit,
-    and where its plots are."""
+    """The line under the button on a best spacing (design_compute.Spacing): d, criterion, a
+    bound hit, and where its plots are."""
     r = sp.result
     edge = (" — at the edge of the scanned range: a better spacing may lie beyond it"
             if r.at_bound else "")
@@ -105,7 +105,7 @@ def design_tab(scenario, cache, widgets):
         st.stations = drawn_stations(data, st.stations, st.h)
 
     draw.add_subscriber(drawn)
-    errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), compute.design),
+    errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), design_compute.design),
                                                        "Custom layout: Cramér–Rao error",
                                                        scenario.design.error_quantity),
                            streams=[*scene, hv.streams.Params(scenario.design, ["error_quantity"])])
@@ -114,7 +114,8 @@ def design_tab(scenario, cache, widgets):
     tap = hv.streams.Params(scenario.design, ["ellipse_x", "ellipse_y"], rename={"ellipse_x": "x", "ellipse_y": "y"})
 
     def ellipse(x, y, **_):
-        return views.error_ellipse(compute.error_at(snap(), x, y), x, y, scenario.region.extent)[0]
+        return views.error_ellipse(design_compute.error_at(snap(), x, y), x, y,
+                                   scenario.region.extent)[0]
 
     # The readout under the table, by a Task, which shows the latest change's text only
     # (computed per change on Panel's threads, an older, slower computation ending last left an
@@ -127,7 +128,7 @@ def design_tab(scenario, cache, widgets):
         snapshot, x, y = key
         s = snapshot.scenario()
         rng = float(compute.nearest_range([x, y, s.z], s.stations)) if len(s.stations) else None
-        return views.error_ellipse(compute.error_at(snapshot, x, y), x, y, s.extent, rng)[1]
+        return views.error_ellipse(design_compute.error_at(snapshot, x, y), x, y, s.extent, rng)[1]
 
     def now():
         return snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
@@ -162,7 +163,7 @@ def design_tab(scenario, cache, widgets):
     spacing_task = offloop.Task("design", busy=[said, found, run])
 
     def spacing_views(snapshot):
-        sp = cache.get(snapshot, compute.best_spacing)
+        sp = cache.get(snapshot, design_compute.best_spacing)
         clim = views.common_clim(sp.best, sp.paper)  # one scale: the comparison must not mislead
         best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m", clim=clim, size=260)
         paper = views.error_map(sp.paper, "Paper: d = 15 m", clim=clim, size=260)
@@ -206,7 +207,7 @@ def design_tab(scenario, cache, widgets):
 
     def optimise_clicked(event):
         snapshot, criterion = Snapshot.of(scenario, DESIGN), scenario.design.criterion
-        optimise_task.start(None, partial(cache.get, snapshot, compute.optimised_layout),
+        optimise_task.start(None, partial(cache.get, snapshot, design_compute.optimised_layout),
                             partial(optimised, criterion=criterion), optimise_failed)
 
     optimise.on_click(optimise_clicked)

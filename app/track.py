@@ -39,7 +39,8 @@ from core.tracking import montecarlo as core_track
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
 from . import offloop, views
-from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, SHARED, Design, Snapshot, nearest_range
+from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, SHARED, Snapshot, nearest_range
+from .design_compute import Design
 from .maps import refusal
 from .scenario import SENSORS, Scenario
 

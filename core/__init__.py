@@ -52,22 +52,16 @@ from .model.measurement import AXES, SensorModel
 from .model.sea import Sea
 from .model.sensors import KINDS, MAGNETIC_NOISE, Sensor
 from .model.validation import STATE_NAMES
+from .observability.crlb import CrlbErrors, crlb_covariance, crlb_maps, horizontal_error_ellipse
 from .observability.design import (
     CRITERIA,
-    LAYOUTS,
-    MAX_STATIONS,
     CriterionResult,
-    CrlbErrors,
     LayoutResult,
     SpacingResult,
     best_spacing,
-    crlb_covariance,
-    crlb_maps,
-    horizontal_error_ellipse,
     layout_criterion,
     optimise_layout,
     spacing_curve,
-    station_layout,
 )
 from .observability.fisher import (
     DEFAULT_NOISE,
@@ -91,6 +85,7 @@ from .observability.grids import (
     single_station,
     velocity_from_heading,
 )
+from .observability.layouts import LAYOUTS, MAX_STATIONS, station_layout
 from .observability.maps import (
     MEASURES,
     MapResult,
@@ -133,7 +128,7 @@ __all__ = [
     "Sea",
     # the measurement model (core.model.sensors)
     "KINDS", "MAGNETIC_NOISE", "Sensor",
-    # sensor-layout design (core.observability.design)
+    # sensor-layout design (core.observability.crlb, .layouts, .design)
     "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
     "layout_criterion", "optimise_layout", "spacing_curve", "station_layout",

@@ -80,7 +80,7 @@ def test_stations_added_by_clicks_keep_the_station_depth(page):
 
 def expected_readout(presets, x, y, z=None):
     """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
-    from app import compute, views
+    from app import compute, design_compute, views
     from app.compute import SCENE, Snapshot
     from app.scenario import Scenario
 
@@ -91,7 +91,7 @@ def expected_readout(presets, x, y, z=None):
         s.target.z = z
     snap = Snapshot.of(s, SCENE)
     rng = float(compute.nearest_range([x, y, s.target.z], s.stations.stations))
-    return views.error_ellipse(compute.error_at(snap, x, y), x, y, s.region.extent, rng)[1]
+    return views.error_ellipse(design_compute.error_at(snap, x, y), x, y, s.region.extent, rng)[1]
 
 
 def ended_at(pg):

@@ -1,4 +1,4 @@
-"""Sensor-layout design (core.observability.design) and the sweep CLI (core.sweep)."""
+"""Sensor-layout design (core.observability.crlb, .layouts, .design) and the sweep CLI (core.sweep)."""
 
 import csv
 import subprocess

@@ -9,7 +9,7 @@ kept and :attr:`Scenario.message` names the input) or from the tab, which says w
 its own pane. The Track, Calibration and Shape tabs are their real layouts built here, outside a
 server: their computations (app.offloop) then finish before the value's assignment returns, so
 the time of that assignment is the tab's time for the value. The maps and the Layout design tab
-are computed by the functions their tabs call (app.compute).
+are computed by the functions their tabs call (app.compute, app.design_compute).
 """
 
 import math
@@ -20,7 +20,7 @@ import panel as pn
 import param
 import pytest
 
-from app import calibration, compute, shape, track
+from app import calibration, compute, design_compute, shape, track
 from app.compute import SCENE, Snapshot
 from app.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
 
@@ -100,13 +100,13 @@ class Tab:
             return f"maps {p.titles}", ""
         if kind == "design":
             snap = Snapshot.of(s, SCENE)
-            d = compute.design(snap)
-            ell = compute.error_at(snap, s.design.ellipse_x, s.design.ellipse_y)
+            d = design_compute.design(snap)
+            ell = design_compute.error_at(snap, s.design.ellipse_x, s.design.ellipse_y)
             extra = ""
             if s.design.criterion.startswith("Area"):
-                extra = f", best d = {compute.best_spacing(snap).result.d:.3g} m"
+                extra = f", best d = {design_compute.best_spacing(snap).result.d:.3g} m"
             if s.design.n_stations in (1, MAX_STATIONS):
-                extra += f", optimised {len(compute.optimised_layout(snap).stations)} stations"
+                extra += f", optimised {len(design_compute.optimised_layout(snap).stations)} stations"
             return f"design {np.nanmin(d.errors.position):.3g} m, ellipse {ell is not None}{extra}", ""
         if kind == "track":
             problem, out = self.layout[0], self.layout[1]

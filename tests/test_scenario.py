@@ -213,27 +213,29 @@ def test_custom_layout_is_checked(bad, why):
 
 def test_design_maps_and_best_spacing():
     from app import compute as c
+    from app import design_compute as dc
     s = Scenario(resolution=31, stations=[[0.0, 0.0, 100.0], [40.0, 20.0, 90.0], [-30.0, 10.0, 100.0]])
-    d = c.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, c.SCENE))
     assert d.errors.position.shape == (31, 31) and np.isfinite(d.errors.position).mean() > 0.95
-    e = c.error_at(Snapshot.of(s, c.SCENE), 100.0, 50.0)
+    e = dc.error_at(Snapshot.of(s, c.SCENE), 100.0, 50.0)
     assert float(e.semi_major) >= float(e.semi_minor) > 0
     s.target.z = 100.0  # target depth = station depth: (0, 0) is on station 1
-    assert c.error_at(Snapshot.of(s, c.SCENE), 0.0, 0.0) is None
+    assert dc.error_at(Snapshot.of(s, c.SCENE), 0.0, 0.0) is None
     s.target.z = 120.0
-    sp = c.best_spacing(Snapshot.of(s, c.DESIGN))
+    sp = dc.best_spacing(Snapshot.of(s, c.DESIGN))
     r = sp.result
-    assert c.SPACING_RANGE[0] <= r.d <= c.SPACING_RANGE[1]
+    assert dc.SPACING_RANGE[0] <= r.d <= dc.SPACING_RANGE[1]
     assert r.value >= np.max(r.curve) - 1e-9  # the refined optimum is at least the scanned best
     assert sp.paper.stations[1, 0] == 15.0 and sp.best.stations[1, 0] == r.d
 
 
 def test_optimised_layout_and_error_quantities():
     from app import compute as c
+    from app import design_compute as dc
     s = Scenario(resolution=21, layout_kind="triangle", n_stations=3)
-    r = c.optimised_layout(Snapshot.of(s, c.DESIGN))
+    r = dc.optimised_layout(Snapshot.of(s, c.DESIGN))
     assert r.stations.shape == (3, 3) and 0 < r.d <= 2 * s.region.extent  # up to what fits in the region
-    d = c.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, c.SCENE))
     for quantity in parameter("error_quantity").objects:
         overlay = views.error_map(d, "t", quantity)
         assert overlay.get(0).vdims[0].unit in ("m", "m/s")
@@ -405,9 +407,10 @@ def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
     # maps' stations asked for an active point-draw tool they do not have), and a station showed
     # two overlapping tooltips
     from app import compute as c
+    from app import design_compute as dc
 
     s = Scenario(resolution=21)
-    d = c.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, c.SCENE))
     with caplog.at_level("WARNING"):
         fig, hovers = _design_plot(views.error_map(d, "t") * views.station_layer(d.stations))
     assert not [r for r in caplog.records if "could not be found" in r.getMessage()]
@@ -416,9 +419,10 @@ def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
 
 def test_best_and_paper_maps_share_one_colour_range():
     from app import compute as c
+    from app import design_compute as dc
 
     s = Scenario(resolution=21)
-    sp = c.best_spacing(Snapshot.of(s, c.DESIGN))
+    sp = dc.best_spacing(Snapshot.of(s, c.DESIGN))
     clim = views.common_clim(sp.best, sp.paper)
     for design in (sp.best, sp.paper):
         lo, hi = views.error_clim(design)

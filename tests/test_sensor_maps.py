@@ -5,8 +5,9 @@ import pytest
 
 import core
 from app import map_figures
-from app.compute import SCENE, Snapshot, compute, design
+from app.compute import SCENE, Snapshot, compute
 from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+from app.design_compute import design
 from app.scenario import PRESETS, Scenario
 
 MAGNETOMETER, GRADIOMETER = "magnetometer (B, nT)", "gradiometer (G, nT/m)"

@@ -1,6 +1,6 @@
 """Tracking: PCRLB, EKF / PUEKF, the filter bank and the Monte-Carlo driver (issue 18).
 
-References are independent of the code under test: the batch CRLB of core.observability.design (QR of Γ),
+References are independent of the code under test: the batch CRLB of core.observability.crlb (QR of Γ),
 Stone Soup's EKF, a covariance-form recursion written out here, chi-square bounds from scipy.
 """
 

@@ -6,6 +6,7 @@ import pytest
 from bokeh.colors import RGB
 
 from app import compute as c
+from app import design_compute as dc
 from app import map_figures, maps, track
 from app.compute import SHARED, Snapshot
 from app.scenario import Scenario
@@ -35,7 +36,7 @@ def test_runaway_marks_are_not_stripes_like_the_unobservable_veil():
 
 
 def test_the_design_and_track_maps_dot_runaway_points_as_the_maps_tab_does():
-    d = c.design(Snapshot.of(Scenario(resolution=41), c.DESIGN))
+    d = dc.design(Snapshot.of(Scenario(resolution=41), c.DESIGN))
     far = c.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
     assert far.any()
     from app import views

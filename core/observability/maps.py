@@ -13,7 +13,7 @@ import numpy as np
 from ..kernels import gamma as kernels
 from ..model import sea as sea_module
 from ..model import sensors, validation
-from .design import magnetic_clear, magnetic_plane_states
+from .crlb import magnetic_clear, magnetic_plane_states
 from .fisher import DEFAULT_STEPS, _fisher_from_kernel, magnetic_fisher
 from .gamma import _full_rank, _options
 
