@@ -39,9 +39,11 @@ from bokeh.models import (
     CustomJSTickFormatter,
     DataRange1d,
     HoverTool,
+    Image,
     Label,
     LinearColorMapper,
     SaveTool,
+    Scatter,
     Title,
 )
 from bokeh.palettes import RdBu11, Viridis256
@@ -177,11 +179,14 @@ def build():
         veil = ColumnDataSource(dict(image=[np.zeros((2, 2), np.float32)], x=[-1], y=[-1], dw=[2], dh=[2]),
                                 name="map-veil")
         st = ColumnDataSource(dict(x=[], y=[], name=[]))
-        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=img, color_mapper=mapper)
-        v = fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=veil, color_mapper=veil_mapper)
-        s = fig.scatter("x", "y", source=st, marker="triangle", size=13, fill_color="white",
-                        line_color="black", line_width=1.5)
-        corners.append(fig.scatter("x", "y", source=view_source, size=0, alpha=0))  # what the ranges fit
+        # add_glyph: one glyph model per layer (the plotting API adds a non-selection and a
+        # muted copy of each; these maps neither select nor mute)
+        fig.add_glyph(img, Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper))
+        v = fig.add_glyph(veil, Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=veil_mapper))
+        s = fig.add_glyph(st, Scatter(x="x", y="y", marker="triangle", size=13, fill_color="white",
+                                      line_color="black", line_width=1.5))
+        if which == 0:  # what the shared ranges fit: drawn once, in the first map
+            corners.append(fig.add_glyph(view_source, Scatter(x="x", y="y", size=0, line_alpha=0, fill_alpha=0)))
         fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
                                                       log=False, texts=dict(unobservable="", none="", runaway="")))
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
