@@ -168,45 +168,56 @@ def _section(scenario, tabs, title, names, collapsed):
     card when none does. A refused value's message shows under its input."""
     watched = [*map(scenario.ref, ("plane", "comparison", "measure", "layout", "sea_model", "sensor",
                                    "sensor_b")), tabs.param.active]
-
-    def visible(name):
-        return pn.bind(lambda *_: applies(name, scenario.snapshot(), tabs.active), *watched)
+    rows = {}  # name -> its row in the card, once built
 
     def widget(name):
         if name in NUMBERS:
-            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"], visible=visible(name),
+            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"],
                                 **({"fmt": FORMATS[name]} if name in FORMATS else {}))
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
-        return cls.from_param(scenario.ref(name), visible=visible(name), **spec)
+        return cls.from_param(scenario.ref(name), **spec)
 
     def row(name):
         if name not in ACCEPTED and name not in MOVES:  # a selector: nothing it offers is refused
-            return widget(name)
-        # A refused value is said right under its input, where the user typed it (at the top of
-        # the sidebar it was out of sight when typing in Stations or Advanced).
-        w = widget(name)
-        column = w if name in NUMBERS else pn.Column(w, visible=visible(name), sizing_mode="stretch_width",
-                                                     margin=0)
-        return maps.with_refusal(scenario, column, [name], f"w-message-{name}")
+            rows[name] = widget(name)
+        else:
+            # A refused value is said right under its input, where the user typed it (at the top
+            # of the sidebar it was out of sight when typing in Stations or Advanced).
+            w = widget(name)
+            column = w if name in NUMBERS else pn.Column(w, sizing_mode="stretch_width", margin=0)
+            rows[name] = maps.with_refusal(scenario, column, [name], f"w-message-{name}")
+        return rows[name]
 
-    def any_applies(*_):
-        s = scenario.snapshot()
-        return any(applies(n, s, tabs.active) for n in names)
-
-    any_visible = pn.bind(any_applies, *watched)
     # A collapsed card's inputs are built when it is first opened (a new page carries only what
     # it shows: the two collapsed cards held ~40 % of the sidebar's models)
     card = pn.Card(*([] if collapsed else map(row, names)), title=title, collapsed=collapsed,
                    sizing_mode="stretch_width")
+    # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
+    outer = pn.Column(card, sizing_mode="stretch_width", margin=0)
+
+    def show_applicable(*_):
+        """Each input shown where it applies, the card where one does: one watcher per card (one
+        binding per input re-read the scenario once per input, and carried its own watchers)."""
+        s = scenario.snapshot()
+        shown = {name: applies(name, s, tabs.active) for name in names}
+        for name, r in rows.items():
+            r.visible = shown[name]
+        outer.visible = any(shown.values())
 
     def opened(event):
         if not event.new and not card.objects:
             card.objects = [row(name) for name in names]
+            show_applicable()
 
     card.param.watch(opened, ["collapsed"])
-    # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
-    return pn.Column(card, visible=any_visible, sizing_mode="stretch_width", margin=0)
+    by_owner = {}
+    for ref in watched:
+        by_owner.setdefault(ref.owner, []).append(ref.name)
+    for owner, params in by_owner.items():  # one call per change of an owner's values
+        owner.param.watch(show_applicable, params)
+    show_applicable()
+    return outer
 
 
 #: What the Layout design and Track tabs say over their content for a magnetic sensor kind.
