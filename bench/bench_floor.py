@@ -18,7 +18,8 @@ and measures for each:
     map A as drawn equal to the in-process computation of that value;
 (b) server CPU per update: the server process's CPU time (user + system, psutil) over the measured
     changes, minus its idle rate measured just before (× the changes' wall time), divided by the
-    number of changes;
+    number of changes; and, apart, the CPU of computing one update's maps in the bench's own
+    process (:func:`compute_cpu_ms`), so the rest (events, drawing, messages) is compared too;
 (c) a new session's page: the server's CPU from the request (``page.goto``) until the page's Bokeh
     document is ready (a document with three plot views), minus idle; also until the page's
     websocket has been quiet for ``--quiet-ms`` (work the page triggers after it is shown). The
@@ -60,6 +61,7 @@ from bench.bench_browser import (
     expected_map_a_sum,
     fractions,
     pct,
+    scenario,
     wait_redrawn,
 )
 from tests.server import CHROMIUM, CHROMIUM_ARGS, ROOT, SERVER_ENV, free_port, served_app, stop
@@ -90,6 +92,31 @@ def idle_rate(proc, seconds=2.0):
     c0, t0 = cpu_s(proc), time.perf_counter()
     time.sleep(seconds)
     return (cpu_s(proc) - c0) / (time.perf_counter() - t0)
+
+
+def compute_cpu_ms(name, repeat=15):
+    """CPU (ms, this process: user + system, every thread) of one update's maps computed
+    in-process, the median of ``repeat`` new slider values: the project's ``app.compute.compute``
+    (its kernels on numba's threads, as in the server) or the floor apps' ``bench.floor.maps``.
+    The floor's compute was set to the project's *wall* time; on two threads the project's uses
+    about twice the CPU, which the server's CPU per update carries."""
+    if name == "project":
+        from app.compute import Snapshot, compute
+
+        def one(ph):
+            compute(Snapshot.of(scenario(Ph=ph)))
+    else:
+        from bench.floor import maps
+
+        def one(ph):
+            maps.compute(ph)
+    one(99.9)  # warm-up (numba loads its kernels)
+    times = []
+    for k in range(repeat):
+        c0 = time.process_time()
+        one(100.0 + 13.7 * k)  # a value not computed before (the project caches its maps)
+        times.append(time.process_time() - c0)
+    return 1e3 * statistics.median(times)
 
 
 @contextlib.contextmanager
@@ -259,13 +286,16 @@ def summarise(raw):
             "new_page_cpu_all_ms": [x for r in runs for x in r["new_page_ready_ms"]],
             "new_page_cpu_settled_ms": statistics.median([x for r in runs for x in r["new_page_settled_ms"]]),
             "models": runs[-1]["models"],
+            "compute_cpu_ms": statistics.median(r["compute_cpu_ms"] for r in runs),
             "changes": n,
             "wall_per_change_s": wall / n,
         }
+    for v in out.values():  # what the server spends on an update besides computing its maps
+        v["cpu_per_update_rest_ms"] = v["cpu_per_update_ms"] - v["compute_cpu_ms"]
     for name in out if "panel" in out else ():  # the ratios need the Panel floor in the run
         out[name]["ratio_to_panel"] = {k: out[name][k] / out["panel"][k] for k in
                                        ("release_paint_median_ms", "release_paint_p95_ms", "cpu_per_update_ms",
-                                        "cpu_per_update_median_ms",
+                                        "cpu_per_update_median_ms", "compute_cpu_ms", "cpu_per_update_rest_ms",
                                         "new_page_cpu_ms", "new_page_cpu_settled_ms", "models")}
     return out
 
@@ -278,6 +308,8 @@ def table(summary):
         ("  p95 (ms)", "release_paint_p95_ms", "{:.0f}"),
         ("server CPU per update (ms)", "cpu_per_update_ms", "{:.1f}"),
         ("  median of the changes (10 ms ticks)", "cpu_per_update_median_ms", "{:.0f}"),
+        ("  of which computing the maps (in-process CPU, ms)", "compute_cpu_ms", "{:.1f}"),
+        ("  the rest: events, drawing, messages (ms)", "cpu_per_update_rest_ms", "{:.1f}"),
         ("a new session's page: server CPU until ready (ms)", "new_page_cpu_ms", "{:.0f}"),
         ("  … until its websocket is quiet (ms)", "new_page_cpu_settled_ms", "{:.0f}"),
         ("Bokeh models in the page", "models", "{:.0f}"),
@@ -330,6 +362,7 @@ def main(argv=None):
                         print(f"run {run + 1}/{args.runs}: {LABELS[name]} at {url} "
                               f"(load {os.getloadavg()[0]:.2f})", flush=True)
                         raw[name].append(measure_app(name, url, proc, browser, args))
+                    raw[name][-1]["compute_cpu_ms"] = compute_cpu_ms(name)  # here, the server stopped
                 load.append(os.getloadavg())
         finally:
             browser.close()
