@@ -15,8 +15,10 @@ ENV PYTHONUNBUFFERED=1 \
     PIP_DISABLE_PIP_VERSION_CHECK=1
 
 # Debian's Python only; numpy/scipy/numba/llvmlite come as manylinux wheels, so no compiler.
+# libgomp1: numba's OpenMP threading layer for the maps' kernels (app/__init__.py sets its threads
+# to sleep between parallel regions; without it numba falls back to its own workqueue).
 RUN apt-get update \
- && apt-get install -y --no-install-recommends python3 python3-venv \
+ && apt-get install -y --no-install-recommends python3 python3-venv libgomp1 \
  && apt-get clean \
  && rm -rf /var/lib/apt/lists/*
 
