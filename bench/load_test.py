@@ -89,8 +89,8 @@ class Client:
         self.doc = self.session.document
         self.events = []  # (attr, model id, new) of every server push
         self.doc.on_change(self._record)
-        # A browser announces itself; the server then builds the rest of the page (the sidebar's
-        # inputs: app.dashboard's build_rest), and until then Panel holds threaded updates.
+        # A browser announces itself; Panel then runs the page's onload callbacks, and until then
+        # holds the updates made on its threads.
         self._send(MessageSentEvent(self.doc, "bokeh_event", DocumentReady()))
         if not self._pump(self.complete, timeout):
             self.close()  # not left open on the server (its session would never be destroyed)
