@@ -218,14 +218,11 @@ def error_view(out):
     ]).opts(logy=True, title="TRMSE vs PCRLB", legend_position="top_right", responsive=True)
 
 
-def nees_check(nees, runs, states=7, level=0.99):
+def nees_check(nees, runs, states=7, level=core_track.NEES_LEVEL):
     """'' if a mean NEES is consistent with ``runs`` independent runs of a ``states``-state
-    filter, else a warning. The interval is the two-sided ``level`` χ² interval of the mean of
-    ``runs`` independent χ²(states) draws: the instants of one run are correlated, so only the
-    runs count as independent (a wider, conservative interval)."""
-    from scipy.stats import chi2
-
-    lo, hi = (chi2.ppf(q, states * runs) / runs for q in ((1 - level) / 2, (1 + level) / 2))
+    filter, else a warning: outside :func:`core.tracking.montecarlo.nees_band` (the band the
+    command line's summary.json flags as ``nees_consistent``)."""
+    lo, hi = core_track.nees_band(states, runs, level)
     if nees > hi:
         return (f"**Warning: the filter is overconfident** — mean NEES {nees:.3g} is above "
                 f"{hi:.3g}, the {level:.0%} bound for {states} consistent states over {runs} runs: its "
@@ -239,9 +236,14 @@ def nees_check(nees, runs, states=7, level=0.99):
 def summary_text(out):
     """One line of numbers for the tab (markdown)."""
     s = out["res"].summary
-    parts = [f"**{s['filter']}**, {s['runs']} runs: diverged {100 * s['diverged']:.0f} % "
-             f"(final error > max(5 × PCRLB, 10 m)); final TRMSE {s['trmse_final_m']:.3g} m vs PCRLB "
-             f"{s['pcrlb_final_m']:.3g} m"]
+    if s["diverged"] is None:  # the final bound predicts nothing there: no share to quote
+        lo, hi = s.get("final_error_range_m", (math.nan, math.nan))
+        diverged = (f"divergence {s['diverged_rule']} (final errors {lo:.3g} … {hi:.3g} m)")
+    else:
+        diverged = (f"diverged {100 * s['diverged']:.0f} % (a run diverges when its final error "
+                    "exceeds max(5 × final PCRLB, 10 m))")
+    parts = [f"**{s['filter']}**, {s['runs']} runs: {diverged}; final TRMSE "
+             f"{s['trmse_final_m']:.3g} m vs PCRLB {s['pcrlb_final_m']:.3g} m"]
     warning = ""
     if s.get("nees") is not None:
         dof = int(s.get("nees_dof", 7))

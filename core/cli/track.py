@@ -8,8 +8,10 @@ and writes
 - ``DIR/trmse.csv``: ``step, time_s, trmse_m, pcrlb_m`` (TRMSE_k of seed 001 eq. (18): the RMS
   over runs of the 3-D position error of the reported estimate at step k);
 - ``DIR/summary.json``: runs, diverged (share of runs whose final position error exceeds
-  max(5 × final PCRLB, 10 m)), winners (how often each bank hypothesis is the final ML choice),
-  nees (mean NEES of the reported filter over runs and steps, 7 states), and more;
+  max(5 × final PCRLB, 10 m); null, with the reason in diverged_rule, where the final bound is
+  beyond its linearisation limit and predicts nothing), winners (how often each bank hypothesis
+  is the final ML choice), nees (mean NEES of the reported filter over runs and steps, 7 states),
+  nees_band (its 99 % χ² band for a consistent filter), nees_consistent, and more;
 - ``DIR/trmse.png``: TRMSE and PCRLB against time.
 """
 
@@ -41,6 +43,23 @@ def write_outputs(result, out):
     _plot(result, os.path.join(out, "trmse.png"))
 
 
+def diverged_text(s):
+    """The diverged share of a summary ("20 %"), or why it is not judged."""
+    return "not judged" if s["diverged"] is None else f"{100 * s['diverged']:.0f} %"
+
+
+def nees_warning(s):
+    """A WARNING line when the mean NEES is outside its consistent band, else ''."""
+    if s.get("nees_consistent") is not False:
+        return ""
+    lo, hi = s["nees_band"]
+    side = ("overconfident: its covariance claims far less error than it makes"
+            if s["nees"] > hi else "underconfident: its covariance is larger than its errors")
+    return (f"WARNING: mean NEES {s['nees']:.3g} is outside {lo:.3g} … {hi:.3g}, the "
+            f"{s['nees_level']:.0%} band of a consistent {s['nees_dof']}-state filter over "
+            f"{s['runs']} runs: the filter is {side}; do not quote its σ.")
+
+
 def _plot(result, path):
     import matplotlib
 
@@ -55,7 +74,7 @@ def _plot(result, path):
                 "k--", label="PCRLB position σ")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (m)")
-    ax.set_title(f"{s['case']}: diverged {100 * s['diverged']:.0f} %")
+    ax.set_title(f"{s['case']}: diverged {diverged_text(s)}")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -114,8 +133,13 @@ def main(argv=None):
     nees = ("mean NEES —" if s["nees"] is None
             else f"mean NEES {s['nees']:.3g} ({s['nees_dof']} states: {s['nees_dof']} if consistent)")
     print(f"{s['case']} {s['filter']}: {s['runs']} runs in {s['elapsed_s']} s, diverged "
-          f"{100 * s['diverged']:.0f} %, final TRMSE {s['trmse_final_m']:.3g} m vs PCRLB "
+          f"{diverged_text(s)}, final TRMSE {s['trmse_final_m']:.3g} m vs PCRLB "
           f"{s['pcrlb_final_m']:.3g} m, {nees}; wrote {a.out}")
+    if s["diverged"] is None:
+        print(f"Divergence {s['diverged_rule']}.")
+    warning = nees_warning(s)
+    if warning:
+        print(warning)
     return 0
 
 

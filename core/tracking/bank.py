@@ -232,9 +232,10 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     n_pu : int
         Progressive sub-updates of every filter (1 = EKF).
     init_steps : int
-        Number n ≥ 1 of first measurements whose mean ‖y‖² sets the start ranges (n = 1 is
-        seed 001's single magnitude; more averages the noise down where the start is far and
-        the field near the noise, e.g. seed 001's trial start at ~285 m).
+        Up to how many first measurements (n ≥ 1) set the start ranges by their mean ‖y‖²
+        (n = 1 is seed 001's single magnitude; more averages the noise down where the start is
+        far and the field near the noise, e.g. seed 001's trial start at ~285 m). A track shorter
+        than n steps uses all of its K steps: min(n, K).
     truth : array_like, shape (R, K, 7), optional
         True states, for the NEES.
     progress : callable, optional
@@ -257,9 +258,12 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     if ys.ndim != 3 or ys.shape[2] != sensors.n_meas:
         raise ValueError(f"ys must have shape (R, K, {sensors.n_meas}); got {ys.shape}")
     n_runs, k_steps, m = ys.shape
-    if isinstance(init_steps, bool) or not isinstance(init_steps, (int, np.integer)) or not 1 <= init_steps <= k_steps:
-        raise ValueError(f"init_steps must be an integer in [1, {k_steps}]; got {init_steps!r}")
-    x0, P0, ranges = bank_hypotheses(ys[:, :init_steps], sensors, depth=depth, **hypotheses)
+    if isinstance(init_steps, bool) or not isinstance(init_steps, (int, np.integer)) or init_steps < 1:
+        raise ValueError(f"init_steps must be a whole number ≥ 1; got {init_steps!r}")
+    # a short track (e.g. 5 s at T = 1 s: 6 steps) starts from all of its steps: the default 10
+    # was refused for every track shorter than 10 steps, which the Track tab accepts
+    x0, P0, ranges = bank_hypotheses(ys[:, :min(int(init_steps), k_steps)], sensors, depth=depth,
+                                     **hypotheses)
     n_h = x0.shape[1]
     # (R, H, ...) -> (R·H, ...): every filter of every run in one stack
     flat_truth = None if truth is None else np.repeat(np.asarray(truth, float), n_h, axis=0)

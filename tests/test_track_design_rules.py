@@ -1,0 +1,84 @@
+"""Issue 40 (Track and Layout design, in process): short tracks, NEES consistency on the command
+line, divergence judged only against a bound that predicts, the sea trial preset, station depth h."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+import core
+from core.cli import track as track_cli
+from core.tracking import montecarlo as tr
+
+
+def test_a_track_shorter_than_the_banks_start_window_is_tracked():
+    # issue 40 defect 9: ?track_duration=5 (6 steps at T = 1 s, accepted by the inputs) raised
+    # "init_steps must be an integer in [1, 3]; got 10" in the bank
+    from app import track
+    from app.scenario import Scenario
+
+    s = Scenario()
+    s.update(track_duration=5.0, track_runs=2)
+    out = track.compute(s)
+    assert out["res"].trmse_m.shape == (6,) and np.all(np.isfinite(out["res"].trmse_m))
+    # the bank starts from the steps there are: min(init_steps, K)
+    case = track.case_of(s.snapshot())
+    sensors = case.sensors()
+    ys = sensors.h(case.nominal_track()[None])
+    F, Q = core.dwna_model(case.T, case.sigma_a, case.alpha)
+    a = core.run_bank(ys, sensors, F, Q, depth=case.bank_depth, init_steps=10)
+    b = core.run_bank(ys, sensors, F, Q, depth=case.bank_depth, init_steps=6)
+    np.testing.assert_array_equal(a.x0, b.x0)
+    with pytest.raises(ValueError):
+        core.run_bank(ys, sensors, F, Q, depth=case.bank_depth, init_steps=0)
+
+
+def test_the_nees_band_is_the_chi_square_band_of_the_runs_mean():
+    lo, hi = tr.nees_band(7, 5)
+    assert lo == pytest.approx(chi2.ppf(0.005, 35) / 5) and hi == pytest.approx(chi2.ppf(0.995, 35) / 5)
+    assert lo < 7 < hi
+
+
+def test_the_command_line_flags_an_inconsistent_nees(tmp_path, capsys):
+    # issue 40 defect 14: "mean NEES 2.64e+03" was printed with no warning and no flag
+    out = tmp_path / "trial"
+    assert track_cli.main(["--case", "seed001-trial", "--runs", "3", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    s = json.loads((out / "summary.json").read_text())
+    lo, hi = tr.nees_band(7, 3)
+    assert s["nees_band"] == pytest.approx([lo, hi]) and s["nees"] > hi  # measured: 7.18e+03
+    assert s["nees_consistent"] is False
+    assert "WARNING: mean NEES" in said and "overconfident" in said
+    # a consistent filter: flagged consistent, no warning
+    out2 = tmp_path / "sim"
+    assert track_cli.main(["--case", "seed001-sim", "--filter", "ekf", "--runs", "4", "--seed", "2",
+                           "--out", str(out2)]) == 0
+    said = capsys.readouterr().out
+    s = json.loads((out2 / "summary.json").read_text())
+    assert s["nees_band"][0] <= s["nees"] <= s["nees_band"][1] and s["nees_consistent"] is True
+    assert "WARNING" not in said
+
+
+def test_divergence_is_not_judged_against_a_bound_that_predicts_nothing():
+    # issue 40 (low): "diverged 0 %" beside a final error of 2.3 km: the final PCRLB (4.5 km)
+    # is beyond its linearisation limit there, and 5 × it hid every error
+    from app import track
+    from app.scenario import Scenario
+
+    s = Scenario()
+    s.update(track_x0=-1000.0, track_y0=-900.0)
+    out = track.compute(s)
+    summary = out["res"].summary
+    assert summary["diverged"] is None and summary["diverged_rule"].startswith("not judged")
+    text = track.summary_text(out)
+    assert "diverged 0 %" not in text and "not judged" in text
+    lo, hi = summary["final_error_range_m"]
+    assert lo > 1000.0  # the errors the page now quotes beside it (measured 1.5–3.4 km)
+    # where the bound predicts, the share is judged and its rule said
+    s.update(track_x0=-250.0, track_y0=-120.0)
+    out = track.compute(s)
+    assert out["res"].summary["diverged"] is not None
+    assert "a run diverges when its final error exceeds max(5 × final PCRLB, 10 m)" in track.summary_text(out)
