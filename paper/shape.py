@@ -44,20 +44,20 @@ def _row(res):
 
 def numbers(fig_runs=FIG_RUNS, table_runs=TABLE_RUNS):
     """Every number of the section, as a dict (recomputed; ~1 min with the defaults). Each case
-    runs with its own update (core.shape.cases: figures one sample, tables the lagged window),
-    as ``python -m core.shape`` does; the Fig. 4 pass is also run with the window."""
-    out = {"fig": {}, "tables": {}, "fig_runs": fig_runs, "table_runs": table_runs}
+    runs with its own update (core.shape.cases: seed 003's window), as ``python -m core.shape``
+    does; Figs. 4 and 5 also with the one-sample update, their comparison rows."""
+    out = {"fig": {}, "one_sample": {}, "tables": {}, "fig_runs": fig_runs, "table_runs": table_runs}
     for key in ("seed003-fig4", "seed003-fig5"):
-        (case,) = CASES[key][1]
-        res = ex.run_case(case, runs=fig_runs, seed=SEED)
-        d = _row(res)
-        hit = res.outlier_samples
-        d["outlier_samples"] = hit
-        if hit:  # error at the outlier samples and just after, median over runs
-            d["at_outliers_m"] = {n: [float(np.nanmedian(res.errors[n][:, k])) for k in hit] for n in FILTERS}
-        out["fig"][key] = d
-    lagged = ex.run_case(ex.Case("fig4-lag", lag=TABLE_LAG), runs=fig_runs, seed=SEED)
-    out["lagged"] = _row(lagged)
+        for row in CASES[key][1]:
+            res = ex.run_case(row, runs=fig_runs, seed=SEED)
+            d = _row(res)
+            d["lag"] = row.lag
+            hit = res.outlier_samples
+            d["outlier_samples"] = hit
+            if hit:  # error at the outlier samples, median over runs
+                d["at_outliers_m"] = {n: [float(np.nanmedian(res.errors[n][:, k])) for k in hit]
+                                      for n in FILTERS}
+            out["one_sample" if row.comparison else "fig"][key] = d
     for key in ("seed003-table1", "seed003-table2", "seed003-table3", "seed003-table4", "seed003-table5"):
         desc, rows = CASES[key]
         out["tables"][key] = {"description": desc, "rows": []}
@@ -102,7 +102,7 @@ def section(nums=None):
     L = []
     w = L.append
     f4, f5 = n["fig"]["seed003-fig4"], n["fig"]["seed003-fig5"]
-    one, lag = f4["nhukf"], n["lagged"]["nhukf"]
+    lag, one = f4["nhukf"], n["one_sample"]["seed003-fig4"]["nhukf"]
     w("## Seed 003: locating and sizing an extended magnetic target (UKF, NHUKF, PCA shape)\n")
     w("Seed 003 (spec §11) passes an AUV carrying a gradient-tensor array (0.5 m baseline, 5 Hz, "
       "5 m/s, from (−40, 5, −5) m; closest approach √50 = 7.07 m) by a cylinder (H 3 m, R 0.5 m, "
@@ -114,9 +114,9 @@ def section(nums=None):
     w("**Reproduced.** The system as the text describes it (pass, target, sensor, 15-state "
       "model, UKF, NHUKF with Huber's u, PCA main scale and line / plane verdict) and the "
       "experiments of Figs. 4 and 5 and Tables 1–5 (our rows), each run by "
-      "`python -m core.shape --case …` with the same update as here: the figures with the "
-      f"one-sample update, the tables with the paper's lagged window (n = {TABLE_LAG}, "
-      "`core/shape/cases.py`).\n")
+      "`python -m core.shape --case …` with the same update as here: the paper's lagged window "
+      f"(n = {TABLE_LAG}, `core/shape/cases.py`), and for the figures the one-sample update "
+      "beside it for comparison.\n")
     w("**Assumed where the text is lost.** Noise 0.01 nT/m per tensor component and 0.01 nT per "
       "field component; the truth is the array's magnetometer differences, the filters' model "
       "the point tensor; attitude R = Rz(yaw)·Ry(pitch)·Rx(roll) with the body axis z; UKF "
@@ -125,7 +125,7 @@ def section(nums=None):
       "r = −3 G⁻¹ B of the first reading, its moment from the field, the 4 dipoles on a "
       f"tetrahedron of radius {md.START_SPREAD:g} m about it (never one point: rank 6), prior σ "
       f"{md.P0_POSITION:g} m and {100 * md.P0_MOMENT_REL:g} % of the moment; random walk "
-      f"{md.Q_POSITION:g} m², {md.Q_MOMENT:g} (A·m²)² per step; one-sample updates unless said; "
+      f"{md.Q_POSITION:g} m², {md.Q_MOMENT:g} (A·m²)² per step; "
       f"the lagged window (eq. (15)) with n = {md.LAG}. Disc diameter (eq. (22) lost): "
       f"{DISC_FACTOR:.3f} × the square's diagonal (the mean of the two coverings of eqs. (19)–(20)); "
       f"verdict plane if λ2/λ1 ≥ {PLANE_RATIO:g}. Outliers (Fig. 5): +{FIG5_OUTLIERS.size:g} σ on "
@@ -134,46 +134,49 @@ def section(nums=None):
 
     w(f"### Figs. 4 and 5 ({n.get('fig_runs', FIG_RUNS)} Monte-Carlo passes "
       "each; medians, 90th percentile in brackets)\n")
-    w("| case | filter | final centroid error (m) | peak error after 10 samples (m) | main scale (m; truth 3) "
-      "| axis error (°) | verdict | centroid NEES (3 dof) |")
-    w("|---|---|---|---|---|---|---|---|")
-    for key, d in (("Fig. 4", f4), ("Fig. 5", f5), ("Fig. 4, lagged window", n["lagged"])):
-        for name in FILTERS:
-            if name not in d:
-                continue
-            v = d[name]
-            shape = (f"{_m(v['main_scale_m'], 2)} ({_m(v['main_scale_p10_p90_m'][0], 2)}–"
-                     f"{_m(v['main_scale_p10_p90_m'][1], 2)}) | {v['axis_error_deg']:.1f} "
-                     f"({v['axis_error_p90_deg']:.1f}) | {v['kind']} ({100 * max(v['kind_share'].values()):.0f} %) "
-                     f"| {v['nees']:.2g}") if "kind" in v else "— | — | — | —"
-            w(f"| {key} | {name.upper()} | {_m(v['centroid_error_m'])} ({_m(v['centroid_error_p90_m'])}) "
-              f"| {_m(v['peak_error_m'])} | {shape} |")
+    w("| case | update | filter | final centroid error (m) | peak error after 10 samples (m) "
+      "| main scale (m; truth 3) | axis error (°) | verdict | centroid NEES (3 dof) |")
+    w("|---|---|---|---|---|---|---|---|---|")
+    for key, label in (("seed003-fig4", "Fig. 4"), ("seed003-fig5", "Fig. 5")):
+        for part, upd in (("fig", f"window (lag {TABLE_LAG})"), ("one_sample", "one sample (comparison)")):
+            d = n[part][key]
+            for name in FILTERS:
+                v = d[name]
+                shape = (f"{_m(v['main_scale_m'], 2)} ({_m(v['main_scale_p10_p90_m'][0], 2)}–"
+                         f"{_m(v['main_scale_p10_p90_m'][1], 2)}) | {v['axis_error_deg']:.1f} "
+                         f"({v['axis_error_p90_deg']:.1f}) | {v['kind']} ({100 * max(v['kind_share'].values()):.0f} %) "
+                         f"| {v['nees']:.2g}") if "kind" in v else "— | — | — | —"
+                w(f"| {label} | {upd} | {name.upper()} | {_m(v['centroid_error_m'])} "
+                  f"({_m(v['centroid_error_p90_m'])}) | {_m(v['peak_error_m'])} | {shape} |")
     w("")
-    at = f5["at_outliers_m"]
-    w("At Fig. 5's outlier samples the median position error is "
-      + "; ".join(f"{nm.upper()} " + ", ".join(_m(e) for e in at[nm]) + " m" for nm in FILTERS)
-      + " (x = −20, −10, 0 m).\n")
-
+    for part, upd in (("fig", "window"), ("one_sample", "one-sample update")):
+        at = n[part]["seed003-fig5"]["at_outliers_m"]
+        w(f"At Fig. 5's outlier samples ({upd}) the median position error is "
+          + "; ".join(f"{nm.upper()} " + ", ".join(_m(e) for e in at[nm]) + " m" for nm in FILTERS)
+          + " (x = −20, −10, 0 m).\n")
+    o5 = n["one_sample"]["seed003-fig5"]["nhukf"]
     w(f"Locating holds up: both filters end a few centimetres from the centroid (median "
-      f"{_m(f4['ukf']['centroid_error_m'])} / {_m(one['centroid_error_m'])} m, the paper's < 0.1 m) "
+      f"{_m(f4['ukf']['centroid_error_m'])} / {_m(lag['centroid_error_m'])} m, the paper's < 0.1 m) "
       f"and far better than Euler's point fix ({_m(f4['euler']['centroid_error_m'])} m, a point "
       "for an extended body). Under outliers the NHUKF's peak error is "
       f"{_m(f5['nhukf']['peak_error_m'], 2)} m against the UKF's {_m(f5['ukf']['peak_error_m'], 2)} m "
       f"and Euler's {_m(f5['euler']['peak_error_m'], 2)} m"
       + (" (the paper's claim holds in direction)" if f5['nhukf']['peak_error_m'] < f5['ukf']['peak_error_m']
          else " (the paper's claim fails)")
-      + f", but 500 σ outliers still disturb it (its verdict after Fig. 5's pass: {f5['nhukf']['kind']}). "
-      "**Sizing with the honest one-sample update is fragile**: the 15 states are read from 5 "
-      f"components a sample, and the NHUKF's final axis is off by more than 45° in "
-      f"{100 * one['axis_over_45_share']:.0f} % of the passes (median "
-      f"{one['axis_error_deg']:.0f}°, verdict right in {100 * one['kind_share'].get('line', 0):.0f} %). "
-      f"Seed 003's lagged window (15 rows an update) sizes it well — main scale "
+      + f"; its shape after Fig. 5's pass: {f5['nhukf']['kind']}, main scale "
+      f"{_m(f5['nhukf']['main_scale_m'], 2)} m, axis {f5['nhukf']['axis_error_deg']:.1f}° (UKF: "
+      f"{f5['ukf']['kind']}, axis {f5['ukf']['axis_error_deg']:.0f}°). "
+      f"Seed 003's window (15 rows an update) sizes Fig. 4 well — NHUKF main scale "
       f"{_m(lag['main_scale_m'], 2)} m, axis {lag['axis_error_deg']:.1f}°, "
       f"line in {100 * lag['kind_share'].get('line', 0):.0f} % — but counts every sample three times, "
-      f"so its covariance is optimistic (centroid NEES {lag['nees']:.3g} against 3; the one-sample "
-      "filter is inconsistent here too, from the model mismatch, and consistent on a truth "
-      "that is itself 4 dipoles: `tests/test_shape.py`). The tables therefore use the paper's "
-      "window.\n")
+      f"so its covariance is optimistic (centroid NEES {lag['nees']:.3g} against 3). "
+      "**The honest one-sample update is fragile**: the 15 states are read from 5 components a "
+      f"sample, and the NHUKF's final axis is off by more than 45° in "
+      f"{100 * one['axis_over_45_share']:.0f} % of Fig. 4's passes (median {one['axis_error_deg']:.0f}°, "
+      f"verdict right in {100 * one['kind_share'].get('line', 0):.0f} %); with Fig. 5's outliers its "
+      f"axis is {o5['axis_error_deg']:.0f}° off. (The one-sample filter is inconsistent here too, "
+      "from the model mismatch, and consistent on a truth that is itself 4 dipoles: "
+      "`tests/test_shape.py`.) Every case therefore runs the paper's window.\n")
     w(f"### Tables 1–5 (our rows; {n.get('table_runs', TABLE_RUNS)} passes per row, lagged window "
       f"n = {TABLE_LAG}, medians; the main scale is the median over the runs of the majority "
       "verdict, — on a tie)\n")

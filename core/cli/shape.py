@@ -14,9 +14,11 @@ into DIR:
 - ``shape_rowI.png``: run 0's final dipoles and PCA axes over the target's outline, plan (x–y)
   and side (x–z) views.
 
-The filter update is the case's own (:mod:`core.shape.cases`): the figures use the one-sample
-update, the tables seed 003's window of lag 5; ``--lag N`` sets it for every row (0: one
-sample), with 2N below the pass's sample count (81 samples: N ≤ 40).
+The filter update is the case's own (:mod:`core.shape.cases`): seed 003's window of lag 5, and
+for Figs. 4 and 5 a second row with the one-sample update beside it (``"comparison": true``);
+``--lag N`` sets one update for every row (0: one sample) and drops the comparison rows, with
+2N below the pass's sample count (81 samples: N ≤ 40). The summary's ``description`` names the
+update each row ran.
 
 Every bad input prints one line ``python -m core.shape: error: …`` and exits with status 2.
 """
@@ -32,7 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..shape.cases import CASES, case_rows
+from ..shape.cases import CASES, case_rows, describe
 from ..shape.experiment import run_case
 from . import ArgumentParser
 
@@ -172,15 +174,14 @@ def run(case, runs=1, seed=0, lag=None, out=None, plots=True):
     (as written: NaN as None). ``lag`` None keeps each row's own update (cases.py)."""
     desc, rows = case_rows(case)
     check_lag(case, lag)
-    results = []
-    for row in rows:
-        if lag is not None:
-            row = replace(row, lag=lag)
-        results.append(run_case(row, runs=runs, seed=seed))
-    summary = {"case": case, "description": desc, "runs": runs, "seed": seed,
+    if lag is not None:  # one update for every row: the comparison rows would repeat the main ones
+        rows = [replace(row, lag=lag) for row in rows if not row.comparison]
+    results = [run_case(row, runs=runs, seed=seed) for row in rows]
+    summary = {"case": case, "description": describe(desc, rows), "runs": runs, "seed": seed,
                "lag": results[0].case.lag,
                "truth": results[0].summary["case"], "filters": results[0].summary["filters"],
-               "rows": [{"label": r.case.name, "truth": r.summary["case"], "filters": r.summary["filters"],
+               "rows": [{"label": r.case.name, "comparison": r.case.comparison,
+                          "truth": r.summary["case"], "filters": r.summary["filters"],
                          "outlier_samples": r.outlier_samples} for r in results]}
     summary = _json_safe(summary)
     if out is not None:

@@ -60,12 +60,16 @@ class Case:
     huber_u: float = uk.HUBER_U
     lag: int = 0
     description: str = ""
+    #: A row run beside the case's own for comparison (the one-sample update: cases.py).
+    comparison: bool = False
 
     def to_dict(self):
         return {"name": self.name, "description": self.description, "target": self.target.to_dict(),
                 "pass": self.track.to_dict(), "outliers": self.outliers.to_dict(),
                 "noise_g_nT_per_m": self.noise_g, "noise_b_nT": self.noise_b,
                 "baseline_m": self.baseline, "huber_u": self.huber_u, "lag": self.lag,
+                "update": ("one-sample" if self.lag == 0 else f"window, lag {self.lag}"),
+                "comparison": self.comparison,
                 "n_dipoles": md.N_DIPOLES}
 
 
