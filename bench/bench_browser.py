@@ -7,7 +7,7 @@ drawn in the browser at the default 200 × 200 grid, median of ≥ 20 changes).
 is opened with the sea in its URL (``?sea_model=layered&sea_depth=200&seabed_sigma=1``, which
 puts the stations on the seabed), and the in-process references use the same scenario.
 
-Serves the app (tests/server.py), opens it in Debian's headless Chromium through Playwright and,
+Serves the app (support/server.py), opens it in Debian's headless Chromium through Playwright and,
 for every change, drags the P_h slider handle with the real mouse to a new position (alternating
 directions, every final value distinct, so the server's per-session cache is never hit) and
 releases it. Everything is timed in the page's own clock (``performance.now()``):
@@ -40,7 +40,8 @@ import time
 
 import numpy as np
 
-from tests.server import CHROMIUM, CHROMIUM_ARGS, served_app
+from support.page import CHROMIUM, CHROMIUM_ARGS
+from support.server import served_app
 
 TARGET_MS = 150.0
 #: The target of a slider release in a layered sea (issue 17).

@@ -3,7 +3,7 @@ readings; the CLI takes ~2-4 s for the same log, process start included).
 
     python -m bench.bench_calibration_upload [--readings 50000] [--repeat 3]
 
-Serves the app (tests/server.py), opens it in Debian's headless Chromium through Playwright,
+Serves the app (support/server.py), opens it in Debian's headless Chromium through Playwright,
 shows the Calibration tab and uploads a simulated log (bench.bench_calibration's, as
 tests/test_server_upload_concurrency.py uploads: seed 004's ship on random attitudes, ~3 MiB at
 50,000 readings; a new seed each time so that nothing is cached).
@@ -34,7 +34,8 @@ import time
 from pathlib import Path
 
 from bench.bench_calibration import write_log
-from tests.server import CHROMIUM, CHROMIUM_ARGS, served_app
+from support.page import CHROMIUM, CHROMIUM_ARGS
+from support.server import served_app
 
 TARGET_S = 5.0
 #: The Calibration tab's label (app.dashboard).

@@ -3,7 +3,7 @@ not held meanwhile).
 
     python -m bench.bench_close [--open 10] [--closes 4] [--window 12]
 
-Serves the dashboard (tests/server.py's ``served_app``, destroying a closed session within ~1 s),
+Serves the dashboard (support/server.py's ``served_app``, destroying a closed session within ~1 s),
 opens ``--open`` sessions (bench/load_test.py's websocket client: the page pulled and complete),
 then closes ``--closes`` of them one at a time, ``--window`` seconds apart. For each close:
 
@@ -30,7 +30,7 @@ import urllib.request
 import psutil
 
 from bench.load_test import Client
-from tests.server import served_app
+from support.server import served_app
 
 #: Destroy closed sessions within ~1 s (the default waits up to 15 + 17 s).
 FAST_CLEANUP = ("--check-unused-sessions", "500", "--unused-session-lifetime", "1000")

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 import core
-from tests.reference import symbolic
+from support import symbolic
 
 STATIONS = core.dual_station(100, 15)
 VELOCITY, MOMENTS = (2.0, 2.0), (100.0, 20.0)

@@ -27,8 +27,9 @@ import time
 import urllib.request
 from pathlib import Path
 
-from tests.server import ROOT, SERVER_ENV, chromium_browser, free_port
-from tests.test_browser import wait_maps
+from support.page import chromium_browser
+from support.server import ROOT, SERVER_ENV, free_port
+from support.page import wait_maps
 
 READY_0 = re.compile(r"\[warm-up\] 1/\d+: .* ready in")
 ALL = "[warm-up] all kernels ready"

@@ -8,7 +8,7 @@ The floor apps (bench/floor/): three maps of a 200 × 200 float32 image with a v
 stations, a colour bar and a hover tool, updated in place (data sources' data replaced) from a
 slider's ``value_throttled`` with ~10 ms of numpy (bench/floor/maps.py) — ``bokeh_app.py`` in
 plain Bokeh (``bokeh serve``), ``panel_app.py`` in Panel with a Bootstrap template. Each run
-serves the project (tests/server.py's ``served_app``), then the Panel floor, then the Bokeh floor,
+serves the project (support/server.py's ``served_app``), then the Panel floor, then the Bokeh floor,
 and measures for each:
 
 (a) slider release → all three maps painted in Chromium: bench/bench_browser.py's instrumentation
@@ -64,7 +64,8 @@ from bench.bench_browser import (
     scenario,
     wait_redrawn,
 )
-from tests.server import CHROMIUM, CHROMIUM_ARGS, ROOT, SERVER_ENV, free_port, served_app, stop
+from support.page import CHROMIUM, CHROMIUM_ARGS
+from support.server import ROOT, SERVER_ENV, free_port, served_app, stop
 
 #: The issue's targets: ratio to the minimal Panel app, measured in the same run.
 TARGETS = {"release_paint_median_ms": 1.3, "cpu_per_update_ms": 1.5, "new_page_cpu_ms": 2.0}

@@ -3,7 +3,7 @@
     python -m bench.load_test [--sessions 20] [--duration 60] [--think 0] [--cleanup 30]
                               [--replicas N]
 
-Loopback only, bounded in count and time. Starts its own ``panel serve app`` (tests.server), or
+Loopback only, bounded in count and time. Starts its own ``panel serve app`` (support.server), or
 with ``--replicas N`` N of them behind nginx (app.cluster, deploy/nginx.conf) and talks to the
 proxy, with ``--check-unused-sessions 1000 --unused-session-lifetime 3000`` so closed sessions
 are destroyed within seconds, then:
@@ -59,7 +59,7 @@ from app.cluster import Cluster
 from app.compute import Snapshot, compute
 from app.dashboard import SECTIONS
 from app.scenario import MEASURE_LABELS, Scenario
-from tests.server import served_app
+from support.server import served_app
 
 SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "3000")
 ANSWER_TIMEOUT = 60.0  # s an update may take before it counts as unanswered

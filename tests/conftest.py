@@ -1,3 +1,7 @@
+import ast
+import functools
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -26,3 +30,34 @@ def random_states(rng, n, stations):
 
 def random_stations(rng, n_stations):
     return rng.uniform([-50, -50, 80], [50, 50, 120], (n_stations, 3))
+
+
+# --------------------------------------------------------------------------- markers by file
+#: A test file gets a marker from what it imports (so a new file is marked without a list to
+#: keep): ``browser`` if it imports support.page (it drives Chromium), ``server`` if it imports
+#: support.server (it serves the dashboard in a process of its own). ``container`` is declared
+#: by the file itself (tests/test_container.py). The fast lane leaves all three out:
+#:     pytest -q -m "not browser and not server and not container"
+MARKER_OF_MODULE = {"support.page": "browser", "support.server": "server"}
+
+
+@functools.lru_cache(maxsize=None)
+def markers_of_file(path):
+    """The markers a test file gets from the support modules it imports (at any depth)."""
+    tree = ast.parse(Path(path).read_text(encoding="utf-8"))
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module in MARKER_OF_MODULE:
+            found.add(MARKER_OF_MODULE[node.module])
+        elif isinstance(node, ast.ImportFrom) and node.module == "support":
+            found |= {MARKER_OF_MODULE[f"support.{a.name}"] for a in node.names
+                      if f"support.{a.name}" in MARKER_OF_MODULE}
+        elif isinstance(node, ast.Import):
+            found |= {MARKER_OF_MODULE[a.name] for a in node.names if a.name in MARKER_OF_MODULE}
+    return frozenset(found)
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        for name in sorted(markers_of_file(str(item.path))):
+            item.add_marker(name)

@@ -1,6 +1,5 @@
 """The served dashboard in headless Chromium, used as an analyst would."""
 
-import os
 import time
 from pathlib import Path
 from urllib.parse import urlencode
@@ -8,33 +7,18 @@ from urllib.parse import urlencode
 import numpy as np
 import pytest
 
-from tests.server import CHROMIUM, chromium_browser, served_app
+from support.page import (VIEWPORT, chromium_browser, chromium_missing, maps, select, type_value,
+                          value_of, wait_count, wait_maps, wait_value)
+from support.server import served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-VIEWPORT = {"width": 1600, "height": 1000}  # the issue's analyst screen (also 1280 × 800 below)
 
 pytestmark = pytest.mark.skipif(
-    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
+    chromium_missing(),
     reason="Debian's chromium is not installed (CI installs it; there this test must run)",
 )
 
-#: For every plot on screen: [title, [sum of each image layer's finite values]] (map, veil):
-#: a fingerprint of what is drawn, read from the live Bokeh views.
-MAPS_JS = """() => {
-  const plots = [];
-  const walk = (v) => {
-    if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) plots.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c);
-  };
-  for (const v of Object.values(Bokeh.index)) walk(v);
-  return plots.map(p => [p.title ? p.title.text : "",
-    p.renderers.filter(r => r.data_source && r.data_source.data.image).map(r => {
-      let s = 0; const a = r.data_source.data.image[0];
-      for (let i = 0; i < a.length; i++) if (!isNaN(a[i])) s += a[i];
-      return s; })]);
-}"""
 #: Per plot: [RGBA bytes of the map layer as drawn, how many differ from the image's real values
 #: (the sent image is normalised to the colour range: app/map_figures.py) mapped through the
 #: plot's colour bar mapper].
@@ -99,22 +83,6 @@ def page(chromium, server):
     assert errors == [], f"browser console errors: {errors}"
 
 
-def maps(pg):
-    return pg.evaluate(MAPS_JS)
-
-
-def wait_maps(pg, predicate, timeout=30.0):
-    """Poll what is drawn until ``predicate(maps)`` holds; return it."""
-    deadline = time.time() + timeout
-    while True:
-        drawn = maps(pg)
-        if predicate(drawn):
-            return drawn
-        if time.time() > deadline:
-            raise AssertionError(f"the maps did not reach the expected state: {drawn}")
-        time.sleep(0.2)
-
-
 def values(drawn):
     """The map layer's fingerprint of each plot (A, B, difference)."""
     return [layers[0] for _, layers in drawn]
@@ -123,28 +91,6 @@ def values(drawn):
 def changed(before):
     """Predicate: all three maps show new values."""
     return lambda drawn: len(drawn) == 3 and all(a != b for a, b in zip(values(drawn), values(before)))
-
-
-def value_of(pg, name):
-    return pg.locator(f".w-{name} input").first.input_value()
-
-
-def wait_value(pg, name, expected, timeout=15.0):
-    deadline = time.time() + timeout
-    while float(value_of(pg, name)) != expected:
-        if time.time() > deadline:
-            raise AssertionError(f"{name} shows {value_of(pg, name)}, expected {expected}")
-        time.sleep(0.1)
-
-
-def select(pg, name, option):
-    pg.locator(f".w-{name} select").first.select_option(option)
-
-
-def type_value(pg, name, value):
-    box = pg.locator(f".w-{name} input").first
-    box.fill(str(value))
-    box.press("Enter")
 
 
 def test_page_loads_with_three_maps_and_units(page):
@@ -240,14 +186,6 @@ def test_screenshots_for_the_readme(page):
     time.sleep(1.0)
     page.screenshot(path=str(DOCS / "screenshot-fig5.png"))
     assert (DOCS / "screenshot-fig5.png").stat().st_size > 50_000
-
-
-def wait_count(locator, n, timeout=30.0):
-    deadline = time.time() + timeout
-    while locator.count() != n:
-        if time.time() > deadline:
-            raise AssertionError(f"expected {n} of {locator}, found {locator.count()}")
-        time.sleep(0.2)
 
 
 def test_layout_design_click_adds_a_station_at_depth_h_and_best_spacing_compares_fairly(page):

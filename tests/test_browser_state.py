@@ -6,8 +6,9 @@ import time
 
 import pytest
 
-from tests.server import CHROMIUM, chromium_browser, served_app
-from tests.test_browser import MAPS_JS, VIEWPORT, wait_count, wait_maps, wait_value
+from support.page import CHROMIUM, chromium_browser
+from support.server import served_app
+from support.page import MAPS_JS, VIEWPORT, wait_count, wait_maps, wait_value
 
 playwright = pytest.importorskip("playwright.sync_api")
 

@@ -11,7 +11,8 @@ from urllib.parse import urlencode
 
 import pytest
 
-from tests.server import CHROMIUM, chromium_browser, served_app
+from support.page import CHROMIUM, chromium_browser
+from support.server import served_app
 
 pytest.importorskip("playwright.sync_api")
 DOCS = Path(__file__).resolve().parents[1] / "docs"

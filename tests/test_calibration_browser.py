@@ -9,7 +9,8 @@ import re
 import numpy as np
 import pytest
 
-from tests.server import CHROMIUM, ROOT, chromium_browser, served_app
+from support.page import CHROMIUM, chromium_browser
+from support.server import ROOT, served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 expect = playwright.expect

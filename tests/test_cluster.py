@@ -23,7 +23,8 @@ import psutil
 import pytest
 
 from bench.load_test import Client
-from tests.server import ROOT, chromium_browser, close_client, free_port, on_thread
+from support.page import chromium_browser
+from support.server import ROOT, close_client, free_port, on_thread
 
 
 class Running:

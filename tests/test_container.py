@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.server import SERVER_ENV
+from support.server import SERVER_ENV
 
 pytestmark = pytest.mark.container
 

@@ -5,7 +5,7 @@ import pytest
 
 import core
 from tests.conftest import random_states, random_stations
-from tests.reference import symbolic
+from support import symbolic
 
 
 @pytest.mark.parametrize("model", core.MODELS)

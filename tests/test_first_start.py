@@ -14,7 +14,8 @@ import panel as pn
 
 from app.warming import warming_page
 from app.warmup import STAGES, WARMING_MARK, Warmup
-from tests.server import ROOT, SERVER_ENV, chromium_browser, free_port, stop
+from support.page import chromium_browser
+from support.server import ROOT, SERVER_ENV, free_port, stop
 
 #: Seconds within which a cold server must answer /app (issue 29's bar: 15 s on this machine).
 ANSWER_WITHIN_S = 15.0

@@ -7,7 +7,7 @@ import pytest
 
 from bench.bench_browser import INSTALL_JS, MAP_A_SUM_JS, PH_VALUE_JS, RESET_JS, drag_to
 from bench.bench_floor import MODELS_JS, expected_sum, open_page, served_floor, settle
-from tests.server import chromium_browser
+from support.page import chromium_browser
 
 
 @pytest.mark.parametrize("kind", ["bokeh", "panel"])

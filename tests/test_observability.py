@@ -8,7 +8,7 @@ import pytest
 
 import core
 from tests.conftest import PAPER_STATE, random_states, random_stations
-from tests.reference import symbolic
+from support import symbolic
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_logdet.json").read_text())
 SINGLE = core.single_station(100)

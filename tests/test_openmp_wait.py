@@ -7,7 +7,7 @@ import os
 import subprocess
 import sys
 
-from tests.server import ROOT
+from support import ROOT
 
 PROBE = """
 import os

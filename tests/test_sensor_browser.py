@@ -5,8 +5,8 @@ import time
 
 import pytest
 
-from tests.server import CHROMIUM, chromium_browser, served_app
-from tests.test_track_browser import _wait
+from support.page import CHROMIUM, chromium_browser, wait_plots
+from support.server import served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 
@@ -100,5 +100,5 @@ def test_choosing_gradiometer_then_both_redraws_with_the_kinds_captions_and_veil
         assert time.time() < deadline, problem.locator("div").all_text_contents()
         time.sleep(0.3)
     page.locator("select:has(option[value='puekf'])").first.select_option("ekf")
-    _, text = _wait(page, lambda got, text: "ekf, 5 runs" in text and "mean NEES" in text, timeout=120)
+    _, text = wait_plots(page, lambda got, text: "ekf, 5 runs" in text and "mean NEES" in text, timeout=120)
     assert "ML winner" not in text

@@ -15,7 +15,7 @@ import time
 import pytest
 
 from bench.load_test import Client
-from tests.server import close_client, on_thread, served_app
+from support.server import close_client, on_thread, served_app
 
 SLOW = {"measure": "CRLB position error (m)", "resolution": "400", "steps": "20"}  # as URL arguments
 

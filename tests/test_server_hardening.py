@@ -16,7 +16,8 @@ from tornado.httpclient import HTTPClientError, HTTPRequest
 from tornado.websocket import websocket_connect
 
 from app.scenario import ACCEPTED, Scenario
-from tests.server import CHROMIUM, chromium_browser, close_websocket, served_app
+from support.page import CHROMIUM, chromium_browser
+from support.server import close_websocket, served_app
 
 
 @pytest.fixture(scope="module")

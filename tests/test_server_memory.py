@@ -14,7 +14,7 @@ import subprocess
 import sys
 import time
 
-from tests.server import ROOT
+from support import ROOT
 
 SESSIONS = 4
 
@@ -27,7 +27,7 @@ def probe(sessions=SESSIONS):
     from app.dashboard import create_app, panel_extension
     from app.scenario import Scenario
     from bench.load_test import Client
-    from tests.server import close_client, free_port, on_thread
+    from support.server import close_client, free_port, on_thread
 
     server_threads.configure()
     panel_extension()

@@ -3,8 +3,9 @@ the lowest declared versions (``pytest -m smoke``, .ci/run with the constraints 
 
 import pytest
 
-from tests.server import chromium_browser, served_app
-from tests.test_browser import type_value, value_of, wait_maps
+from support.page import chromium_browser
+from support.server import served_app
+from support.page import type_value, value_of, wait_maps
 
 
 @pytest.mark.smoke

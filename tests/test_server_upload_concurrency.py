@@ -1,6 +1,6 @@
 """One session's calibration of a real-length log does not hold up another session (issue 28).
 
-The real served app (``panel serve app`` as the README serves it, tests.server) and two websocket
+The real served app (``panel serve app`` as the README serves it, support.server) and two websocket
 sessions (bench.load_test's ``Client``, as tests/test_server_concurrency.py): session A opens the
 Calibration tab and uploads a 50,000-reading log (an 83-minute log at 10 Hz, ~3.4 MB of CSV,
 simulated with core.calibration as seed 004's ship; its computation takes ~3 s in-process, longer
@@ -28,7 +28,7 @@ from app.compute import colour_range
 from app.scenario import Scenario
 from bench.load_test import Client
 from core import calibration as cal
-from tests.server import close_client, on_thread, served_app
+from support.server import close_client, on_thread, served_app
 
 #: Readings in the uploaded log (issue 28's size).
 READINGS = 50_000
@@ -174,7 +174,7 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
 
 def test_the_readme_the_container_and_the_cluster_serve_with_the_same_threads():
     """The README's serve command, the container's and app.cluster's replicas pass the same
-    ``--num-threads`` as the served app of these tests (tests.server): one way of serving."""
+    ``--num-threads`` as the served app of these tests (support.server): one way of serving."""
     import inspect
     import json
     import shlex
@@ -193,6 +193,6 @@ def test_the_readme_the_container_and_the_cluster_serve_with_the_same_threads():
     command = shlex.split(readme.split("&&")[-1])
     docker = (root / "Dockerfile").read_text()
     cmd = json.loads(docker[docker.index("\nCMD [") + 5:].split("]", 1)[0].replace("\\\n", "") + "]")
-    served = inspect.getsource(__import__("tests.server", fromlist=["served_app"]).served_app)
+    served = inspect.getsource(__import__("support.server", fromlist=["served_app"]).served_app)
     assert threads(command) == threads(cmd) == str(cluster.Cluster(replicas=1).num_threads) == "4"
     assert '"--num-threads", "4"' in served

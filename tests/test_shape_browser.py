@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.server import CHROMIUM, chromium_browser, served_app
+from support.page import CHROMIUM, chromium_browser
+from support.server import served_app
 
 pytest.importorskip("playwright.sync_api")
 pytestmark = pytest.mark.skipif(

@@ -1,6 +1,6 @@
 """Make tests/data/reference_logdet.json: log10|det Γ| in 60-digit arithmetic.
 
-Γ is built from the sympy field expressions of tests/reference/symbolic.py, differentiated
+Γ is built from the sympy field expressions of support/symbolic.py, differentiated
 symbolically and evaluated with mpmath at 60 significant digits, its determinant taken by
 mpmath. Run from the repository root:
 
@@ -15,7 +15,7 @@ from pathlib import Path
 import mpmath as mp
 import sympy as sp
 
-from tests.reference.symbolic import SIGMA, S, X, field_expressions
+from support.symbolic import SIGMA, S, X, field_expressions
 
 mp.mp.dps = 60
 OUT = Path(__file__).resolve().parents[1] / "data" / "reference_logdet.json"

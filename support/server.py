@@ -1,4 +1,6 @@
-"""Start `panel serve app` on a free loopback port for tests and benchmarks."""
+"""Start `panel serve app` on a free loopback port, for tests and benchmarks alike.
+
+The browser that drives it is :mod:`support.page`'s; this module imports no browser."""
 
 from __future__ import annotations
 
@@ -14,12 +16,10 @@ import time
 import urllib.request
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-CHROMIUM = "/usr/bin/chromium"
+from support import ROOT
+
 #: The server's environment as in the container (Dockerfile ENV): see the note there.
 SERVER_ENV = {"PYTHONMALLOC": "malloc"}
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 
 def free_port():
@@ -108,16 +108,3 @@ def close_client(client):
     """Close a bench.load_test.Client (call with :func:`on_thread`)."""
     asyncio.set_event_loop(client.conn._loop.asyncio_loop)  # the client's own, for its last writes
     client.close()
-
-
-@contextlib.contextmanager
-def chromium_browser():
-    """Debian's headless Chromium driven by Playwright (never a downloaded browser)."""
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            yield browser
-        finally:
-            browser.close()
