@@ -16,7 +16,6 @@ With the on-disk cache filled it takes about a second.
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 import sys
@@ -25,7 +24,7 @@ import time
 from pathlib import Path
 
 import core
-from core import pcrlb
+from core import kernel_cache, pcrlb
 from core.shape import Pass, Target
 from core.shape.bound import shape_bound
 from core.shape.experiment import Case, run_case
@@ -113,11 +112,9 @@ STAGES = (
 
 
 def cache_present():
-    """Whether numba has an on-disk cache of core's kernels (otherwise this is a first start)."""
-    roots = [Path(core.__file__).parent]
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        roots.append(Path(os.environ["NUMBA_CACHE_DIR"]))
-    return any(next(root.rglob("*.nbi"), None) is not None for root in roots if root.exists())
+    """Whether numba's cache in use (NUMBA_CACHE_DIR, else core's ``__pycache__``) holds compiled
+    kernels of every kernel module (otherwise this start compiles: it says so)."""
+    return kernel_cache.cached()
 
 
 class Warmup:

@@ -15,6 +15,13 @@ defined (numba reads a kernel's cache index when it is decorated).
 
 Where the cache cannot be written (a read-only install, e.g. the container image, whose sources
 never change after its build compiled the cache) it does nothing.
+
+A stamp speaks for one cache location only, the one numba uses in this process: the
+``__pycache__`` directories beside the sources, or, when ``NUMBA_CACHE_DIR`` is set, that
+directory (numba then neither reads nor writes ``__pycache__``). A process started with a new
+``NUMBA_CACHE_DIR`` therefore never removes the install's own compiled kernels: it once did
+(no stamp in the new directory, so every cache it could find went, ``__pycache__`` included),
+and the next ordinary start recompiled for minutes.
 """
 
 from __future__ import annotations
@@ -53,19 +60,32 @@ def stamp_path(root=_HERE):
     return base / STAMP
 
 
-def cache_files(root=_HERE):
-    """numba's cache files of the :data:`KERNEL_SOURCES` modules: in ``__pycache__`` beside the
-    sources, and (when NUMBA_CACHE_DIR is set) anywhere under that directory."""
-    stems = [Path(name).stem for name in KERNEL_SOURCES]
-    dirs = sorted({(Path(root) / name).parent / "__pycache__" for name in KERNEL_SOURCES})
+def cache_dirs(root=_HERE):
+    """Where numba caches the kernels in this process: NUMBA_CACHE_DIR when set, else the
+    ``__pycache__`` directories beside the :data:`KERNEL_SOURCES`."""
     if numba.config.CACHE_DIR:
-        dirs.append(Path(numba.config.CACHE_DIR))
+        return [Path(numba.config.CACHE_DIR)]
+    return sorted({(Path(root) / name).parent / "__pycache__" for name in KERNEL_SOURCES})
+
+
+def cache_files(root=_HERE):
+    """numba's cache files of the :data:`KERNEL_SOURCES` modules in :func:`cache_dirs` (anywhere
+    under NUMBA_CACHE_DIR, when set)."""
+    stems = [Path(name).stem for name in KERNEL_SOURCES]
+    dirs = cache_dirs(root)
     found = []
     for d in dirs:
         if d.is_dir():
             for stem in stems:
                 found += [p for p in d.rglob(f"{stem}.*") if p.suffix in (".nbi", ".nbc")]
     return found
+
+
+def cached(root=_HERE):
+    """Whether every :data:`KERNEL_SOURCES` module has compiled kernels (an index, ``*.nbi``) in
+    the cache this process reads: what a start may honestly call "loading from the cache"."""
+    have = {p.name.split(".")[0] for p in cache_files(root) if p.suffix == ".nbi"}
+    return have >= {Path(name).stem for name in KERNEL_SOURCES}
 
 
 def refresh(root=_HERE):

@@ -88,3 +88,59 @@ def test_an_edit_to_inlined_physics_reaches_the_cached_kernel(tmp_path):
     assert after == pytest.approx(2.5 * before, rel=1e-12)
     assert _cache_files(tmp_path)  # the new kernels cached themselves
     assert _run(tmp_path) == after  # and the next interpreter loads them
+
+
+def _fake_tree(root):
+    for name in kernel_cache.KERNEL_SOURCES:
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(f"# {name}\n")
+    cache = root / "kernels" / "__pycache__"
+    cache.mkdir()
+    files = []
+    for name in kernel_cache.KERNEL_SOURCES:
+        stem = Path(name).stem
+        files += [cache / f"{stem}.kernel-1.py311.nbi", cache / f"{stem}.kernel-1.py311.1.nbc"]
+    for p in files:
+        p.write_bytes(b"x")
+    return files
+
+
+def test_a_new_numba_cache_dir_leaves_the_installs_compiled_kernels_alone(tmp_path, monkeypatch):
+    # issue 40 defect 15: a process started with a new NUMBA_CACHE_DIR found no stamp there and
+    # removed every cache it could find, core/kernels/__pycache__ included
+    tree = tmp_path / "core"
+    files = _fake_tree(tree)
+    monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", "")
+    kernel_cache.refresh(tree)  # the install's own start: its stamp, its cache
+    for p in files:
+        p.write_bytes(b"x")
+    assert not kernel_cache.refresh(tree) and kernel_cache.cached(tree)
+    elsewhere = tmp_path / "numba-cache"
+    monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", str(elsewhere))
+    kernel_cache.refresh(tree)  # a process with a cache directory of its own
+    assert all(p.exists() for p in files)
+    assert not kernel_cache.cached(tree)  # that process's cache is empty: it will compile
+    monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", "")
+    assert not kernel_cache.refresh(tree) and kernel_cache.cached(tree)  # the next ordinary start loads
+
+
+def test_cached_needs_every_kernel_module(tmp_path, monkeypatch):
+    monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", "")
+    files = _fake_tree(tmp_path)
+    assert kernel_cache.cached(tmp_path)
+    files[0].unlink()  # one module's index gone: that module compiles, "loading" would be untrue
+    assert not kernel_cache.cached(tmp_path)
+
+
+def test_a_process_with_a_new_cache_dir_keeps_a_trees_kernels(tmp_path):
+    # the same in real interpreters: `import core` with NUMBA_CACHE_DIR set, on a copy of core/
+    # whose cache is current (its stamp written by an ordinary start)
+    shutil.copytree(CORE, tmp_path / "core")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = str(tmp_path)
+    subprocess.run([sys.executable, "-c", "import core"], cwd=tmp_path, env=env, check=True, timeout=300)
+    marker = tmp_path / "core" / "kernels" / "__pycache__" / "gamma.marker-1.py311.nbi"
+    marker.write_bytes(b"x")  # stands for a compiled kernel of the current sources
+    env["NUMBA_CACHE_DIR"] = str(tmp_path / "new-cache")
+    subprocess.run([sys.executable, "-c", "import core"], cwd=tmp_path, env=env, check=True, timeout=300)
+    assert marker.exists()
