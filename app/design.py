@@ -28,6 +28,8 @@ optimum with scipy; *Optimise N-station layout* does the same for a line, triang
 N stations (or free positions, ~10 s) and makes it the custom layout.
 """.format(limit=RUNAWAY_LIMIT)
 
+#: The station table's columns.
+COLUMNS = ["x (m)", "y (m)", "z (m)"]
 #: Inputs of this tab whose refusal is shown here, next to their inputs.
 OWN = ("stations", *Design.names())
 
@@ -143,13 +145,27 @@ def design_tab(scenario, cache, widgets):
     scenario.design.param.watch(refresh, ["ellipse_x", "ellipse_y"])
 
     ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
+    def frame(stations):
+        return pd.DataFrame(stations, columns=COLUMNS, dtype=float)
+
     table = pn.widgets.Tabulator(
-        pn.bind(lambda st: pd.DataFrame(st, columns=["x (m)", "y (m)", "z (m)"]), st.param.stations),
-        show_index=False, sizing_mode="stretch_width", height=260, css_classes=["w-station-table"],
-        formatters={c: NumberFormatter(format="0.0") for c in ("x (m)", "y (m)", "z (m)")})
+        frame(st.stations), show_index=False, sizing_mode="stretch_width", height=260,
+        css_classes=["w-station-table"],
+        formatters={c: NumberFormatter(format="0.0") for c in COLUMNS})
+
+    def shown(*_):
+        table.value = frame(st.stations)  # a new frame: the edited one is changed in place
+
+    st.param.watch(shown, ["stations"])
 
     def edited(event):
-        st.stations = table.value.astype(float).values.tolist()
+        wanted = table.value.astype(float).values.tolist()
+        st.stations = wanted
+        if st.stations != wanted:
+            # refused (the Scenario restored the layout and said why, next to the table): the
+            # table shows the kept layout at once. It kept the refused cell, silently, and the
+            # next valid edit was then lost to the late restore (issue 40 defect 4).
+            shown()
 
     table.on_edit(edited)
     message = refusal(scenario, OWN, "w-design-message")
@@ -189,8 +205,9 @@ def design_tab(scenario, cache, widgets):
         pn.Param(scenario.design, parameters=["criterion"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
         number_input(scenario.design, "threshold", css_classes=["w-threshold"]),
-        pn.Param(scenario.design, parameters=["layout_kind", "n_stations"], show_name=False, widgets=widgets,
+        pn.Param(scenario.design, parameters=["layout_kind"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
+        number_input(scenario.design, "n_stations", css_classes=["w-n_stations"]),
         sizing_mode="stretch_width", margin=0)
     optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
 

@@ -183,7 +183,9 @@ class Stations(Part):
                         f"measured down from the surface (z ≥ 0)")
         return None
 
-    h = _num(100.0, (0, 1000), "Station depth h (m)", "Depth of every station, m.")
+    h = _num(100.0, (0, 1000), "Station depth h (m)",
+             "Depth of the paper's stations, and of every custom station at it (Layout design, "
+             "Track): they move with h; one given its own depth in the table keeps it, m.")
     d = _num(15.0, (0.5, 300), "Station spacing d (m)", "Station 2 sits at (d, 0, h); station 1 at (0, 0, h).")
     layout = param.Selector(objects=["single", "dual"], default="dual", label="Layout for Figs. 3–4",
                             doc="Station layout used by the moment comparisons.")

@@ -84,9 +84,14 @@ PRESETS = {
                                T=1.0, plane="x–y", extent=300.0, layout="dual",
                                comparison="Dual − single (Fig. 5)", z_min=0.0, z_max=8.4,
                                measure="log10|det Γ| (paper)",
-                               # along x, as core.dual_station(h, d) puts the Maps tab's pair: one
-                               # geometry on every tab (it was along y here, along x on Maps)
-                               stations=[[0.0, 0.0, 8.4], [10.0, 0.0, 8.4]]),
+                               # the Track tab's case is the command line's seed001-trial
+                               # (core.tracking.montecarlo.CASES): two 2-axis sensors on the seabed
+                               # at (0, ±5 m), the source from (−57.1, 280) m along −y, 300
+                               # measurements (0 … 299 s). The Maps tab's pair is core.dual_station's,
+                               # d = 10 m along x: the same pair, turned by 90° about its centre.
+                               stations=[[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]], track_axes=2,
+                               track_x0=-57.1, track_y0=280.0, track_heading=-90.0,
+                               track_duration=299.0, track_speed=2.0),
     # spec §11 at one station: magnetometer (A) against magnetometer + gradiometer (B); A alone
     # is rank 7 of 8 (veiled), B + G is observable. Switch A to the gradiometer to see it veiled too.
     "Seed 003 sensors": dict(_COMMON, measure="CRLB position error (m)", layout="single",
@@ -244,14 +249,21 @@ class Scenario(param.Parameterized):
             if ev.name == "sea_depth" and not notes and self.medium.sea_model == "layered":
                 moved = self._follow_seabed(ev.old, ev.new)
                 self._quietly(**moved)
+            elif ev.name == "h" and not notes:
+                # the custom stations at the station depth move with it (the Layout design and
+                # Track tabs' stations stayed at the old h while the sidebar said "every station")
+                moved = self._follow_h(ev.old, ev.new)
+                self._quietly(**moved)
         notes = notes or self.rules()
         if not notes:
             if self.message:
                 self.param.update(message="", refused=[])
             return
         back = {ev.name: ev.old for ev in events}
-        if moved:
+        if moved and "sea_depth" in back:
             back.update(self._follow_seabed(self.medium.sea_depth, back["sea_depth"]))
+        elif moved:
+            back.update(self._follow_h(self.stations.h, back["h"]))
         self._quietly(**back)
         kept = "layout" if [ev.name for ev in events] == ["stations"] else "value"
         self.param.update(message="; ".join(notes) + f". Kept the last good {kept}.",
@@ -318,6 +330,12 @@ class Scenario(param.Parameterized):
         if stations != self.stations.stations:
             moved["stations"] = stations
         return moved
+
+    def _follow_h(self, old, new):
+        """The custom stations that sat at the old station depth h, moved to the new one (a
+        station given a depth of its own, in the Layout design table, keeps it)."""
+        stations = [[st[0], st[1], new if st[2] == old else st[2]] for st in self.stations.stations]
+        return {"stations": stations} if stations != self.stations.stations else {}
 
     def _shape_sizes(self):
         """A type the sizes disagree with (a cylinder has H > R, a disc H ≤ R) sets the type's

@@ -24,6 +24,7 @@ cached per set of inputs, computed off the server's event loop (:mod:`app.offloo
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from functools import partial
 
@@ -41,6 +42,7 @@ from core.tracking import montecarlo as core_track
 from . import offloop, views
 from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, SHARED, Snapshot, nearest_range
 from .design_compute import Design
+from .inputs import number_input
 from .maps import refusal
 from .scenario import SENSORS, Scenario
 
@@ -53,6 +55,8 @@ READS = ("target", "stations", "medium", "sensor", "track")
 MAGNETIC_PRIOR_SHARE = 0.2
 #: Most steps of a track the tab computes (the duration's bound over the smallest T).
 MAX_STEPS = 2001
+#: The plan view's frame side (px; the window is square): fits beside the inputs at 1280 × 800.
+PLAN_PX = 440
 #: Points per side of the CRLB map beneath the track.
 MAP_POINTS = 121
 
@@ -81,18 +85,34 @@ def magnetic_options(s):
                 prior_std=(20.0, 20.0, 0.5, 0.5, 0.5, sm, sm, sm))
 
 
+#: The command line's sea-trial case (``python -m core.track --case seed001-trial``): the
+#: *Seed 001 sea trial* preset sets the Track tab's inputs to it, and :func:`case_of` then uses
+#: its priors too, so that the page's numbers are the command line's (docs/tracking.md).
+TRIAL = core_track.CASES["seed001-trial"]
+#: The TrackCase fields that are priors rather than inputs of the page.
+_PRIORS = ("prior_std", "bank_depth_std", "bank_pv_std")
+
+
+def tracker_of(s):
+    """(the tracker the tab runs, why it is not the one chosen or ''): the filter bank is seed
+    001's, for the electric dipole; with a magnetic sensor the tab runs the EKF, and says so."""
+    if s.track_filter == "bank" and SENSORS[s.sensor] != "E":
+        return "ekf", ("The filter bank is seed 001's, for the electric dipole only: with a "
+                       f"{s.sensor.split(' (')[0]} the tab runs the **EKF** (choose the EKF or the "
+                       "PU-EKF as the tracker to make this the setting).")
+    return s.track_filter, ""
+
+
 def case_of(s):
-    """The :class:`core.track.TrackCase` of a scenario's values."""
+    """The :class:`core.track.TrackCase` of a scenario's values (the command line's
+    ``seed001-trial`` case, priors included, when the inputs are that case's)."""
     steps = int(round(s.track_duration / s.T)) + 1
     if steps > MAX_STEPS:
         raise ValueError(f"the track has {steps} steps (duration / T + 1); at most {MAX_STEPS}: "
                          "shorten it or lengthen T")
     magnetic = magnetic_options(s)
-    if magnetic and s.track_filter == "bank":
-        raise ValueError("the filter bank is seed 001's, for the electric dipole only: with a "
-                         "magnetic sensor choose the EKF or the PU-EKF")
     sea = None if magnetic else sea_of(s)  # a static magnetic field does not see the sea
-    return core_track.TrackCase(
+    case = core_track.TrackCase(
         name="track tab", stations=tuple(map(tuple, s.stations)), axes=int(s.track_axes),
         start=(float(s.track_x0), float(s.track_y0), float(s.z)),
         heading=math.radians(s.track_heading), speed=float(s.track_speed), steps=max(steps, 2),
@@ -102,6 +122,10 @@ def case_of(s):
         sigma_a=float(s.track_sigma_a), alpha=float(s.track_alpha), bank_depth=float(s.z),
         bank_pv_std=max(30.0, 2.0 * abs(float(s.Pv))), **magnetic,
     )
+    as_trial = dataclasses.replace(case, name=TRIAL.name, **{f: getattr(TRIAL, f) for f in _PRIORS})
+    if as_trial == TRIAL:
+        return dataclasses.replace(as_trial, name="track tab: seed001-trial")
+    return case
 
 
 def _compute(snapshot: Snapshot):
@@ -109,7 +133,7 @@ def _compute(snapshot: Snapshot):
     s = snapshot.scenario()
     case = case_of(s)
     with KERNEL_LOCK:
-        res = core_track.monte_carlo(case, filter=s.track_filter, runs=int(s.track_runs), seed=0,
+        res = core_track.monte_carlo(case, filter=tracker_of(s)[0], runs=int(s.track_runs), seed=0,
                                      workers=1, keep_tracks=int(s.track_runs))
     truth = case.nominal_track()
     stations = np.asarray(case.stations, float)
@@ -123,7 +147,8 @@ def _compute(snapshot: Snapshot):
         errors = core.crlb_maps(plane, stations, velocity=tuple(truth[0, 3:5]), T=case.T,
                                 steps=int(s.steps), **medium)
     return dict(case=case, res=res, truth=truth, range_m=rng, breaks=breaks, stations=stations,
-                map=Design(plane=plane, stations=stations, errors=errors), window=window)
+                map=Design(plane=plane, stations=stations, errors=errors), window=window,
+                tracker_note=tracker_of(s)[1])
 
 
 def view_window(truth):
@@ -183,8 +208,9 @@ def plan_view(out):
         title="Track, PCRLB and estimates over the snapshot CRLB map",  # fits at 1280 px (was cut)
         # the legend under the frame: inside it covered the estimates (issue 25); beside it, it
         # squeezed the frame to ~120 px at 1280 × 800
-        aspect="equal", xlim=(x0, x1), ylim=(y0, y1), legend_position="bottom", legend_cols=3,
-        responsive=True)
+        # to scale (views.to_scale): equal px per metre in x and y, a fixed frame
+        xlim=(x0, x1), ylim=(y0, y1), legend_position="bottom", legend_cols=3,
+        **views.to_scale((x0, x1), (y0, y1), PLAN_PX))
 
 
 def map_layer(d):
@@ -256,7 +282,12 @@ def summary_text(out):
         share = 100 * out["breaks"].mean()
         parts.append(f"the linearised bound is not predictive on {share:.0f} % of the track "
                      f"(PCRLB > {RUNAWAY_LIMIT:g} × range: far-field runaway along range–strength)")
-    return "; ".join(parts) + "." + (f"\n\n{warning}" if warning else "")
+    if "case" in out and out["case"].name.endswith("seed001-trial"):
+        parts.append("the command line's seed001-trial case (`python -m core.track --case "
+                     "seed001-trial`), its priors included")
+    note = out.get("tracker_note", "")
+    return ("; ".join(parts) + "." + (f"\n\n{warning}" if warning else "")
+            + (f"\n\n{note}" if note else ""))
 
 
 def outputs_of(snapshot):
@@ -276,22 +307,31 @@ def _outputs(scenario: Scenario):
     #: Said (under the spinner) until the first track is shown: the first visit computes it
     summary = pn.pane.Markdown("*Computing the track, its bound and the trackers' runs …*",
                                sizing_mode="stretch_width", css_classes=["w-track-summary"])
-    plan = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=560)
+    plan = pn.pane.HoloViews(None, sizing_mode="stretch_width")
     error = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=340)
     # min_height: the spinner over it is seen before the first plots come (it was a ring ~10 px high)
     outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width", min_height=400)
     task = offloop.Task("track", busy=[outputs])
+    shown_any = [False]  # whether a track has been shown: what a refusal may say of the plots
 
     def say(text):
         problem.param.update(object=text, visible=bool(text))
 
+    def not_computed(why):
+        # nothing shown yet: say so, not "computing" (it stayed for good) nor "the last track"
+        if shown_any[0]:
+            say(f"Track not computed: {why}. The plots show the last computed track.")
+        else:
+            say(f"Track not computed: {why}.")
+            summary.object = "*No track computed yet.*"
+
     def show(shown):
         say("")
+        shown_any[0] = True
         summary.object, plan.object, error.object = shown["summary"], shown["plan"], shown["error"]
 
     def failed(exc):  # e.g. a track outside the sea: said, the last plots stay
-        say(f"Track not computed: {exc}" if isinstance(exc, ValueError)
-            else f"Track not computed: {type(exc).__name__}: {exc}")
+        not_computed(str(exc) if isinstance(exc, ValueError) else f"{type(exc).__name__}: {exc}")
 
     def start(*_):
         with task.lock:  # the values as they are when this decides (two watchers may race)
@@ -299,8 +339,8 @@ def _outputs(scenario: Scenario):
             try:
                 case_of(key.scenario())
             except ValueError as exc:
-                say(f"Track not computed: {exc}. The plots show the last computed track.")
                 task.cancel()
+                not_computed(str(exc).rstrip("."))
                 return
             task.start(key, partial(outputs_of, key), show, failed)
 
@@ -338,10 +378,14 @@ def track_tab(scenario: Scenario):
     """The Track tab's layout for a shared :class:`Scenario` (a Panel layout); its outputs are
     built (and first computed) when the tab is first shown."""
     own = list(scenario.track.names())
-    options = {name: {"throttled": True} for name in own
-               if isinstance(scenario.track.param[name], param.Number)}
-    options["track_alpha"] = {"type": pn.widgets.FloatInput, "step": 1e-4, "format": "0.[0000]"}
-    widgets = pn.Param(scenario.track, parameters=own, show_name=False, widgets=options)
+    # every number is typed or dragged (a box above its slider, app.inputs: a refused text is
+    # said, not dropped); the choices are selectors
+    fmt = {"track_alpha": "0.[0000]", "track_sigma_a": "0.[000]"}
+    widgets = pn.Column(*[
+        number_input(scenario.track, name, fmt=fmt.get(name, "0.[00]"), css_classes=[f"w-{name}"])
+        if isinstance(scenario.track.param[name], param.Number)
+        else pn.Param(scenario.track, parameters=[name], show_name=False, sizing_mode="stretch_width")
+        for name in own], sizing_mode="stretch_width", margin=0)
     note = pn.pane.Markdown(note_text(scenario.snapshot(NOTE_READS)), sizing_mode="stretch_width",
                             css_classes=["w-track-note"])
     scenario.watch(lambda *_: setattr(note, "object", note_text(scenario.snapshot(NOTE_READS))), NOTE_READS)

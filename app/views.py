@@ -114,16 +114,33 @@ def common_clim(*designs, quantity="3-D position error (m)"):
     return (min(lo for lo, _ in lims), max(hi for _, hi in lims))
 
 
-def error_map(d, title, quantity="3-D position error (m)", clim=None, size=320):
+#: The Layout design map's frame side (px): beside the station table (~600 px high) it leaves
+#: no blank under it; it was 320 px with ~200 px blank under it at every window size.
+DESIGN_MAP_PX = 460
+
+
+def to_scale(xlim, ylim, longest):
+    """Frame width and height (px) drawing the ranges ``xlim`` and ``ylim`` (m) at one scale,
+    the longer span ``longest`` px: equal px per metre in x and y, so a course's angle on the
+    screen is its true angle (a responsive frame drew the Track tab's plan at 1.333 px/m in x
+    and 0.785 in y: a 25° track looked like 15°)."""
+    xs, ys = float(xlim[1] - xlim[0]), float(ylim[1] - ylim[0])
+    if not (xs > 0 and ys > 0):
+        raise ValueError(f"empty range: x {xlim}, y {ylim}")
+    scale = longest / max(xs, ys)
+    return dict(frame_width=int(round(xs * scale)), frame_height=int(round(ys * scale)))
+
+
+def error_map(d, title, quantity="3-D position error (m)", clim=None, size=DESIGN_MAP_PX):
     """A CRLB error (1σ, log colour scale) of a layout over the x–y plane; ``clim`` the colour
-    range (default :func:`error_clim`), ``size`` the frame's side in pixels."""
+    range (default :func:`error_clim`), ``size`` the frame's longer side in pixels (to scale)."""
     err = _errors(d, quantity)
     label, unit = quantity.rsplit(" (", 1)
     vdim = hv.Dimension("error", label=label, unit=unit.rstrip(")"))
     img = map_image(err, d.plane, vdim).opts(
         cmap="viridis_r", logz=True, clim=clim or error_clim(d, quantity), colorbar=True,
         clabel=f"CRLB {quantity}, log scale", tools=["hover"], clipping_colors={"NaN": "white"},
-        frame_width=size, frame_height=size, framewise=True, title=title)
+        **to_scale(d.plane.u, d.plane.v, size), framewise=True, title=title)
     return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane) * runaway_layer(d)
 
 

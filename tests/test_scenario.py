@@ -1,5 +1,6 @@
 """The dashboard's state and computations, without a browser."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -541,13 +542,30 @@ def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
         assert s.message == "" and s.active_preset() == second
 
 
-def test_the_sea_trial_has_one_geometry_on_every_tab():
-    # issue 25: its stations were along y on Layout design and Track, along x on Maps
+def test_the_sea_trial_preset_is_the_command_lines_trial_on_the_track_tab():
+    # issue 40 defect 11: the page used 3-axis sensors, a start at (−250, −120), heading 25° and
+    # 250 s; the command line's --case seed001-trial is 2-axis sensors at (0, ±5, 8.4), a start
+    # at (−57.1, 280) heading −y, 300 measurements. The Maps tab's pair (core.dual_station) has
+    # the same spacing and depth.
     import core
+    from app import track
+    from core.tracking import montecarlo as tr
 
     s = Scenario()
     s.apply_preset("Seed 001 sea trial")
-    assert np.array_equal(np.array(s.stations.stations), core.dual_station(s.stations.h, s.stations.d))
+    trial = tr.CASES["seed001-trial"]
+    case = track.case_of(s.snapshot())
+    assert dataclasses.replace(case, name=trial.name) == trial
+    pair = core.dual_station(s.stations.h, s.stations.d)
+    assert np.linalg.norm(pair[1] - pair[0]) == pytest.approx(
+        np.linalg.norm(np.subtract(*s.stations.stations)))
+    assert {st[2] for st in s.stations.stations} == {float(pair[0][2])}
+    # the same numbers as the command line (same seed, same runs)
+    s.track.track_runs = 2
+    page = track.compute(s)["res"]
+    cli = tr.monte_carlo("seed001-trial", filter="bank", runs=2, seed=0, workers=1)
+    np.testing.assert_allclose(page.trmse_m, cli.trmse_m, rtol=1e-12)
+    np.testing.assert_allclose(page.pcrlb_m, cli.pcrlb_m, rtol=1e-12)
 
 
 def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():

@@ -82,3 +82,36 @@ def test_divergence_is_not_judged_against_a_bound_that_predicts_nothing():
     out = track.compute(s)
     assert out["res"].summary["diverged"] is not None
     assert "a run diverges when its final error exceeds max(5 × final PCRLB, 10 m)" in track.summary_text(out)
+
+
+def test_the_station_depth_h_moves_the_custom_stations_at_it():
+    # issue 40 defect 6: h = 120 moved neither the Layout design nor the Track stations; three
+    # clicked stations then sat at 120 m beside two at 100 m, unsaid
+    from app import track
+    from app.design import drawn_stations
+    from app.scenario import Scenario
+
+    s = Scenario()
+    assert [st[2] for st in s.stations.stations] == [100.0, 100.0]
+    s.stations.h = 120.0
+    assert [st[2] for st in s.stations.stations] == [120.0, 120.0] and s.message == ""
+    for x, y in [(-229.0, 168.0), (-134.0, -165.0), (55.0, 205.0)]:  # clicked: at h
+        layout = s.stations.stations
+        s.stations.stations = drawn_stations({"x": [st[0] for st in layout] + [x],
+                                              "y": [st[1] for st in layout] + [y]}, layout, s.stations.h)
+    assert [st[2] for st in s.stations.stations] == [120.0] * 5
+    # the Track tab's stations are these
+    assert {st[2] for st in track.case_of(s.snapshot()).stations} == {120.0}
+    # a station given a depth of its own keeps it; the others follow h
+    s.stations.stations = [[0.0, 0.0, 90.0], *s.stations.stations[1:]]
+    s.stations.h = 110.0
+    assert [st[2] for st in s.stations.stations] == [90.0] + [110.0] * 4
+    # a refused h (above the sea surface) moves nothing
+    s.stations.h = -5.0
+    assert s.stations.h == 110.0 and [st[2] for st in s.stations.stations] == [90.0] + [110.0] * 4
+    assert "above the sea surface" in s.message
+    # in a layered sea, an h outside the water column is refused and the stations stay
+    s.update(sea_model="layered", sea_depth=150.0)
+    before = [list(st) for st in s.stations.stations]
+    s.stations.h = 160.0
+    assert s.stations.h != 160.0 and s.stations.stations == before and "water column" in s.message

@@ -241,6 +241,11 @@ def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():
     direct = tr.monte_carlo(case, filter="ekf", runs=2, seed=0, workers=1)
     np.testing.assert_allclose(out["res"].pcrlb_m, direct.pcrlb_m, rtol=1e-12)
     assert "(8 states: 8 if consistent)" in track.summary_text(out)
+    # issue 40 defect 9: a magnetometer with the bank tracker ran nothing ("Computing the track"
+    # for good); the tab runs the EKF and says so
     s.track.track_filter = "bank"
-    with pytest.raises(ValueError, match="electric dipole only"):
-        track.case_of(s.snapshot())
+    assert track.tracker_of(s.snapshot())[0] == "ekf"
+    out = track.compute(s)
+    assert out["res"].summary["filter"] == "ekf"
+    text = track.summary_text(out)
+    assert "electric dipole only" in text and "runs the **EKF**" in text
