@@ -28,6 +28,7 @@ import numpy as np
 import panel as pn
 
 from core.shape import Outliers, Pass, Target
+from core.shape.targets import CLEARANCE, clearance
 from core.shape.bound import shape_bound_curve
 from core.shape.cases import CASES
 from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
@@ -51,8 +52,6 @@ CHOICES = ("shape_type", "shape_window", "shape_outliers")
 WINDOWS = {"one sample": 0, "seed 003 window (lag 5)": LAG}
 #: The pass (seed 003): start x (m), speed along +x (m/s), rate (Hz), samples: x −40 … +40 m.
 START_X, SPEED, RATE, SAMPLES = -40.0, 5.0, 5.0, 81
-#: Nearest a target cell may be to the track (m): the gradiometer's arms reach 0.25 m.
-CLEARANCE = 1.0
 #: Closest approaches of the bound curve (m): from the target's reach to here.
 CURVE_MAX, CURVE_POINTS = 35.0, 14
 FILTERS = {"ukf": ("UKF", "#1f77b4"), "nhukf": ("NHUKF (Huber)", "#d62728"),
@@ -183,14 +182,6 @@ def case_of(values):
     noise = float(v["shape_noise"])
     return Case(name="shape tab", target=target, track=track, outliers=outliers, noise_g=noise,
                 noise_b=noise, lag=WINDOWS[v["shape_window"]])
-
-
-def clearance(target, track):
-    """Distance (m) from the track's line to the target's nearest cell."""
-    s = np.asarray(track.start, float)
-    u = np.asarray(track.velocity, float) / np.linalg.norm(track.velocity)
-    d = target.positions - s
-    return float(np.min(np.linalg.norm(d - np.outer(d @ u, u), axis=1)))
 
 
 def curve_cpas(target, cpa):

@@ -1,18 +1,31 @@
-"""``python -m core.shape --case CASE [--runs N] [--seed S] [--lag N] --out DIR``.
+"""``python -m core.shape --case CASE [--runs N] [--seed S] [--lag N] [--offset Y] [--above Z]
+[--noise σ] [--speed V] [--rate F] [--cpa-sweep LO:HI:N] --out DIR``.
 
 Runs a case of seed 003 (:data:`core.shape.cases.CASES`) with ``runs`` Monte-Carlo passes
 (1 to :data:`MAX_RUNS`: each run keeps ~0.3 MB of tracks and covariances in memory) and writes
 into DIR:
 
-- ``summary.json``: the case's truth and, per row of the case (Tables have several), per filter
-  ("euler", "ukf", "nhukf") ``centroid_error_m``, ``peak_error_m``, ``main_scale_m``,
-  ``main_scale_error_m``, ``axis_error_deg``, ``kind``, ``nees`` (medians over runs; the
-  metrics of :mod:`core.shape.experiment`: ``kind`` is the majority verdict or ``"tie"``,
-  ``main_scale_m`` the median over the runs of the majority kind, null on a tie); the
-  top-level ``filters`` and ``truth`` are the first row's;
+- ``summary.json``: the case's truth and, per row of the case (Tables have several), per
+  estimator ("euler", "ukf", "nhukf" and the batch fit "fit") ``centroid_error_m``,
+  ``peak_error_m`` (not the fit: one estimate per pass), ``main_scale_m`` (span read),
+  ``spread_scale_m`` (second-moment read), ``main_scale_error_m``, ``axis_error_deg``, ``kind``,
+  ``nees`` (medians over runs; the metrics of :mod:`core.shape.experiment`: ``kind`` is the
+  majority verdict or ``"tie"``, ``main_scale_m`` the median over the runs of the majority kind,
+  null on a tie; the fit's ``nees_band`` is its two-sided 99 % band); per row also ``bound``
+  (:class:`core.shape.bound.ShapeBound`: the main scale's σ in both reads and the rigid line's,
+  m), ``sizable`` (whether the read that sizes best has σ ≤ 10 % of the true main scale) and
+  ``sizing`` (that read). The top-level ``filters``, ``bound`` and ``sizable`` are the first
+  row's;
 - ``errors_rowI.png``: position error along the pass for each filter (run 0), outliers marked;
 - ``shape_rowI.png``: run 0's final dipoles and PCA axes over the target's outline, plan (x–y)
   and side (x–z) views.
+
+The pass runs along +x from x = −40 to +40 m (80 m) at a lateral offset ``--offset Y`` and a
+height ``--above Z`` above the target's centre (z down: the track's z is −Z), as the Shape tab's
+inputs; ``--speed`` (m/s) and ``--rate`` (Hz) set the samples (80 · rate / speed + 1; seed 003:
+5 m/s, 5 Hz, 81). Each is refused with a message outside its limits (:data:`LIMITS`; at most
+:data:`MAX_SAMPLES` samples, and a track at least 1 m from the target's nearest cell). Defaults:
+the case's own (seed 003: 5 m, 5 m, 0.01 nT/m, 5 m/s, 5 Hz).
 
 The filter update is the case's own (:mod:`core.shape.cases`): seed 003's window of lag 5, and
 for Figs. 4 and 5 a second row with the one-sample update beside it (``"comparison": true``);
@@ -20,6 +33,13 @@ for Figs. 4 and 5 a second row with the one-sample update beside it (``"comparis
 2N below the pass's sample count (81 samples: N ≤ 40). The summary's ``description`` names the
 update each row ran.
 
+``--cpa-sweep LO:HI:N`` also moves the first row's pass to N closest approaches from LO to HI m
+(geometric; the direction of the offset kept) and writes ``cpa_sweep.csv`` and
+``cpa_sweep.png``: the bound of the main scale (both reads, rigid line) and the Monte-Carlo
+errors of the filters and the fit against the closest approach, and prints how close the pass
+must be to size the target to ``--size-to`` metres (default 10 % of its main scale).
+
+A row the pass cannot size prints a WARNING line: its main scales and kinds mean nothing.
 Every bad input prints one line ``python -m core.shape: error: …`` and exits with status 2.
 """
 
@@ -34,14 +54,26 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..shape.bound import SIZABLE_FRACTION, shape_bound
 from ..shape.cases import CASES, case_rows, describe
 from ..shape.experiment import run_case
+from ..shape.targets import CLEARANCE, Pass, clearance
 from . import ArgumentParser
 
 PROG = "python -m core.shape"
 #: Largest ``--runs``: each run keeps ~0.3 MB (the two filters' 81 covariances of 15 × 15, the
 #: tracks), so 10000 runs need ~3 GB.
 MAX_RUNS = 10000
+#: Limits of the pass options: name -> (lowest, highest, unit). Offset and height as the Shape
+#: tab's; speed and rate keep the 80 m pass between 2 and MAX_SAMPLES samples.
+LIMITS = {"offset": (-100.0, 100.0, "m"), "above": (-100.0, 100.0, "m"),
+          "noise": (1e-5, 10.0, "nT/m"), "speed": (0.5, 20.0, "m/s"), "rate": (0.1, 50.0, "Hz")}
+#: Most samples a pass may have (80 · rate / speed + 1): the filters' cost is linear in them.
+MAX_SAMPLES = 2001
+#: Length of the pass along x (m): x = −40 … +40, as seed 003's.
+PASS_LENGTH = 80.0
+#: Most closest approaches of a --cpa-sweep.
+MAX_SWEEP = 40
 
 
 class _Parser(ArgumentParser):
@@ -76,8 +108,84 @@ def _parser():
                    help="the update's window lag n for every row: 0 = one-sample update, n > 0 = "
                         "seed 003's [k − 2n, k − n, k] with 2n below the sample count (81: n ≤ 40); "
                         "default: the case's own (figures 0, tables 5)")
+    for name, what in (("offset", "lateral offset y of the track from the target's centre"),
+                       ("above", "height of the track above the target's centre (z is down)"),
+                       ("noise", "noise σ of each tensor component"),
+                       ("speed", "platform speed along +x"), ("rate", "sampling rate")):
+        lo, hi, unit = LIMITS[name]
+        p.add_argument(f"--{name}", type=_float(lo, hi, unit, what), default=None,
+                       help=f"{what}, {lo:g} to {hi:g} {unit} (default: the case's)")
+    p.add_argument("--cpa-sweep", type=_sweep, default=None, metavar="LO:HI:N",
+                   help="also sweep the closest approach from LO to HI m in N steps (CSV + PNG)")
+    p.add_argument("--size-to", type=_float(1e-6, 1e6, "m", "the σ to size the main scale to"),
+                   default=None, help="with --cpa-sweep: the main scale's σ to reach (m; default "
+                                      f"{100 * SIZABLE_FRACTION:g} %% of it)")
     p.add_argument("--out", required=True, help="output folder (created if missing)")
     return p
+
+
+def _float(lo, hi, unit, what):
+    def conv(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a number ({what}, {unit}); got {s!r}") from None
+        if not math.isfinite(v) or not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"must be between {lo:g} and {hi:g} {unit} ({what}); got {s!r}")
+        return v
+    return conv
+
+
+def _sweep(s):
+    parts = s.split(":")
+    try:
+        lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
+        if len(parts) != 3:
+            raise ValueError
+    except (ValueError, IndexError):
+        raise argparse.ArgumentTypeError(f"must be LO:HI:N (closest approaches in m, N steps), e.g. "
+                                         f"5:40:8; got {s!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi <= 1000):
+        raise argparse.ArgumentTypeError(f"needs 0 < LO < HI ≤ 1000 m; got {s!r}")
+    if not 2 <= n <= MAX_SWEEP:
+        raise argparse.ArgumentTypeError(f"N must be 2 to {MAX_SWEEP} steps; got {s!r}")
+    return lo, hi, n
+
+
+def geometry(row, offset=None, above=None, noise=None, speed=None, rate=None):
+    """``row`` (a Case) with the pass options applied (None: the row's own); ValueError for a pass
+    the options make impossible (too many samples, through the target)."""
+    t = row.track
+    st, v = np.asarray(t.start, float), np.asarray(t.velocity, float)
+    y = st[1] if offset is None else offset
+    z = st[2] if above is None else -above
+    spd = float(np.linalg.norm(v)) if speed is None else speed
+    hz = float(t.rate) if rate is None else rate
+    if speed is None and rate is None:
+        samples = t.samples
+    else:
+        samples = int(round(PASS_LENGTH * hz / spd)) + 1
+        if samples > MAX_SAMPLES:
+            raise ValueError(f"--rate {hz:g} Hz at --speed {spd:g} m/s makes {samples} samples over "
+                             f"the {PASS_LENGTH:g} m pass; at most {MAX_SAMPLES} (rate / speed ≤ "
+                             f"{(MAX_SAMPLES - 1) / PASS_LENGTH:g} per m)")
+    track = Pass(start=(-PASS_LENGTH / 2, y, z), velocity=(spd, 0.0, 0.0), rate=hz, samples=samples)
+    near = clearance(row.target, track)
+    if near < CLEARANCE:
+        raise ValueError(f"the track passes {near:.2f} m from the target's nearest cell; keep it at "
+                         f"least {CLEARANCE:g} m away (--offset, --above)")
+    out = replace(row, track=track)
+    if noise is not None:
+        out = replace(out, noise_g=noise, noise_b=noise)
+    return out
+
+
+def rows_of(case, lag=None, **geo):
+    """The rows ``run`` runs: the case's, with ``lag`` and the pass options (:func:`geometry`)."""
+    rows = case_rows(case)[1]
+    if lag is not None:  # one update for every row: the comparison rows would repeat the main ones
+        rows = [replace(row, lag=lag) for row in rows if not row.comparison]
+    return [geometry(row, **geo) for row in rows]
 
 
 def _check_out(out):
@@ -91,10 +199,11 @@ def _check_out(out):
         raise ValueError(f"--out {out!r} is not writable")
 
 
-def check_lag(case, lag):
-    """ValueError unless every row of ``case`` can take the window lag ``lag`` (None: the rows'
-    own): seed 003's window [k − 2n, k − n, k] needs 2n below the pass's sample count."""
-    for row in case_rows(case)[1]:
+def check_lag(case, lag, **geo):
+    """ValueError unless every row of ``case`` (with the pass options ``geo``) can take the window
+    lag ``lag`` (None: the rows' own): seed 003's window [k − 2n, k − n, k] needs 2n below the
+    pass's sample count."""
+    for row in rows_of(case, None, **geo):
         n = row.lag if lag is None else lag
         K = row.track.samples
         if 2 * n >= K:
@@ -169,20 +278,26 @@ def _plot_shape(res, path):
     plt.close(fig)
 
 
-def run(case, runs=1, seed=0, lag=None, out=None, plots=True):
+def _row_summary(r, bound):
+    return {"label": r.case.name, "comparison": r.case.comparison, "truth": r.summary["case"],
+            "filters": r.summary["filters"], "outlier_samples": r.outlier_samples,
+            "bound": bound.to_dict(), "sizable": bound.sizable, "sizing": bound.sizing}
+
+
+def run(case, runs=1, seed=0, lag=None, out=None, plots=True, **geo):
     """Run a case; write summary.json (and plots) into ``out`` if given. Returns the summary
-    (as written: NaN as None). ``lag`` None keeps each row's own update (cases.py)."""
-    desc, rows = case_rows(case)
-    check_lag(case, lag)
-    if lag is not None:  # one update for every row: the comparison rows would repeat the main ones
-        rows = [replace(row, lag=lag) for row in rows if not row.comparison]
+    (as written: NaN as None). ``lag`` None keeps each row's own update (cases.py); ``geo``: the
+    pass options of :func:`geometry` (offset, above, noise, speed, rate)."""
+    desc, _ = case_rows(case)
+    check_lag(case, lag, **geo)
+    rows = rows_of(case, lag, **geo)
     results = [run_case(row, runs=runs, seed=seed) for row in rows]
+    bounds = [shape_bound(r.target, r.track, r.noise_g) for r in rows]
+    per_row = [_row_summary(r, b) for r, b in zip(results, bounds)]
     summary = {"case": case, "description": describe(desc, rows), "runs": runs, "seed": seed,
-               "lag": results[0].case.lag,
-               "truth": results[0].summary["case"], "filters": results[0].summary["filters"],
-               "rows": [{"label": r.case.name, "comparison": r.case.comparison,
-                          "truth": r.summary["case"], "filters": r.summary["filters"],
-                         "outlier_samples": r.outlier_samples} for r in results]}
+               "lag": results[0].case.lag, "truth": results[0].summary["case"],
+               "filters": results[0].summary["filters"], "bound": per_row[0]["bound"],
+               "sizable": per_row[0]["sizable"], "sizing": per_row[0]["sizing"], "rows": per_row}
     summary = _json_safe(summary)
     if out is not None:
         with open(os.path.join(out, "summary.json"), "w", encoding="utf-8") as fh:
@@ -194,24 +309,199 @@ def run(case, runs=1, seed=0, lag=None, out=None, plots=True):
     return summary
 
 
+def warning(row):
+    """The WARNING line of a summary row the pass cannot size (else '')."""
+    if row["sizable"]:
+        return ""
+    b = row["bound"]
+    truth = row["truth"]["target"]["main_scale_m"]
+    return (f"WARNING: this pass cannot size the target: the best read ({b['sizing']}) has σ "
+            f"{b['best_main_scale_m']:.3g} m, above {100 * SIZABLE_FRACTION:g} % of the main scale "
+            f"({truth:g} m); the main scales, axes and line / plane verdicts of {row['label']} "
+            "are noise, not a size (pass closer, or see --cpa-sweep)")
+
+
+#: Columns of cpa_sweep.csv: the bound's σ of the main scale (span read, second-moment read,
+#: rigid line), the verdict, and per estimator the Monte-Carlo medians of |main scale − truth|
+#: in both reads and of the axis error.
+ESTIMATORS = ("ukf", "nhukf", "fit")
+SWEEP_COLUMNS = (["closest_approach_m", "bound_span_m", "bound_second_moment_m", "bound_rigid_line_m",
+                  "sizable"]
+                 + [f"{e}_{q}" for e in ESTIMATORS
+                    for q in ("span_error_m", "second_moment_error_m", "axis_error_deg")])
+#: An estimator sizes the target at a closest approach when the median error of its best read is
+#: within 10 % of the main scale and its median axis error within this (°): a length along the
+#: wrong axis is no size.
+SIZED_AXIS_DEG = 10.0
+
+
+def _crossing(cpas, values, level):
+    """Largest closest approach (log-log interpolation) where ``values`` (increasing with the
+    closest approach) is ≤ ``level``; None if not even at the first, inf if at the last."""
+    v = np.asarray(values, float)
+    ok = v <= level
+    if not ok[0]:
+        return None
+    if ok.all():
+        return math.inf
+    i = int(np.argmin(ok)) - 1  # last ≤ before the first >
+    x0, x1, y0, y1 = np.log(cpas[i]), np.log(cpas[i + 1]), np.log(v[i]), np.log(v[i + 1])
+    return float(np.exp(x0 + (np.log(level) - y0) * (x1 - x0) / (y1 - y0)))
+
+
+def cpa_sweep(case, lo, hi, n, runs=1, seed=0, lag=None, out=None, size_to=None, plots=True, **geo):
+    """The bound and the Monte-Carlo errors of the first row against the closest approach (module
+    notes); writes cpa_sweep.csv (and .png) into ``out`` if given. Returns a dict: ``records``
+    (one per closest approach, :data:`SWEEP_COLUMNS`), ``size_to_m``, ``bound_cpa_m`` (the
+    farthest pass whose best bound is ≤ size_to) and ``monte_carlo_cpa_m`` (the farthest swept
+    pass where an estimator sizes the target to it)."""
+    row = rows_of(case, lag, **geo)[0]
+    cpas = np.geomspace(lo, hi, n)
+    cases = []
+    for c in cpas:
+        r = replace(row, track=row.track.with_closest_approach(float(c)))
+        near = clearance(r.target, r.track)
+        if near < CLEARANCE:
+            raise ValueError(f"--cpa-sweep: at a closest approach of {c:.3g} m the track passes "
+                             f"{near:.2f} m from the target's nearest cell; start the sweep farther "
+                             f"(at least {CLEARANCE:g} m from the target)")
+        cases.append(r)
+    truth = row.target.main_scale
+    size_to = SIZABLE_FRACTION * truth if size_to is None else float(size_to)
+    records, sized = [], []
+    for r in cases:
+        b = shape_bound(r.target, r.track, r.noise_g)
+        res = run_case(r, runs=runs, seed=seed)
+        rec = {"closest_approach_m": b.closest_approach_m, "bound_span_m": b.main_scale_m,
+               "bound_second_moment_m": b.spread_main_scale_m, "bound_rigid_line_m": b.rigid_main_scale_m,
+               "sizable": b.sizable}
+        ok = False
+        for e in ESTIMATORS:
+            f = res.final[e]
+            second = f["spread_scale_m"] if r.target.kind == "line" else f["main_scale_m"]
+            rec[f"{e}_span_error_m"] = float(np.median(np.abs(f["main_scale_m"] - truth)))
+            rec[f"{e}_second_moment_error_m"] = float(np.median(np.abs(second - truth)))
+            rec[f"{e}_axis_error_deg"] = float(np.median(f["axis_error_deg"]))
+            best = min(rec[f"{e}_span_error_m"], rec[f"{e}_second_moment_error_m"])
+            ok |= best <= size_to and rec[f"{e}_axis_error_deg"] <= SIZED_AXIS_DEG
+        sized.append(ok)
+        records.append(rec)
+    best_bound = [min(r["bound_span_m"], r["bound_second_moment_m"]) for r in records]
+    mc = [c for c, ok in zip(cpas, sized) if ok]
+    result = {"records": records, "size_to_m": size_to, "main_scale_m": truth, "runs": runs,
+              "bound_cpa_m": _crossing(cpas, best_bound, size_to),
+              "monte_carlo_cpa_m": float(max(mc)) if mc else None,
+              "monte_carlo_sized": sized}
+    if out is not None:
+        import csv
+        with open(os.path.join(out, "cpa_sweep.csv"), "w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=SWEEP_COLUMNS)
+            w.writeheader()
+            for rec in records:
+                w.writerow({k: (str(v).lower() if isinstance(v, bool) else f"{v:.6g}") for k, v in rec.items()})
+        if plots:
+            _plot_sweep(result, row, os.path.join(out, "cpa_sweep.png"))
+    return result
+
+
+def sweep_answer(sw):
+    """The sweep's answer in words: how close the pass must be."""
+    x, b, m = sw["size_to_m"], sw["bound_cpa_m"], sw["monte_carlo_cpa_m"]
+    lo = sw["records"][0]["closest_approach_m"]
+    hi = sw["records"][-1]["closest_approach_m"]
+    if b is None:
+        bound = f"no swept pass (from {lo:.3g} m) is close enough by the bound"
+    elif math.isinf(b):
+        bound = f"every swept pass (to {hi:.3g} m) is close enough by the bound"
+    else:
+        bound = f"the pass must come within {b:.3g} m by the bound (the best read's σ ≤ {x:.3g} m)"
+    mc = ("no swept pass sized it in the Monte-Carlo" if m is None else
+          f"in the Monte-Carlo ({sw['runs']} passes each) an estimator sized it to {x:.3g} m (axis "
+          f"within {SIZED_AXIS_DEG:g}°) up to {m:.3g} m")
+    return f"To size this target ({sw['main_scale_m']:g} m) to {x:.3g} m: {bound}; {mc}."
+
+
+def _plot_sweep(sw, row, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rec = sw["records"]
+    c = [r["closest_approach_m"] for r in rec]
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    ax.loglog(c, [r["bound_span_m"] for r in rec], "-", color="#9467bd", label="bound: span read")
+    ax.loglog(c, [r["bound_second_moment_m"] for r in rec], "-", lw=2.5, color="#17becf",
+              label="bound: second-moment read")
+    ax.loglog(c, [r["bound_rigid_line_m"] for r in rec], "--", color="#9467bd", label="bound: rigid line")
+    for e, mk, col in (("ukf", "o", "#1f77b4"), ("nhukf", "^", "#d62728"), ("fit", "s", "#2ca02c")):
+        ax.loglog(c, [max(r[f"{e}_second_moment_error_m"], 1e-6) for r in rec], mk, color=col,
+                  label=f"{e.upper()}: Monte-Carlo error, second-moment read")
+    ax.axhline(sw["size_to_m"], color="k", ls=":", lw=1, label=f"size to {sw['size_to_m']:.3g} m")
+    ax.axhline(sw["main_scale_m"], color="0.5", ls="-.", lw=1, label=f"main scale {sw['main_scale_m']:g} m")
+    if sw["bound_cpa_m"] is not None and math.isfinite(sw["bound_cpa_m"]):
+        ax.axvline(sw["bound_cpa_m"], color="k", lw=1, alpha=0.5)
+    ax.set_xlabel("closest approach (m)")
+    ax.set_ylabel("main scale: 1σ bound or median |error| (m)")
+    ax.set_title(f"{row.name}: how close must the pass be? ({sw['runs']} passes per point)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
 def _fmt(v, spec):
     return "—" if v is None else format(v, spec)
 
 
 def main(argv=None):
     a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
+    geo = dict(offset=a.offset, above=a.above, noise=a.noise, speed=a.speed, rate=a.rate)
     try:
-        check_lag(a.case, a.lag)
+        check_lag(a.case, a.lag, **geo)
+        if a.size_to is not None and a.cpa_sweep is None:
+            raise ValueError("--size-to needs --cpa-sweep")
         _check_out(a.out)
     except ValueError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         sys.exit(2)
-    s = run(a.case, runs=a.runs, seed=a.seed, lag=a.lag, out=a.out)
+    sw = None
+    if a.cpa_sweep is not None:
+        try:
+            sw = cpa_sweep(a.case, *a.cpa_sweep, runs=a.runs, seed=a.seed, lag=a.lag, out=a.out,
+                           size_to=a.size_to, **geo)
+        except ValueError as exc:
+            print(f"{PROG}: error: {exc}", file=sys.stderr)
+            sys.exit(2)
+    s = run(a.case, runs=a.runs, seed=a.seed, lag=a.lag, out=a.out, **geo)
     for row in s["rows"]:
         f = row["filters"]
+        b = row["bound"]
         print(f"{row['label']}: " + "; ".join(
             f"{n} centroid {_fmt(v['centroid_error_m'], '.3f')} m" + (
-                f", scale {_fmt(v['main_scale_m'], '.2f')} m, axis {v['axis_error_deg']:.1f}°, {v['kind']}"
+                f", scale {_fmt(v['main_scale_m'], '.2f')} m (second moment "
+                f"{_fmt(v['spread_scale_m'], '.2f')} m), axis {v['axis_error_deg']:.1f}°, {v['kind']}"
                 if "kind" in v else "") for n, v in f.items()))
+        print(f"  bound of the main scale (1σ): span {b['main_scale_m']:.3g} m, second moment "
+              f"{b['spread_main_scale_m']:.3g} m, rigid line {_fmt(b['rigid_main_scale_m'], '.3g')} m; "
+              + ("sizable" if row["sizable"] else "NOT sizable") + f" ({b['sizing']} read)")
+        if "fit" in f:
+            band = f["fit"]["nees_band"]
+            if not band[0] <= f["fit"]["nees"] <= band[1]:
+                print(f"  WARNING: the fit's centroid NEES {f['fit']['nees']:.3g} is outside its 99 % "
+                      f"band {band[0]:.3g} … {band[1]:.3g}: its σ is "
+                      + ("optimistic" if f["fit"]["nees"] > band[1] else "pessimistic"))
+        w = warning(row)
+        if w:
+            print("  " + w)
+    if sw is not None:
+        s["cpa_sweep"] = _json_safe({k: v for k, v in sw.items() if k != "records"}
+                                    | {"csv": "cpa_sweep.csv", "png": "cpa_sweep.png"})
+        s["cpa_sweep"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
+                          for k, v in s["cpa_sweep"].items()}
+        with open(os.path.join(a.out, "summary.json"), "w", encoding="utf-8") as fh:
+            json.dump(s, fh, indent=1, allow_nan=False)
+        print(sweep_answer(sw))
+        print(f"wrote {os.path.join(a.out, 'cpa_sweep.csv')} and cpa_sweep.png")
     print(f"wrote {os.path.join(a.out, 'summary.json')}")
     return s

@@ -145,6 +145,9 @@ class DipoleModel:
     stations: np.ndarray
     n_dipoles: int = N_DIPOLES
     lag: int = 0
+    #: The gradiometer's baseline (m) of :func:`core.gradient_tensor`; None: the point tensor
+    #: (the filters' model). The batch fit models the array (core.shape.fit).
+    baseline: float | None = None
 
     def __post_init__(self):
         st = np.asarray(self.stations, float)
@@ -176,7 +179,7 @@ class DipoleModel:
         lead = x.shape[:-1]
         pos = x[..., : 3 * n].reshape(-1, 3)  # (P·N, 3)
         mom = np.repeat(x[..., 3 * n:].reshape(-1, 3), n, axis=0)
-        G = dipole_tensor(pos, mom, stations)  # (P·N, S, 3, 3)
+        G = dipole_tensor(pos, mom, stations, self.baseline)  # (P·N, S, 3, 3)
         G = G.reshape((-1, n) + G.shape[1:]).sum(axis=1)  # sum over the dipoles
         i, j = zip(*G_COMPONENTS)
         return G[..., i, j].reshape(lead + (stations.shape[0], 5))
@@ -210,10 +213,26 @@ class DipoleModel:
         idx = np.clip(np.asarray(self.window) + k, 0, None)
         pos = x[: 3 * n].reshape(n, 3)
         _, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))),
-                                 self.stations[idx], sensor="G")  # (N, w, 5, 8)
+                                 self.stations[idx], sensor="G", baseline=self.baseline)  # (N, w, 5, 8)
         J = J.reshape(n, -1, 8)  # (N, n_meas, 8), window-major then component
         out = np.empty((J.shape[1], 3 * n + 3))
         for j in range(n):
             out[:, 3 * j: 3 * j + 3] = J[j, :, :3]
         out[:, 3 * n:] = J[:, :, 5:].sum(axis=0)
         return out
+
+    def pass_jacobian(self, x):
+        """The one-sample readings and Jacobian of one state over the whole pass (a batch fit's
+        model): h (K, 5) nT/m and ∂h/∂X (5K, 3N + 3), sample-major then component, from one
+        :func:`core.magnetic_jacobian` call (the window's lag plays no part: every sample once)."""
+        x = np.asarray(x, float)
+        n = self.n_dipoles
+        pos = x[: 3 * n].reshape(n, 3)
+        h, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))), self.stations,
+                                 sensor="G", baseline=self.baseline)  # (N, K, 5), (N, K, 5, 8)
+        K = self.stations.shape[0]
+        out = np.empty((K * 5, 3 * n + 3))
+        for j in range(n):
+            out[:, 3 * j: 3 * j + 3] = J[j, :, :, :3].reshape(-1, 3)
+        out[:, 3 * n:] = J[:, :, :, 5:].sum(axis=0).reshape(-1, 3)
+        return h.sum(axis=0), out

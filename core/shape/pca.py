@@ -17,6 +17,11 @@ eigenvalues λ1 ≥ λ2 ≥ λ3 and unit eigenvectors u1, u2, u3.
   diagonal L of a square is 2 × its points' RMS distance from the centroid, so for any N
   L = 2 √(Σ_i |P (r_i − r̄)|² / N) with P the projection on the (u1, u2) plane
   (= √((N − 1)(λ1 + λ2) · 4 / N); for the square, λ1 = λ2 = L² / 6, eq. (21)).
+- **Second-moment read of a line**: L₂ = √(12 λ1 N / (N + 1)), the rod whose N segment centres
+  have the dipoles' spread along u1 (with a 1/N covariance, λ1' = (N − 1) λ1 / N, this is the
+  spec's N · √(12 λ1' / (N² − 1))). It equals L for evenly spaced dipoles and uses every
+  dipole's projection, where the span uses the two end ones only: far from the target its
+  Cramér–Rao bound is orders of magnitude below the span's (core.shape.bound).
 - **Verdict**: "line" if λ2 / λ1 < :data:`PLANE_RATIO` (the second principal spread is less
   than half the first), else "plane".
 """
@@ -52,6 +57,8 @@ class ShapeEstimate:
         max − min of the projections on u1 (m).
     line_scale : ndarray, shape (...)
         N / (N − 1) · span: the main scale read as a cylinder (m).
+    spread_scale : ndarray, shape (...)
+        √(12 λ1 N / (N + 1)): the cylinder's main scale from the spread along u1 (m).
     disc_diameter : ndarray, shape (...)
         :data:`DISC_FACTOR` × the in-plane diagonal: the main scale read as a disc (m).
     kind : ndarray of str, shape (...)
@@ -67,6 +74,7 @@ class ShapeEstimate:
     axes: np.ndarray
     span: np.ndarray
     line_scale: np.ndarray
+    spread_scale: np.ndarray
     disc_diameter: np.ndarray
     kind: np.ndarray
     main_scale: np.ndarray
@@ -116,8 +124,9 @@ def pca_shape(points):
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(w[..., 0] > 0, w[..., 1] / np.where(w[..., 0] > 0, w[..., 0], 1.0), 0.0)
     plane = ratio >= PLANE_RATIO
+    spread = np.sqrt(12.0 * w[..., 0] * n / (n + 1))
     return ShapeEstimate(centroid=c, eigenvalues=w, axes=V, span=span, line_scale=line,
-                         disc_diameter=disc, kind=np.where(plane, "plane", "line"),
+                         spread_scale=spread, disc_diameter=disc, kind=np.where(plane, "plane", "line"),
                          main_scale=np.where(plane, disc, line),
                          axis=np.where(plane[..., None], u3, u1))
 

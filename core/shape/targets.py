@@ -41,10 +41,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["CELL", "Outliers", "Pass", "Target", "attitude_matrix"]
+__all__ = ["CELL", "CLEARANCE", "Outliers", "Pass", "Target", "attitude_matrix", "clearance"]
 
 #: Grid cell of the truth model (m), seed 003's 0.1 m.
 CELL = 0.1
+#: Nearest a target cell may be to the track (m) for a pass to be run (the dashboard and the
+#: command line refuse closer ones): the gradiometer's arms reach 0.25 m.
+CLEARANCE = 1.0
 
 
 def _pos(name, v, unit, allow_zero=False):
@@ -324,3 +327,11 @@ class Outliers:
     def to_dict(self):
         return {"at_x_m": [float(a) for a in self.at_x], "size_sigma": float(self.size),
                 "components": [int(c) for c in self.components]}
+
+
+def clearance(target, track):
+    """Distance (m) from the track's line to the target's nearest cell."""
+    s = np.asarray(track.start, float)
+    u = np.asarray(track.velocity, float) / np.linalg.norm(track.velocity)
+    d = target.positions - s
+    return float(np.min(np.linalg.norm(d - np.outer(d @ u, u), axis=1)))
