@@ -22,6 +22,7 @@ from core import calibration as cal
 from . import offloop
 from .calibration_plots import Figures, plot_data
 from .maps import refusal
+from .number_box import number_box
 from .scenario import Calibration
 
 #: The parts (app.scenario.PARTS) the tab reads: its own.
@@ -424,9 +425,9 @@ def calibration_tab(scenario):
         plots, sizing_mode="stretch_width")
 
 
-#: Number format of the tab's boxes (numbro): up to 4 decimals, so that a value such as the
+#: Decimals shown in the tab's number boxes (app.number_box): up to 4, so that a value such as the
 #: Table 1 preset's 100·√3 shows as 173.2051, not 173.20508075688772 (the value keeps every digit).
-NUMBER_FORMAT = "0.[0000]"
+NUMBER_DECIMALS = 4
 
 
 def _input(scenario, name):
@@ -439,9 +440,8 @@ def _input(scenario, name):
         return pn.widgets.Select.from_param(p, **opts)
     if isinstance(p, param.String):
         return pn.widgets.TextInput.from_param(p, **opts)
-    if isinstance(p, param.Integer):
-        return pn.widgets.IntInput.from_param(p, **opts)
-    return pn.widgets.FloatInput.from_param(p, format=NUMBER_FORMAT, **opts)
+    # a box that says why it refuses (Bokeh's spinners dropped -3, 500 or abc in the browser)
+    return number_box(scenario.calibration, name, decimals=NUMBER_DECIMALS, **opts)
 
 
 def _set(scenario, values):

@@ -12,13 +12,13 @@ import threading
 
 import panel as pn
 import param
-from bokeh.models.formatters import PrintfTickFormatter
 
 from . import export, maps, url
 from .calibration import calibration_tab
 from .compute import KIND_NAMES, MAP_INPUTS, SHARED
 from .design import design_tab
 from .inputs import number_input
+from .number_box import number_box
 from .scenario import (
     ACCEPTED,
     COMPARISONS,
@@ -96,13 +96,9 @@ FORMATS = {"noise_b": "0.[0000]", "noise_g": "0.[0000]"}
 
 
 def _widgets():
-    """pn.Param widget specs of the inputs that are not :data:`NUMBERS`: a text box for the
-    noise, a select for the rest; each with its stable css class."""
-    # Scientific notation (numbro's "0.0e+0" showed 1e-7 as "+0.000"): a printf formatter.
-    # No start/end (from_param took the slider's soft bounds, 1e-9 … 1e-5, and the browser dropped
-    # 1e-3 without a word): any number reaches the Scenario, which refuses it with a message.
-    spec = {"noise": {"type": pn.widgets.FloatInput, "format": PrintfTickFormatter(format="%.2e"),
-                      "start": None, "end": None, "step": 1e-8, "sizing_mode": "stretch_width"}}
+    """pn.Param widget specs of the inputs that are not :data:`NUMBERS` (a select; the noise has a
+    number box, app.number_box): each with its stable css class."""
+    spec = {}
     for name in PART_OF:  # stable hooks for the browser tests
         spec.setdefault(name, {})["css_classes"] = [f"w-{name}"]
     return spec
@@ -171,6 +167,8 @@ def _section(scenario, tabs, title, names, collapsed):
     rows = {}  # name -> its row in the card, once built
 
     def widget(name):
+        if name == "noise":  # a box that says why it refuses (emptied, it raised in the server)
+            return number_box(scenario.part_of(name), name, css_classes=[f"w-{name}"])
         if name in NUMBERS:
             return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"],
                                 **({"fmt": FORMATS[name]} if name in FORMATS else {}))
@@ -288,8 +286,9 @@ def create_app():
 
     served = pn.state.location is not None  # no page URL outside a served page
     args = (pn.state.session_args or {}) if served else {}
-    if served:  # the link's values first: the first maps are the link's
-        url.read_link(scenario, args)
+    titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
+    # the link's values first: the first maps are the link's (read once, here)
+    link = url.read_link(scenario, args, titles) if served else None
     flush_url = []  # set below, once the tabs exist
 
     #: Spins while a change slower than BUSY_AFTER computes, hidden otherwise (an idle ring
@@ -300,7 +299,6 @@ def create_app():
                                         color="light", bgcolor="dark", throttle=0)
     # the URL update after the maps are drawn (none outside a served page: nothing to wait for)
     after_draw = (lambda: flush_url[0]() if flush_url else None) if served else None
-    titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
     # The other tabs are built on their first visit (first_visit), and stay: Panel's dynamic
     # Tabs detach a hidden tab's models from the document, and a change made to them there (a
     # preset) patched Panel's shared stylesheets to cdn.holoviz.org, for every model of the
@@ -323,7 +321,8 @@ def create_app():
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,
-                                      waits=lambda names: bool(set(names) & MAP_INPUTS)))
+                                      waits=lambda names: bool(set(names) & MAP_INPUTS),
+                                      link=link))
 
     buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
                                        width=90 if len(name) <= 6 else 150,  # a seed's name is longer
@@ -358,7 +357,8 @@ def create_app():
         # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
         # own (Calibration, Shape), where a click changed the hidden Maps state.
         sidebar=[pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
-                                            "the figure's map gets a red frame)"), presets,
+                                            "the figure's map gets a red frame; the Layout design "
+                                            "and Track tabs' own settings stay)"), presets,
                            visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
                            sizing_mode="stretch_width", margin=0),
                  maps.refusal(scenario, None, "w-message"), *sections,

@@ -19,36 +19,7 @@ from __future__ import annotations
 import panel as pn
 import param
 
-
-def shown_text(value, integer=False, decimals=2):
-    """The box's text for ``value``: at most ``decimals`` decimals, trailing zeros dropped
-    (``100``, ``2.83``), or 6 significant digits for a value too small or large for them
-    (``1e-07``). Only shown: the value is the owner's, never re-read from this text."""
-    if integer:
-        return str(int(value))
-    v = float(value)
-    if v != 0 and (abs(v) < 10.0 ** -decimals or abs(v) >= 1e7):
-        return f"{v:.6g}"
-    return f"{v:.{decimals}f}".rstrip("0").rstrip(".") if v != 0 else "0"
-
-
-def parsed(text, integer=False):
-    """(value, '') of a typed text, or (None, why it is not a number)."""
-    cleaned = str(text).strip().replace("\u2212", "-").replace(" ", "")
-    if not cleaned:
-        return None, "empty: type a number"
-    try:
-        value = float(cleaned)
-    except ValueError:
-        hint = " (use a point for decimals)" if "," in cleaned else ""
-        return None, f"“{text.strip()}” is not a number{hint}"
-    if value != value or value in (float("inf"), float("-inf")):
-        return None, f"“{text.strip()}” is not a finite number"
-    if integer:
-        if not value.is_integer():
-            return None, f"“{text.strip()}” is not a whole number"
-        return int(value), ""
-    return value, ""
+from .number_box import number_box, parsed, shown_text  # noqa: F401  (shown_text, parsed: as before)
 
 
 def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
@@ -65,12 +36,8 @@ def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
     value = getattr(owner, name)
     lo = value if lo is None else min(lo, value)
     hi = value if hi is None else max(hi, value)
-    # its title: ``label`` from Panel 1.9 (``name`` is deprecated there), ``name`` before it
-    title = {"label" if "label" in pn.widgets.TextInput.param else "name": p.label}
     decimals = fmt.count("0") - 1  # "0.[00]": 2
-    box = pn.widgets.TextInput(value=shown_text(value, integer, decimals), sizing_mode="stretch_width",
-                               **title)
-    showing = [False]  # the box's text is being set from the value: not typed
+    box = number_box(owner, name, decimals=decimals)
     if integer:
         slider = pn.widgets.IntSlider(start=lo, end=hi, value=value, step=p.step or 1)
     else:
@@ -79,41 +46,15 @@ def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
     slider.param.update(name="", show_value=False, sizing_mode="stretch_width", margin=(0, 10, 5, 10))
 
     def shown(_event):
-        # The owner's current value, not the event's: a refused value is restored inside the
-        # owner's own watcher, so this event may already be stale.
+        # The owner's current value, not the event's (the box follows it too: app.number_box)
         v = getattr(owner, name)
         slider.param.update(start=min(slider.start, v), end=max(slider.end, v), value=v)
-        show(v)
-
-    def show(v, again=False):
-        showing[0] = True
-        try:
-            text = shown_text(v, integer, decimals)
-            if again:
-                # Panel drops an update equal to the last value the browser sent, as an echo of
-                # it; after a refused text the last good value often is that one (typed before
-                # it), and the box kept showing the refused text: step through another text
-                box.value = text + " "
-            box.value = text
-        finally:
-            showing[0] = False
-
-    def typed_text(event):
-        if showing[0]:
-            return
-        v, why = parsed(event.new, integer)
-        if v is None:
-            show(getattr(owner, name), again=True)  # the last good value
-            owner.refuse(name, why)
-        elif v != getattr(owner, name):
-            setattr(owner, name, v)
 
     def typed(event):
         if event.new is not None:
             setattr(owner, name, event.new)
 
     owner.param.watch(shown, [name])
-    box.param.watch(typed_text, ["value"])
     slider.param.watch(typed, ["value"])  # on release: the page's sliders are throttled
     return pn.Column(box, slider, css_classes=list(css_classes), visible=visible,
                      sizing_mode="stretch_width", margin=0)

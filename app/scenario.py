@@ -175,14 +175,18 @@ class Scenario(param.Parameterized):
             part = getattr(self, attr)
             part.param.watch(fn, list(part.names()))
 
-    def update(self, values=None, **more):
+    def update(self, values=None, as_given=False, **more):
         """Set many inputs at once (a link, a preset): every watcher sees them together, the
         rules between them are checked on the whole; if one is broken nothing changes and
-        :attr:`message` says why."""
-        with self._updating:
-            self._update({**(values or {}), **more})
+        :attr:`message` says why.
 
-    def _update(self, values):
+        ``as_given`` (a link): a rule may move only the inputs *not* in ``values``; one that
+        would have to move a given value refuses the whole update instead (a link ``?sea_model=
+        layered&sea_depth=80&h=100`` is refused for its h, not opened with h moved to 80)."""
+        with self._updating:
+            self._update({**(values or {}), **more}, as_given)
+
+    def _update(self, values, as_given=False):
         notes = [p for p in (self.problem(n, v) for n, v in values.items()) if p]
         before = self.values()
         was, self._restoring = self._restoring, True  # no part checks, no rule, until all are set
@@ -193,8 +197,14 @@ class Scenario(param.Parameterized):
                     self.param.update(message="", refused=[])
                     # the rules that move values, as if each input had been set by hand
                     if values.get("sea_model") == "layered" and before["sea_model"] != "layered":
-                        self._seabed()
+                        self._seabed(keep=values if as_given else ())
                     notes = self.rules()
+                    if as_given and not notes:
+                        self._all_rows()
+                        self._shape_sizes()
+                        now = self.values()
+                        notes = [f"{parameter(n).label} = {values[n]} does not fit the other values "
+                                 f"({self.message})" for n in values if now[n] != values[n]][:1]
                 if notes:
                     now = self.values()
                     self._quietly(**{n: v for n, v in before.items() if now[n] != v})
@@ -282,20 +292,23 @@ class Scenario(param.Parameterized):
         return notes[:1]
 
     # -- rules that move values
-    def _seabed(self):
+    def _seabed(self, keep=()):
         """Switching to a layered sea puts the stations on the seabed (h = D), the target and
         the x–z plane into the water column, and the field model to the exact dipole (the
-        paper's printed equations have no images)."""
+        paper's printed equations have no images). ``keep``: inputs it leaves as they are."""
         if self.medium.sea_model != "layered":
             return
         D = self.medium.sea_depth
         moved = dict(h=D, z=min(max(self.target.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
                      stations=[[st[0], st[1], D] for st in self.stations.stations])
+        moved = {n: v for n, v in moved.items() if n not in keep}
+        if not moved:
+            return
         said = [f"{parameter(n).label.split(' (')[0]} {self.value(n):g} → {moved[n]:g} m"
-                for n in ("h", "z", "z_min", "z_max") if self.value(n) != moved[n]]
-        if moved["stations"] != self.stations.stations:
+                for n in ("h", "z", "z_min", "z_max") if n in moved and self.value(n) != moved[n]]
+        if moved.get("stations", self.stations.stations) != self.stations.stations:
             said.append(f"custom stations to the seabed ({D:g} m)")
-        if self.medium.model != "exact dipole":
+        if "model" in moved and self.medium.model != "exact dipole":
             said.append("field model → exact dipole (the paper's printed equations have no images)")
         self._quietly(**moved)
         note = ("Layered sea: moved " + "; ".join(said) + ". These stay when you switch back to the "
@@ -353,7 +366,8 @@ class Scenario(param.Parameterized):
     def apply_preset(self, name):
         """Load one of :data:`PRESETS` as a complete scenario: every input of every part is the
         preset's or its default, whatever was set before, but the parts with problems (and
-        presets) of their own (calibration, shape)."""
+        presets) of their own (calibration, shape) and the :data:`TAB_OWN` tabs' own settings
+        that no preset sets (:func:`preset_values`)."""
         self.update(preset_values(name))
 
     def active_preset(self):
@@ -370,12 +384,22 @@ def _magnetic_maps(sensor, comparison, sensor_b):
                                       and SENSORS[sensor_b] != "E")
 
 
+#: Parts that are one tab's own settings shown beside the paper-figure buttons (the Layout design
+#: and Track tabs): a figure button leaves those of their inputs that no figure sets as the user
+#: set them (Fig. 1 reset the Track tab's runs from 2 to 5, without a word).
+TAB_OWN = ("design", "track")
+
+
 def preset_values(name):
     """Every input :meth:`Scenario.apply_preset` sets for preset ``name``: its values over the
-    defaults of every part but those with presets of their own."""
+    defaults of every part but those with presets of their own, and but the inputs of the
+    :data:`TAB_OWN` parts that no preset sets (a preset is still whole: what one preset sets,
+    another sets back)."""
     shared = [a for a, cls in PARTS.items() if not cls.own_presets]
-    return {**defaults(shared), **{k: [list(v) for v in val] if k == "stations" else val
-                                   for k, val in PRESETS[name].items()}}
+    kept = {n for a in TAB_OWN for n in PARTS[a].names()} - set(PRESET_INPUTS)
+    return {**{n: v for n, v in defaults(shared).items() if n not in kept},
+            **{k: [list(v) for v in val] if k == "stations" else val
+               for k, val in PRESETS[name].items()}}
 
 
 #: Every input some preset sets (what :meth:`Scenario.active_preset` reads).

@@ -373,9 +373,10 @@ def test_a_link_with_refused_values_says_so_and_leaves_the_address_bar(chromium,
         text = msg.locator(".alert").text_content()
         assert "h:" in text and "above the sea surface" in text and "resolution:" in text
         wait_value(pg, "h", 100.0)
-        wait_value(pg, "Ph", 150.0)
-        pg.wait_for_function("() => !/[?&](h|resolution)=/.test(window.location.search)", timeout=15_000)
-        assert "Ph=150" in pg.evaluate("() => window.location.search")
+        # a refused link is refused whole (issue 40 defect 1): Ph = 150 is not set either, and
+        # the address bar shows the view, the defaults
+        wait_value(pg, "Ph", 100.0)
+        pg.wait_for_function("() => window.location.search === ''", timeout=15_000)
     finally:
         pg.close()
 

@@ -11,6 +11,7 @@ import re
 
 import numpy as np
 import panel as pn
+import param
 import pytest
 from bokeh.models import GlyphRenderer
 
@@ -162,14 +163,18 @@ def test_inputs_shown_are_those_of_the_data_source():
 
 # --------------------------------------------------------------------------- 5. float noise
 def test_every_number_box_has_a_format_and_shown_numbers_are_short():
-    """Every FloatInput of the tab formats its value (the Table 1 preset's 100·√3 showed as
-    173.20508075688772); every decimal number in the text, table and buttons has at most 6
+    """Every number box of the tab shows at most 4 decimals (the Table 1 preset's 100·√3 showed
+    as 173.20508075688772); every decimal number in the text, table and buttons has at most 6
     significant digits (4 as a rule, 5-6 for nT to 0.1; float noise has 15-17)."""
     s = Scenario()
     s.update(ac.PRESETS["Seed 004 Table 1"])
     tab = ac.calibration_tab(s)
-    boxes = list(tab.select(pn.widgets.FloatInput))
-    assert len(boxes) == 8 and all(b.format == ac.NUMBER_FORMAT for b in boxes)
+    boxes = {b.css_classes[0]: b for b in tab.select(pn.widgets.TextInput) if b.css_classes}
+    numbers = [n for n in ac.FIELDS if isinstance(s.ref(n), param.Number)]
+    assert len(numbers) == 11 and all(f"w-{n}" in boxes for n in numbers)
+    assert boxes["w-cal_noise_nt"].value == "173.2051"
+    for n in numbers:
+        assert len(boxes[f"w-{n}"].value.partition(".")[2]) <= 4, (n, boxes[f"w-{n}"].value)
     res = ac.compute(values("Seed 004 Table 1"))
     shown = [ac.summary(res), ac.coefficient_table(res).to_string()]
     shown += [ac._fix_label(k, v) for k, v in ac.fixes(res).items() if v]

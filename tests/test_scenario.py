@@ -9,7 +9,7 @@ import xarray as xr
 
 from app import map_figures, views
 from app.compute import MAPS, SCENE, PanelCache, Snapshot, compute
-from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PARTS, PRESETS, Scenario, parameter
+from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PARTS, PRESET_INPUTS, PRESETS, Scenario, parameter
 
 
 def test_presets_set_what_the_paper_says():
@@ -535,11 +535,26 @@ def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
         alone = Scenario(resolution=21)
         alone.apply_preset(second)
         s = Scenario(resolution=21)
-        s.update(stations=[[1.0, 2.0, 3.0]], track_heading=33.0, error_quantity="Depth error σz (m)")
+        own = dict(track_heading=33.0, error_quantity="Depth error σz (m)")  # tabs' own: kept
+        s.update(stations=[[1.0, 2.0, 3.0]], **own)
         s.apply_preset(first)
         s.apply_preset(second)
+        alone.update(own)
         assert _state(s) == _state(alone), (first, second)
         assert s.message == "" and s.active_preset() == second
+
+
+def test_a_figure_button_keeps_the_track_and_design_tabs_own_settings():
+    # issue 40 defect 7: Fig. 1 reset the Track tab's runs from 2 to 5 without a word
+    from app.scenario import TAB_OWN
+    own = {n for a in TAB_OWN for n in PARTS[a].names()} - set(PRESET_INPUTS)
+    assert {"track_runs", "track_heading", "error_quantity", "n_stations"} <= own
+    for name in PRESETS:
+        s = Scenario(resolution=21)
+        s.update(track_runs=2, track_filter="ekf", n_stations=6, error_quantity="Depth error σz (m)")
+        s.apply_preset(name)
+        assert (s.track.track_runs, s.track.track_filter, s.design.n_stations,
+                s.design.error_quantity) == (2, "ekf", 6, "Depth error σz (m)"), name
 
 
 def test_the_sea_trial_preset_is_the_command_lines_trial_on_the_track_tab():

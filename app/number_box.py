@@ -1,0 +1,93 @@
+"""A number box: a text box kept in step with one Number or Integer parameter, that says why it
+refuses what it refuses.
+
+Bokeh's numeric inputs (Panel's ``FloatInput``, ``IntInput``, the "spinners") check a typed text
+in the browser: a value outside their start/end or a text that is not a number is dropped there
+without a word (``-3`` in "Reading error bound", ``500`` in "Attitudes N", ``abc`` in "Be north"
+did nothing), and an emptied box sends None, which the parameter refuses with a server traceback
+(the sidebar's noise box). Here the browser holds plain text, and every text reaches the server:
+a number is set on the owner (an :class:`app.parts.Part`, whose limits refuse it with a message
+next to the input, the last good value restored), anything else is refused here through the
+owner's :meth:`~app.parts.Part.refuse`. The box then shows the value the owner holds.
+"""
+
+from __future__ import annotations
+
+import panel as pn
+import param
+
+
+def shown_text(value, integer=False, decimals=2):
+    """The box's text for ``value``: at most ``decimals`` decimals, trailing zeros dropped
+    (``100``, ``2.83``), or 6 significant digits for a value too small or large for them
+    (``1e-07``). Only shown: the value is the owner's, never re-read from this text."""
+    if integer:
+        return str(int(value))
+    v = float(value)
+    if v != 0 and (abs(v) < 10.0 ** -decimals or abs(v) >= 1e7):
+        return f"{v:.6g}"
+    return f"{v:.{decimals}f}".rstrip("0").rstrip(".") if v != 0 else "0"
+
+
+def parsed(text, integer=False):
+    """(value, '') of a typed text, or (None, why it is not a number)."""
+    cleaned = str(text).strip().replace("\u2212", "-").replace(" ", "")
+    if not cleaned:
+        return None, "empty: type a number"
+    try:
+        value = float(cleaned)
+    except ValueError:
+        hint = " (use a point for decimals)" if "," in cleaned else ""
+        return None, f"“{text.strip()}” is not a number{hint}"
+    if value != value or value in (float("inf"), float("-inf")):
+        return None, f"“{text.strip()}” is not a finite number"
+    if integer:
+        if not value.is_integer():
+            return None, f"“{text.strip()}” is not a whole number"
+        return int(value), ""
+    return value, ""
+
+
+def number_box(owner, name, *, decimals=2, label=None, **widget):
+    """A ``pn.widgets.TextInput`` for the Number or Integer parameter ``name`` of ``owner`` (an
+    :class:`app.parts.Part`), titled with the parameter's label (or ``label``). ``decimals``:
+    the most shown (the value keeps every digit); ``widget``: further TextInput settings
+    (``css_classes``, ``visible`` (may be a bound function), sizing)."""
+    p = owner.param[name]
+    integer = isinstance(p, param.Integer)
+    # its title: ``label`` from Panel 1.9 (``name`` is deprecated there), ``name`` before it
+    title = {"label" if "label" in pn.widgets.TextInput.param else "name": label or p.label}
+    box = pn.widgets.TextInput(value=shown_text(getattr(owner, name), integer, decimals),
+                               **{"sizing_mode": "stretch_width", **title, **widget})
+    showing = [False]  # the box's text is being set from the value: not typed
+
+    def show(v, again=False):
+        showing[0] = True
+        try:
+            text = shown_text(v, integer, decimals)
+            if again:
+                # Panel drops an update equal to the last value the browser sent, as an echo of
+                # it; after a refused text the last good value often is that one (typed before
+                # it), and the box kept showing the refused text: step through another text
+                box.value = text + " "
+            box.value = text
+        finally:
+            showing[0] = False
+
+    def typed(event):
+        if showing[0]:
+            return
+        v, why = parsed(event.new, integer)
+        if v is None:
+            show(getattr(owner, name), again=True)  # the last good value
+            owner.refuse(name, why)
+        elif v != getattr(owner, name):
+            setattr(owner, name, v)
+            if getattr(owner, name) != v:  # refused by the owner's limits: it restored the last
+                show(getattr(owner, name), again=True)  # good value, which the box shows again
+
+    # The owner's current value, not the event's: a refused value is restored inside the owner's
+    # own watcher, so this event may already be stale.
+    owner.param.watch(lambda _event: show(getattr(owner, name)), [name])
+    box.param.watch(typed, ["value"])
+    return box
