@@ -535,7 +535,7 @@ def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
         alone = Scenario(resolution=21)
         alone.apply_preset(second)
         s = Scenario(resolution=21)
-        own = dict(track_heading=33.0, error_quantity="Depth error σz (m)")  # tabs' own: kept
+        own = dict(track_runs=7, error_quantity="Depth error σz (m)")  # tabs' own, no preset's: kept
         s.update(stations=[[1.0, 2.0, 3.0]], **own)
         s.apply_preset(first)
         s.apply_preset(second)
@@ -548,7 +548,7 @@ def test_a_figure_button_keeps_the_track_and_design_tabs_own_settings():
     # issue 40 defect 7: Fig. 1 reset the Track tab's runs from 2 to 5 without a word
     from app.scenario import TAB_OWN
     own = {n for a in TAB_OWN for n in PARTS[a].names()} - set(PRESET_INPUTS)
-    assert {"track_runs", "track_heading", "error_quantity", "n_stations"} <= own
+    assert {"track_runs", "track_filter", "error_quantity", "n_stations"} <= own
     for name in PRESETS:
         s = Scenario(resolution=21)
         s.update(track_runs=2, track_filter="ekf", n_stations=6, error_quantity="Depth error σz (m)")
