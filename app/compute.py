@@ -61,6 +61,16 @@ class Snapshot:
         """The values of the parts named ``parts`` (app.scenario.PARTS) of ``scenario``."""
         return cls(tuple((name, _frozen(v)) for name, v in scenario.values(parts).items()))
 
+    @classmethod
+    def of_values(cls, scenario: Scenario, values, parts=MAPS):
+        """As :meth:`of`, with the inputs in ``values`` (name -> value) replaced: a dragged
+        slider's value before it reaches the scenario (app/live.py)."""
+        current = scenario.values(parts)
+        unknown = set(values) - set(current)
+        if unknown:
+            raise KeyError(f"not inputs of {parts}: {sorted(unknown)}")
+        return cls(tuple((name, _frozen(values.get(name, v))) for name, v in current.items()))
+
     def scenario(self):
         """These values, with the methods that build core's inputs (not a live Scenario)."""
         return ScenarioValues.of({k: [list(v) for v in val] if k == "stations" else val

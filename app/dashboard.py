@@ -13,7 +13,7 @@ import threading
 import panel as pn
 import param
 
-from . import export, maps, url
+from . import export, live, maps, url
 from .calibration import calibration_tab
 from .compute import KIND_NAMES, MAP_INPUTS, SHARED
 from .design import design_tab
@@ -318,6 +318,7 @@ def create_app():
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    *holders.items(), sizing_mode="stretch_width")
     first_visit(tabs, titles, holders, later)
+    live.shown_with(tabs, MAPS_TAB)  # no previews of the maps while another tab is shown
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,

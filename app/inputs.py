@@ -19,6 +19,7 @@ from __future__ import annotations
 import panel as pn
 import param
 
+from . import live
 from .number_box import number_box, parsed, shown_text  # noqa: F401  (shown_text, parsed: as before)
 
 
@@ -56,5 +57,6 @@ def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
 
     owner.param.watch(shown, [name])
     slider.param.watch(typed, ["value"])  # on release: the page's sliders are throttled
+    live.follow(slider, name)  # while dragged, the maps follow (app/live.py)
     return pn.Column(box, slider, css_classes=list(css_classes), visible=visible,
                      sizing_mode="stretch_width", margin=0)

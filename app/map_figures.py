@@ -61,6 +61,9 @@ OK, VEIL_DARK, VEIL_LIGHT, NO_VALUE, RUNAWAY, RUNAWAY_GAP = 0, 1, 2, 3, 4, 5
 #: runaway was hatched the other way, and two kinds of diagonal stripes were confused (issue 25).
 VEIL_PALETTE = ("#00000000", "#6b6b6bdd", "#b4b4b4dd", "#00000000", "#ffffffb0", "#00000000")
 NAN_COLOUR = "#ffffff"
+#: A preview image's levels (app/live.py): 0 … PREVIEW_TOP over the colour range, PREVIEW_NAN
+#: where there is no value (drawn in NAN_COLOUR, the preview mapper's ``high_color``).
+PREVIEW_TOP, PREVIEW_NAN = 254, 255
 STRIPE = 6  # pixels of the map grid per stripe of the veil
 DOT = 3  # pixels of the map grid per side of a runaway dot (one every 2 DOT, in both directions)
 
@@ -119,6 +122,8 @@ class MapFigures:
     labels: tuple = ()  # per map: a Label inside its frame, shown when it is veiled everywhere
     view: object = None  # the (plane, view box, exaggeration) last drawn: a new one resets zoom and pan
     view_source: object = None  # the view box's corners, drawn invisibly: the ranges fit them
+    previews: tuple = ()  # per map: the preview layer's data source (app/live.py), column ``pv``
+    preview_layers: tuple = ()  # per map: its renderer, shown only while previews are drawn
 
 
 #: The figures' size before scaling to the page's width (``scale_width``): frames within ~8 % of square
@@ -168,7 +173,7 @@ def build():
                            for _ in range(2))
     veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=len(VEIL_PALETTE) - 1)
     out = {k: [] for k in ("figs", "images", "veils", "stations", "bars", "hovers", "formatters",
-                           "captions", "saves", "labels")}
+                           "captions", "saves", "labels", "previews", "preview_layers")}
     for which in range(3):
         fig = _figure(x_range, y_range)
         # The images' mapper spans 0 … 1 for good (images come normalised: module docstring).
@@ -182,6 +187,15 @@ def build():
         # add_glyph: one glyph model per layer (the plotting API adds a non-selection and a
         # muted copy of each; these maps neither select nor mute)
         fig.add_glyph(img, Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper))
+        # The preview while a slider is dragged (app/live.py): uint8 levels 0 … PREVIEW_TOP of the
+        # colour range, PREVIEW_NAN where no value, over the map and under its veil. Its column is
+        # ``pv``, not ``image``: what reads a map's layers by their ``image`` column (the hover,
+        # the tests) sees the exact map and its veil only.
+        pv = ColumnDataSource(dict(pv=[np.zeros((2, 2), np.uint8)], x=[-1], y=[-1], dw=[2], dh=[2]),
+                              name="map-preview")
+        pv_mapper = LinearColorMapper(palette=Viridis256, low=0, high=PREVIEW_TOP, high_color=NAN_COLOUR)
+        pv_layer = fig.add_glyph(pv, Image(image="pv", x="x", y="y", dw="dw", dh="dh", color_mapper=pv_mapper),
+                                 visible=False)
         v = fig.add_glyph(veil, Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=veil_mapper))
         s = fig.add_glyph(st, Scatter(x="x", y="y", marker="triangle", size=13, fill_color="white",
                                       line_color="black", line_width=1.5))
@@ -208,7 +222,7 @@ def build():
                       text_font_size="7.5pt", text_color="#222222", background_fill_color="white",
                       background_fill_alpha=0.9, border_line_color="#888888", padding=4)
         fig.add_layout(label)
-        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label)):
+        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label, pv, pv_layer)):
             out[key].append(model)
     for rng in (x_range, y_range):
         rng.renderers = corners
@@ -218,7 +232,8 @@ def build():
                       bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
                       hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
                       captions=tuple(out["captions"]), saves=tuple(out["saves"]),
-                      labels=tuple(out["labels"]))
+                      labels=tuple(out["labels"]), previews=tuple(out["previews"]),
+                      preview_layers=tuple(out["preview_layers"]))
 
 
 def _symmetric(values):
@@ -279,8 +294,17 @@ def normalised(values, low, high):
     return ((np.asarray(values, dtype=float) - low) / (high - low)).astype(np.float32)
 
 
+def quantised(values, low, high):
+    """``values`` as a preview sends them: uint8 levels 0 … PREVIEW_TOP over ``low`` … ``high``
+    (clipped, as the colour mapper clips), PREVIEW_NAN where NaN; a quarter of float32's bytes."""
+    v = np.asarray(values, dtype=float)
+    with np.errstate(invalid="ignore"):
+        level = np.rint(np.clip((v - low) / (high - low), 0.0, 1.0) * PREVIEW_TOP)
+    return np.where(np.isfinite(v), level, PREVIEW_NAN).astype(np.uint8)
+
+
 def veil_codes(observable, values, runaway=None):
-    """The veil image (float32 codes, see :data:`VEIL_PALETTE`): diagonal stripes where the point
+    """The veil image (uint8 codes, see :data:`VEIL_PALETTE`): diagonal stripes where the point
     is unobservable, NO_VALUE where it is observable but has no value, dots (:func:`runaway_dots`)
     where ``runaway`` (bool, optional) flags it, OK elsewhere."""
     n_v, n_u = observable.shape
@@ -290,7 +314,7 @@ def veil_codes(observable, values, runaway=None):
     if runaway is not None:
         good = np.where(runaway & np.isfinite(values),
                         np.where(runaway_dots(observable.shape), RUNAWAY, RUNAWAY_GAP), good)
-    return np.where(observable, good, VEIL_DARK + stripes).astype(np.float32)
+    return np.where(observable, good, VEIL_DARK + stripes).astype(np.uint8)
 
 
 def _wrapped(text, width=50):
@@ -357,6 +381,10 @@ def view_box(p: Panels):
     return (*box_u, *((hi, lo) if p.plane.kind == "xz" else (lo, hi)))
 
 
+#: After a map's title while it shows a preview (app/live.py).
+PREVIEW_TITLE = " — preview"
+
+
 @dataclass(frozen=True)
 class Prepared:
     """The arrays :func:`set_maps` sends, worked out beforehand (on a worker thread: no numpy work
@@ -366,18 +394,22 @@ class Prepared:
     maps: list  # [(values shown, observable, stations (S, 2), title)] of A, B, difference
     axes: tuple  # ("x", "y" or "z")
     ranges: list  # [(low, high, palette)] of each map
-    images: tuple  # float32, normalised to each map's range
-    veils: tuple  # float32 veil codes
+    images: tuple  # float32, normalised to each map's range (a preview's: uint8, :func:`quantised`)
+    veils: tuple  # uint8 veil codes
+    preview: bool = False  # drawn in the preview layer while a slider is dragged (app/live.py)
 
 
-def prepare(p: Panels) -> Prepared:
-    """Everything numeric that drawing ``p`` needs (pure; thread-safe)."""
+def prepare(p: Panels, preview=False) -> Prepared:
+    """Everything numeric that drawing ``p`` needs (pure; thread-safe). ``preview``: the images
+    as uint8 levels for the preview layer (:func:`quantised`)."""
     maps, axes = _maps(p)
     scales = ranges(p)
-    images = tuple(normalised(values, low, high) for (values, *_), (low, high, _) in zip(maps, scales))
+    encode = quantised if preview else normalised
+    images = tuple(encode(values, low, high) for (values, *_), (low, high, _) in zip(maps, scales))
     far = p.runaway or (None, None, None)
     veils = tuple(veil_codes(observable, values, r) for (values, observable, *_), r in zip(maps, far))
-    return Prepared(panels=p, maps=maps, axes=axes, ranges=scales, images=images, veils=veils)
+    return Prepared(panels=p, maps=maps, axes=axes, ranges=scales, images=images, veils=veils,
+                    preview=preview)
 
 
 def _prepared(p):
@@ -410,9 +442,16 @@ def set_maps(figs: MapFigures, prepared):
     vertical = f", vertical ×{stretch:g}" if stretch != 1 else ""
     for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, d.ranges)):
         fig = figs.figures[which]
-        figs.images[which].data = dict(image=[d.images[which]], **where)
-        mapper = fig.renderers[0].glyph.color_mapper
+        layer = figs.preview_layers[which] if figs.preview_layers else None
+        if d.preview:
+            figs.previews[which].data = dict(pv=[d.images[which]], **where)
+            mapper = layer.glyph.color_mapper
+        else:
+            figs.images[which].data = dict(image=[d.images[which]], **where)
+            mapper = fig.renderers[0].glyph.color_mapper
         mapper.update(**_changed(mapper, dict(palette=palette)))
+        if layer is not None and layer.visible != d.preview:
+            layer.visible = d.preview
         veil = d.veils[which]
         old = figs.veils[which].data
         same_rect = all(old[k] == v for k, v in where.items())
@@ -424,7 +463,7 @@ def set_maps(figs: MapFigures, prepared):
             figs.stations[which].data = dict(x=stations[:, 0], y=stations[:, 1],
                                              name=[f"station {i + 1}" for i in range(len(stations))])
         paper = which in p.paper[0]
-        fig.title.text = title + (" (paper)" if paper else "")
+        fig.title.text = title + (" (paper)" if paper else "") + (PREVIEW_TITLE if d.preview else "")
         fig.title.text_color = "#b03a2e" if paper else "#222222"
         fig.outline_line_color, fig.outline_line_width = ("#b03a2e", 3) if paper else ("#e5e5e5", 1)
         fig.xaxis.axis_label, fig.yaxis.axis_label = f"{xname} (m)", f"{vname} (m)" + vertical
@@ -448,7 +487,7 @@ def set_maps(figs: MapFigures, prepared):
             figs.labels[which].update(text=said, visible=bool(said))
         figs.saves[which].filename = f"{p.filename}_{'ABD'[which]}"
     view = (p.plane, view_box(p), stretch)
-    if figs.view != view:  # a new plane (or station outside it) resets the view; a new value keeps the zoom
+    if figs.view != view and not d.preview:  # a preview's coarser grid keeps the view  # a new plane (or station outside it) resets the view; a new value keeps the zoom
         u0, u1, v0, v1 = view[1]
         figs.view_source.data = dict(x=[u0, u1], y=[min(v0, v1), max(v0, v1)])
         x_range, y_range = _ranges()

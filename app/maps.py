@@ -10,7 +10,7 @@ import numpy as np
 import panel as pn
 from bokeh.layouts import row
 
-from . import export, map_figures, offloop, views
+from . import export, live, map_figures, offloop, views
 from .compute import MAPS, RUNAWAY_LIMIT, Snapshot
 from .scenario import defaults
 
@@ -231,6 +231,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         # per event) the images were painted up to ~50 ms apart.
         with pn.io.hold():
             map_figures.fill(figs, panels)
+        follow.drawn_exact()
         # the panes under the maps, whose first update brings Panel's stylesheets: in order
         # with the threads' changes
         await offloop.changes(doc, partial(show, panels))
@@ -244,12 +245,19 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         now = remedies(p)
         known.visible, crlb.visible = now["known"], now["crlb"]
 
+    def exact():  # the exact maps again, of the scenario as it is (previews drawn over them)
+        latest[0] = None
+        redraw()
+
+    # the maps follow a dragged slider: previews until its release (app/live.py)
+    follow = live.Live(scenario, figs, doc, exact)
     scenario.watch(redraw, MAPS)
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
     tab = pn.Column(paper, plots, start, key, note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                     sizing_mode="stretch_width")
     tab.figures = figs  # for tests
+    tab.live = follow
     return tab
 
 

@@ -1,0 +1,191 @@
+"""Maps that follow a dragged slider (issue 38): coarse previews while the hand moves, the exact
+maps on release.
+
+The page's sliders report on release only (``pn.extension(throttled=True)``: app/dashboard.py),
+and Panel delays every widget change by 50 ms before Python sees it. While a slider of the maps'
+inputs is dragged, the path here is shorter, through public Bokeh and Panel only:
+
+* in the browser, a ``CustomJS`` on the slider's ``value`` (Panel's ``jscallback``) writes
+  ``[input, value, sequence, released]`` into :class:`Drag`, a Bokeh ``DataModel`` of the session,
+  at most once per THROTTLE_MS (the latest value goes out at the end of each interval); a change
+  of the slider model's ``value_throttled`` (its release; connected through BokehJS's signal API
+  on the first drag: Panel's ``jscallback`` does not offer that property) writes the final value
+  at once, ``released`` set;
+* on the server, Bokeh's ``on_change`` of that model runs :meth:`Live.changed` on the event loop
+  as the message arrives (no debounce). A preview is computed off the loop at PREVIEW_N² points
+  (:meth:`app.compute.Snapshot.of_values`: the handle's value, not the scenario's) and drawn
+  into each map's preview layer: uint8 levels colour-mapped in the browser (app/map_figures.py),
+  veils uint8 and sent only when they change, colour bars, titles (" — preview") and captions
+  (their "grid 100 × 100") of the value under the handle. A session computes one preview at a
+  time; values arriving meanwhile replace each other, and the latest is computed next;
+* on release the value is set on the scenario at once (Panel's own ``value_throttled``, 50 ms
+  later, then changes nothing), which draws the exact maps through app/maps.py as any change
+  does; a preview still computing is dropped. A release where the scenario does not change
+  (the hand came back, or the value is refused) redraws the exact maps of the scenario as it is.
+
+A change of the slider made by the server (a preset, a typed value) moves the handle in the
+browser too, and so reaches :class:`Drag`: a value the scenario already holds is not previewed
+unless a drag of it is under way. Nothing is previewed while the Maps tab is hidden.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import weakref
+from functools import partial
+
+import panel as pn
+from bokeh.core.properties import Any, List
+from bokeh.model import DataModel
+
+from . import map_figures, offloop
+from .compute import MAP_INPUTS, Snapshot, compute
+
+#: Shortest interval (ms) between two values a dragged slider sends.
+THROTTLE_MS = 40
+#: Points per axis of a preview (at most the scenario's resolution).
+PREVIEW_N = 100
+
+#: Previews of every session, off the event loop (core runs one kernel at a time anyway).
+_PREVIEWS = offloop.pool("previews", 2)
+
+
+class Drag(DataModel):
+    """What the browser says about a dragged slider: ``[input name, value, sequence number,
+    released]`` (one property: one message and one server callback per value)."""
+
+    state = List(Any, default=[])
+
+
+#: In the slider's browser-side callback (``source``: the slider's model; ``drag``: the session's
+#: :class:`Drag`; ``name``: the input): the throttle, its timer and sequence per page.
+FOLLOW_JS = """
+const L = window.__liveDrag || (window.__liveDrag = {seq: 0, inputs: {}, hooked: new WeakSet()});
+const s = L.inputs[name] || (L.inputs[name] = {last: -1e9, timer: null});
+if (!L.hooked.has(source)) {  // the release: the slider's value_throttled, set when the hand lets go
+  L.hooked.add(source);
+  source.connect(source.properties.value_throttled.change, () => {
+    if (s.timer !== null) { clearTimeout(s.timer); s.timer = null; }
+    L.seq += 1;
+    drag.state = [name, source.value_throttled, L.seq, true];
+  });
+}
+const send = () => {
+  s.timer = null; s.last = performance.now(); L.seq += 1;
+  drag.state = [name, source.value, L.seq, false];
+};
+const wait = s.last + throttle - performance.now();
+if (wait <= 0) send(); else if (s.timer === null) s.timer = setTimeout(send, wait);
+"""
+
+#: The live part of each open session's page, by its document (dropped when the session ends).
+_SESSIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+class Live:
+    """Previews of one session's maps while a slider is dragged (module docstring).
+
+    ``figs``: the Maps tab's :class:`app.map_figures.MapFigures`; ``exact()``: draws the exact
+    maps of the scenario as it is, even when they were drawn before (app/maps.py)."""
+
+    def __init__(self, scenario, figs, doc, exact):
+        self.scenario, self.figs, self.doc, self.exact = scenario, figs, doc, exact
+        self.drag = Drag()
+        self.drag.on_change("state", self.changed)
+        self.shown = True  # the Maps tab is the active one
+        self.dragging = None  # the input being dragged, from its first preview to its release
+        self.previewed = False  # a preview is drawn (and not yet replaced by exact maps)
+        self.pending = None  # the latest (input, value) not yet computed
+        self.computing = False
+        self.generation = 0  # a release starts a new one: previews of an older one are dropped
+        self.drawn = 0  # previews drawn (for tests and the benchmark)
+        if doc is not None and doc.session_context is not None:
+            _SESSIONS[doc] = self
+            doc.on_session_destroyed(lambda _ctx: _SESSIONS.pop(doc, None))
+
+    def changed(self, _attr, _old, new):
+        if len(new) != 4:
+            return
+        name, value, _seq, released = new
+        if name not in MAP_INPUTS or not isinstance(value, (int, float)):
+            return
+        owner = self.scenario.part_of(name)
+        if isinstance(getattr(owner, name), int):
+            value = int(round(value))
+        if released:
+            self.release(owner, name, value)
+        elif self.shown and (self.dragging == name or value != getattr(owner, name)):
+            self.dragging = name
+            self.pending = (name, value)
+            if not self.computing:
+                self._start()
+
+    def release(self, owner, name, value):
+        """The final value: set on the scenario now (the exact maps follow); previews dropped."""
+        self.generation += 1
+        self.pending, self.dragging = None, None
+        before = Snapshot.of(self.scenario)
+        setattr(owner, name, value)  # the scenario may refuse it and keep its value
+        if self.previewed and Snapshot.of(self.scenario) == before:
+            self.exact()  # nothing changed, so nothing redraws: the previews must go
+
+    def _start(self):
+        name, value = self.pending
+        self.pending, self.computing = None, True
+        scenario = self.scenario
+        n = min(PREVIEW_N, int(scenario.value("resolution")))
+        try:
+            snapshot = Snapshot.of_values(scenario, {name: value, "resolution": n})
+        except (KeyError, ValueError):
+            self.computing = False
+            return
+        future = _PREVIEWS.submit(lambda: map_figures.prepare(compute(snapshot), preview=True))
+        offloop.schedule(self.doc, partial(self._finish, self.generation, future))
+
+    async def _finish(self, generation, future):
+        try:
+            prepared = await asyncio.wrap_future(future)
+        except Exception:  # noqa: BLE001 (a value the scenario would refuse: no preview)
+            prepared = None
+        self.computing = False
+        if prepared is not None and generation == self.generation and self.shown:
+            with pn.io.hold():  # the maps' own models in one message, as app/maps.py draws them
+                map_figures.fill(self.figs, prepared)
+            self.previewed = True
+            self.drawn += 1
+        if self.pending is not None:
+            self._start()
+
+    def drawn_exact(self):
+        """Called by app/maps.py when it has drawn exact maps: no preview is shown, and none
+        computed before them is drawn over them."""
+        self.previewed = False
+        self.generation += 1
+
+
+def follow(slider, name):
+    """Make the Panel ``slider`` of input ``name`` drive the current session's previews (a no-op
+    for an input the maps do not read, or a page without a Maps tab)."""
+    live = _SESSIONS.get(pn.state.curdoc) if pn.state.curdoc is not None else None
+    if live is None or name not in MAP_INPUTS:
+        return
+    args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS)
+    slider.jscallback(args=args, value=FOLLOW_JS)
+
+
+def shown_with(tabs, index):
+    """Previews only while tab ``index`` of ``tabs`` (the Maps tab) is the active one."""
+    live = _SESSIONS.get(pn.state.curdoc) if pn.state.curdoc is not None else None
+    if live is None:
+        return
+
+    def active(event):
+        live.shown = event.new == index
+        if not live.shown:
+            live.pending = None
+
+    live.shown = tabs.active == index
+    tabs.param.watch(active, ["active"])
+
+
+__all__ = ["Drag", "Live", "PREVIEW_N", "THROTTLE_MS", "follow", "shown_with"]

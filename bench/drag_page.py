@@ -1,0 +1,128 @@
+"""A slider dragged in Chromium, and what the page drew meanwhile (issue 38): shared by
+tests/test_drag_browser.py and bench/bench_drag.py, for the dashboard and the floor apps.
+
+The page is watched through BokehJS's public model API only: every image data source of the
+page (the maps' ``map-image`` and ``map-preview`` sources; the floor apps' images) is connected
+(``connect(source.properties.data.change, …)``) and each change is logged in the page's clock
+(``performance.now()``) with a fingerprint of the new array (sum and count of its finite values,
+dtype, byte size) and the time of the animation frame after it: BokehJS repaints a changed plot
+in an animation frame it requested while handling the change, before this one (requested after
+it), so that frame's time is when the change was painted. Pointer events (down, moves, up) are
+logged by capturing listeners on ``document``, and every change of the dragged slider's
+``value`` with its new value.
+"""
+
+from __future__ import annotations
+
+import time
+
+#: Installs the log (``window.__drag``); ``css``: the css class of the dragged slider's holder.
+INSTALL_JS = """(css) => {
+  const doc = Bokeh.documents[0];
+  const models = Array.from(doc.all_models);
+  const log = window.__drag = {changes: [], pointer: [], values: []};
+  const fingerprint = (a) => { let s = 0, n = 0;
+    for (let i = 0; i < a.length; i++) { const v = a[i]; if (Number.isFinite(v)) { s += v; n++; } }
+    return [s, n, String(a.constructor.name), a.byteLength || 0]; };
+  const plots = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) plots.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  let n = 0;
+  plots.forEach((p, i) => { for (const r of p.renderers) {
+    const src = r.data_source;
+    if (!src || !src.data || !('image' in src.data || 'pv' in src.data)) continue;
+    const column = 'pv' in src.data ? 'pv' : 'image';
+    const layer = src.name || 'unnamed';
+    n++;
+    src.connect(src.properties.data.change, () => {
+      const t = performance.now();
+      const a = src.data[column][0];
+      const entry = [t, null, layer, i, ...fingerprint(a)];
+      log.changes.push(entry);
+      requestAnimationFrame(() => { entry[1] = performance.now(); });
+    });
+  } });
+  const holder = models.find(m => (m.css_classes || []).includes(css));
+  let slider = null; const stack = holder ? [holder] : models;
+  while (stack.length && slider === null) {
+    const m = stack.pop();
+    if (m.type === 'Slider') slider = m;
+    for (const c of (m.children || [])) stack.push(Array.isArray(c) ? c[0] : c);
+  }
+  if (slider === null) slider = models.find(m => m.type === 'Slider' && (m.css_classes || []).includes(css));
+  log.slider = slider;
+  slider.connect(slider.properties.value.change, () => log.values.push([performance.now(), slider.value]));
+  for (const kind of ['pointerdown', 'pointermove', 'pointerup'])
+    document.addEventListener(kind, (e) => log.pointer.push([performance.now(), kind]), true);
+  return n;
+}"""
+#: What the log holds (and the slider's value now), for Python.
+COLLECT_JS = """() => { const l = window.__drag;
+  return {changes: l.changes, pointer: l.pointer, values: l.values, value: l.slider.value,
+          now: performance.now()}; }"""
+#: Per map (plot), in order: [title, caption, preview layer shown, colour bar low, high].
+MAP_TEXTS_JS = """() => {
+  const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.map(p => {
+    const below = Array.from(p.below || []);
+    const caption = below.find(m => m.text !== undefined && m.color_mapper === undefined);
+    const bar = [...Array.from(p.right || []), ...below].find(m => m.color_mapper);
+    const pv = p.renderers.find(r => r.data_source && r.data_source.name === 'map-preview');
+    return [p.title ? p.title.text : '', caption ? caption.text : '', pv ? pv.visible : null,
+            bar ? bar.color_mapper.low : null, bar ? bar.color_mapper.high : null];
+  });
+}"""
+
+
+def handle_track(page, css="w-Ph"):
+    """(handle centre x, y, track left x, track width) of the slider in ``.{css}``."""
+    track = page.locator(f".{css} .noUi-target").first.bounding_box()
+    handle = page.locator(f".{css} .noUi-handle").first.bounding_box()
+    return (handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2,
+            track["x"], track["width"])
+
+
+def drag(page, fractions, css="w-Ph", step_s=0.016, mid=None):
+    """Press the slider's handle, move it through ``fractions`` of its track (one mouse move per
+    fraction, ``step_s`` apart), release. ``mid``: called with the page halfway through the moves
+    (a screenshot). Returns (pointer down, pointer up) in the page's clock."""
+    cx, cy, left, width = handle_track(page, css)
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    for k, frac in enumerate(fractions):
+        page.mouse.move(left + frac * width, cy)
+        if mid is not None and k == len(fractions) // 2:
+            mid(page)
+        time.sleep(step_s)
+    page.mouse.up()
+
+
+def sweep(start, end, moves):
+    """``moves`` fractions of the track from ``start`` to ``end`` and back (a hand going to and
+    fro), ending at ``end``."""
+    half = max(moves // 2, 1)
+    out = [start + (end - start) * k / half for k in range(1, half + 1)]
+    back = [end - (end - start) * 0.5 * k / half for k in range(1, half + 1)]
+    return out + back + [end]
+
+
+def settled(page, quiet_ms=800.0, timeout=60.0, check=None):
+    """Wait until no image source has changed for ``quiet_ms`` and every change is painted (and
+    ``check(log)`` holds, if given); return the log (COLLECT_JS)."""
+    deadline = time.time() + timeout
+    while True:
+        log = page.evaluate(COLLECT_JS)
+        last = max((c[0] for c in log["changes"]), default=None)
+        painted = all(c[1] is not None for c in log["changes"])
+        if (last is not None and log["now"] - last >= quiet_ms and painted
+                and (check is None or check(log))):
+            return log
+        if time.time() > deadline:
+            raise TimeoutError(f"the page did not settle: {len(log['changes'])} changes")
+        time.sleep(0.1)

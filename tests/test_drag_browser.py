@@ -1,0 +1,103 @@
+"""Maps that follow a dragged slider (issue 38), in headless Chromium: previews while the hand
+moves, the exact maps of the final value on release (app/live.py)."""
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from bench.drag_page import COLLECT_JS, INSTALL_JS, MAP_TEXTS_JS, drag, settled, sweep
+from tests.server import CHROMIUM, chromium_browser, served_app
+
+playwright = pytest.importorskip("playwright.sync_api")
+
+pytestmark = pytest.mark.skipif(
+    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
+    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
+)
+
+
+@pytest.fixture(scope="module")
+def server():
+    with served_app() as (url, _):
+        yield url
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    with chromium_browser() as browser:
+        yield browser
+
+
+def open_maps(chromium, server, errors):
+    pg = chromium.new_page(viewport={"width": 1600, "height": 1000})
+    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.goto(server + "/app")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    pg.wait_for_selector(".w-Ph .noUi-handle", timeout=60_000)
+    time.sleep(1.0)  # the page's first paints and deferred updates
+    assert pg.evaluate(INSTALL_JS, "w-Ph") == 9  # map, preview and veil layers of three maps
+    return pg
+
+
+def expected(value):
+    """The maps' images and texts as the server sends them for P_h = ``value``, computed here."""
+    from app import map_figures
+    from app.compute import Snapshot, compute
+    from app.scenario import Scenario
+
+    sc = Scenario()
+    sc.target.Ph = value
+    return map_figures.prepare(compute(Snapshot.of(sc)))
+
+
+def test_the_maps_follow_a_dragged_slider_and_end_exact(chromium, server, tmp_path):
+    errors = []
+    page = open_maps(chromium, server, errors)
+    start = page.evaluate(COLLECT_JS)["value"]
+    mid = {}
+
+    def middle(pg):  # what the maps say halfway through the drag, and how they look
+        time.sleep(0.3)  # a preview of the hand's place arrives meanwhile
+        mid["texts"] = pg.evaluate(MAP_TEXTS_JS)
+        pg.screenshot(path=str(tmp_path / "mid-drag.png"))
+
+    # ~2.5 s of a hand going right and back, a move every 40 ms
+    drag(page, sweep(0.2, 0.55, 60), step_s=0.04, mid=middle)
+    log = settled(page, check=lambda lg: not any(t[2] for t in page.evaluate(MAP_TEXTS_JS)))
+    value = log["value"]
+    assert value != start
+    down = next(t for t, kind in log["pointer"] if kind == "pointerdown")
+    up = next(t for t, kind in log["pointer"] if kind == "pointerup")
+
+    # during the drag, every map's preview layer was redrawn, with different values, and shown
+    for which in range(3):
+        during = [c for c in log["changes"] if c[2] == "map-preview" and c[3] == which and down < c[0] <= up]
+        assert len({c[4] for c in during}) >= 3, f"map {which}: {len(during)} previews while dragging"
+        assert all(c[5] == c[7] == 100 * 100 for c in during)  # 100² levels, one byte each (uint8)
+    assert all(shown and title.endswith("— preview") and "grid 100 × 100" in caption.replace("\n", " ")
+               for title, caption, shown, *_ in mid["texts"]), mid["texts"]
+    assert (tmp_path / "mid-drag.png").stat().st_size > 10_000
+
+    # after the release: the exact maps of the final value, every one redrawn after the release
+    want = expected(value)
+    texts = page.evaluate(MAP_TEXTS_JS)
+    for which in range(3):
+        images = [c for c in log["changes"] if c[2] == "map-image" and c[3] == which]
+        last = images[-1]
+        assert last[0] > up, f"map {which} was not redrawn after the release"
+        img = want.images[which].astype(float)
+        # the same float32 numbers summed in float64 in the same order: equal but for the
+        # summation's round-off (~1e-16 per term)
+        assert last[5] == int(np.isfinite(img).sum())
+        assert last[4] == pytest.approx(float(np.nansum(img)), rel=1e-9, abs=1e-9)
+        title, caption, shown, low, high = texts[which]
+        assert shown is False and "preview" not in title
+        assert caption.replace(",\n", ", ") == want.panels.captions[which]
+        assert f"P = ({value:g}, " in want.panels.captions[which]
+        # the colour bars (A and B share one) span the final maps' colour ranges
+        assert (low, high) == pytest.approx(want.ranges[which][:2], rel=1e-12)
+    page.close()
+    assert errors == [], f"browser console errors: {errors}"
