@@ -3,6 +3,7 @@
 - :mod:`support.server`: ``panel serve app`` on a free loopback port, and websocket clients' care.
 - :mod:`support.page`: Debian's headless Chromium through Playwright, and reading what a served
   page draws (the live Bokeh documents).
+- :mod:`support.drag`: a slider dragged in Chromium, and each redraw of a map logged in the page.
 - :mod:`support.symbolic`: the independent sympy reference of the field models.
 - :mod:`support.screenshots`: the screenshots in docs/ (``python -m support.screenshots``).
 

@@ -1,21 +1,19 @@
 """Maps that follow a dragged slider (issue 38), in headless Chromium: previews while the hand
 moves, the exact maps of the final value on release (app/live.py)."""
 
-import os
 import time
 
 import numpy as np
 import pytest
 
-from bench.drag_page import COLLECT_JS, INSTALL_JS, MAP_TEXTS_JS, drag, settled, sweep
-from tests.server import CHROMIUM, chromium_browser, served_app
+from support.drag import COLLECT_JS, INSTALL_JS, MAP_TEXTS_JS, drag, settled, sweep
+from support.page import VIEWPORT, chromium_browser, chromium_missing
+from support.server import served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
 
 pytestmark = pytest.mark.skipif(
-    not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
-    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
-)
+    chromium_missing(), reason="Debian's chromium is not installed (CI installs it; there this test must run)")
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +29,7 @@ def chromium():
 
 
 def open_maps(chromium, server, errors):
-    pg = chromium.new_page(viewport={"width": 1600, "height": 1000})
+    pg = chromium.new_page(viewport=VIEWPORT)
     pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     pg.on("pageerror", lambda e: errors.append(str(e)))
     pg.goto(server + "/app")

@@ -1,5 +1,6 @@
 """A slider dragged in Chromium, and what the page drew meanwhile (issue 38): shared by
-tests/test_drag_browser.py and bench/bench_drag.py, for the dashboard and the floor apps.
+tests/test_drag_browser.py and bench/bench_drag.py, for the dashboard and the floor apps
+(bench/floor/drag_*_app.py).
 
 The page is watched through BokehJS's public model API only: every image data source of the
 page (the maps' ``map-image`` and ``map-preview`` sources; the floor apps' images) is connected
