@@ -6,8 +6,10 @@ are the ``shape_*`` parameters of the shared :class:`app.scenario.Scenario` (num
 outside ``ACCEPTED`` with a message, as everywhere; the rules between them are checked by
 :func:`case_of`, and said in the tab). It shows
 
-- the verdict of each filter: line or plane, the main scale ± its Cramér–Rao bound at this pass,
-  the axis and centroid errors beside their bounds (:func:`verdict_text`);
+- whether this pass can size the target (the main scale's Cramér–Rao bound in its two reads and
+  the rigid line's, :attr:`core.shape.bound.ShapeBound.sizable`) and the verdict of the UKF, the
+  NHUKF and the batch fit: line or plane (✓ only when right *and* sizable), main scale, axis and
+  centroid errors beside their bounds (:func:`app.shape_text.verdict_text`);
 - plan (x–y) and side (x–z, z down) views: the true outline, the estimated dipoles of every
   pass and the PCA axes of pass 1, the track and its closest approach (:func:`target_view`);
 - the position error along the pass for the UKF, the NHUKF and Euler's point fix, with the
@@ -29,7 +31,7 @@ import panel as pn
 
 from core.shape import Outliers, Pass, Target
 from core.shape.targets import CLEARANCE, clearance
-from core.shape.bound import shape_bound_curve
+from core.shape.bound import SIZABLE_FRACTION, shape_bound_curve
 from core.shape.cases import CASES
 from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
 from core.shape.model import LAG
@@ -39,6 +41,7 @@ from .compute import KERNEL_LOCK, SHARED, Snapshot
 from .inputs import number_input
 from .maps import alert, with_refusal
 from .scenario import Scenario, Shape
+from .shape_text import verdict_text
 
 hv.extension("bokeh", logo=False)
 
@@ -55,16 +58,18 @@ START_X, SPEED, RATE, SAMPLES = -40.0, 5.0, 5.0, 81
 #: Closest approaches of the bound curve (m): from the target's reach to here.
 CURVE_MAX, CURVE_POINTS = 35.0, 14
 FILTERS = {"ukf": ("UKF", "#1f77b4"), "nhukf": ("NHUKF (Huber)", "#d62728"),
-           "euler": ("Euler point fix", "#7f7f7f")}
+           "fit": ("Batch fit", "#ff7f0e"), "euler": ("Euler point fix", "#7f7f7f")}
 TRUTH = "#000000"
 CAPTION = """
 *Plan and side views*: the true outline (black) and axis (dashed), the 4 dipoles of every pass
 (hover: filter, pass, x, y, z), the PCA axes of pass 1 (a line's u1 over its main scale; a plane's
 u1 and u2), the track (green) and its closest point. *Error along the pass*: the centroid of the 4
 dipoles against the target's (Euler: its point fix), crosses and dotted lines at the outliers.
-*Bound*: the Cramér–Rao σ of the main scale (free 4-dipole model, and a rigid line for a
-cylinder) and of the centroid against the closest approach of a pass in the same direction; the
-star is this pass, the dotted line the true main scale (a bound above it: no sizing).
+The batch fit has one estimate per pass: its square marks its final error. *Bound*: the
+Cramér–Rao σ of the main scale (free 4-dipole model in its two reads, span and second moment,
+and a rigid line for a cylinder) and of the centroid against the closest approach of a pass in
+the same direction; the star is this pass's best read, the black dotted line the true main
+scale, the blue dotted line 10 % of it (below it: sizable).
 """
 
 HELP = """
@@ -75,7 +80,9 @@ the height set here (z is down). A UKF and a robust NHUKF (Huber, u = 1.345) fit
 one common moment (15 states), started from Euler's point fix of the first reading, with seed
 003's window update (three lagged readings, lag 5: the paper's method; the one-sample update is
 offered for comparison); the PCA of the 4 final dipoles reads the axis, the main scale (a
-cylinder's H, a disc's diameter) and the verdict, *line* or *plane*. The bound is the Cramér–Rao σ of the one-sample 4-dipole model at the
+cylinder's H, a disc's diameter) and the verdict, *line* or *plane*. The batch fit fits the same model to the whole pass at once (Huber,
+Levenberg–Marquardt, the gradiometer's array modelled), started from the filters' end states.
+The bound is the Cramér–Rao σ of the one-sample 4-dipole model at the
 true target (free: 15 states; rigid line: 9): errors far above it come from the model (4 dipoles
 for a continuum), not from the noise. See docs/shape.md.
 """
@@ -213,55 +220,6 @@ def _compute(key):
     return dict(case=case, res=res, cpa=cpa, bound=here, cpas=cpas, curve=curve)
 
 
-def _med(a):
-    return float(np.median(a))
-
-
-def verdict_text(out):
-    """The verdict of each filter against the truth and the bound (markdown)."""
-    case, res, b = out["case"], out["res"], out["bound"]
-    t, s = case.target, res.summary["filters"]
-    runs = res.runs
-    what = "cylinder" if t.kind == "line" else "disc"
-    hollow = (f", hollow (cavity H_in {t.inner_height:g} m, R_in {t.inner_radius:g} m)"
-              if t.inner_height else "")
-    lines = [f"**Truth**: {t.kind} ({what} H {t.height:g} m, R {t.radius:g} m{hollow}, "
-             f"{t.positions.shape[0]} cells), main scale {t.main_scale:g} m; closest approach "
-             f"**{out['cpa']:.3g} m**; noise σ {case.noise_g:g} nT/m"
-             + (f"; {runs} passes (medians)" if runs > 1 else "") + "."]
-    rigid = (f", rigid line ± {b.rigid_main_scale_m:.2g} m" if np.isfinite(b.rigid_main_scale_m) else "")
-    for name in ("ukf", "nhukf"):
-        d = s[name]
-        if d["kind"] == "tie":  # as many passes say line as plane: both, with their scales
-            by_kind = d.get("main_scale_by_kind_m", {})
-            kind = "line or plane: a tie (" + ", ".join(
-                f"{k} {100 * d['kind_share'].get(k, 0.0):.0f} %, {by_kind.get(k, float('nan')):.3g} m"
-                for k in ("line", "plane")) + ")"
-            ok, scale = "?", "—"
-        else:
-            share = d["kind_share"].get(d["kind"], 1.0)
-            kind = d["kind"] + (f" ({100 * share:.0f} % of passes)" if runs > 1 else "")
-            ok = "✓" if d["kind"] == t.kind else "✗ (truth: " + t.kind + ")"
-            scale = f"{d['main_scale_m']:.3g} m"
-        lines.append(
-            f"**{FILTERS[name][0]}**: **{kind}** {ok}, main scale **{scale} ± "
-            f"{b.main_scale_m:.2g} m** (bound{rigid}; error {d['main_scale_error_m']:.2g} m), "
-            f"axis {d['axis_error_deg']:.3g}° off (bound ± {b.axis_deg:.2g}°), centroid error "
-            f"{d['centroid_error_m']:.2g} m (bound {b.centroid_m:.2g} m), centroid NEES "
-            f"{d['nees']:.3g} (3 if consistent).")
-    e = s["euler"]
-    lines.append(f"**Euler** (point fix of each reading): final error {e['centroid_error_m']:.2g} m, "
-                 f"peak after {SETTLE} samples {e['peak_error_m']:.2g} m; G ill-conditioned (> "
-                 f"{EULER_FLAG_COND:g}) on {100 * e['flagged_share']:.0f} % of samples.")
-    worst = max(s[n]["main_scale_error_m"] for n in ("ukf", "nhukf"))
-    if worst > 10 * b.main_scale_m:
-        lines.append(f"The main-scale errors are over {int(worst / b.main_scale_m):,}× the bound: "
-                     "noise does not limit them here, the 4-dipole model of a continuum does.")
-    elif b.main_scale_m > t.main_scale / 3:
-        lines.append("The bound is over a third of the main scale: this pass cannot size the target.")
-    return "\n\n".join(lines)
-
-
 #: Farthest (m) the track's closest point may be from the target's box and still be in the views.
 NEAR_TRACK = 4.0
 
@@ -295,7 +253,7 @@ def target_view(out, plane="xy"):
     ax = t.centroid + np.outer([-0.5, 0.5], t.axis) * t.main_scale
     layers.append(hv.Curve(ax[:, [i, j]], a, b, label="true axis").opts(
         color=TRUTH, line_dash="dashed", line_width=1))
-    for name in ("ukf", "nhukf"):
+    for name in ("ukf", "nhukf", "fit"):
         label, color = FILTERS[name]
         label = label.split(" (")[0]  # short: the legend fits under a half-width plot
         dip = res.dipoles[name]  # (R, N, 3)
@@ -349,6 +307,11 @@ def error_view(out):
             k = list(res.outlier_samples)
             layers.append(hv.Scatter((res.platform_x[k], err[k]), x, e, label="outlier samples").opts(
                 color="black", marker="x", size=14, line_width=2, tools=["hover"]))
+    if "fit" in res.errors:  # one estimate from the whole pass: a marker at its end
+        label, color = FILTERS["fit"]
+        layers.append(hv.Scatter(([float(res.platform_x[-1])], [float(np.median(res.errors["fit"]))]),
+                                 x, e, label=f"{label} (whole pass)").opts(
+            color=color, marker="square", size=12, tools=["hover"]))
     for k in res.outlier_samples:
         layers.append(hv.VLine(float(res.platform_x[k])).opts(color="black", line_dash="dotted",
                                                                line_width=1))
@@ -363,8 +326,14 @@ def bound_view(out):
     cpas, curve, b = out["cpas"], out["curve"], out["bound"]
     x = hv.Dimension("cpa", label="closest approach", unit="m")
     y = hv.Dimension("sigma", label="1σ bound", unit="m")
-    layers = [hv.Curve((cpas, [c.main_scale_m for c in curve]), x, y, label="main scale (15 states)").opts(
+    layers = [hv.Curve((cpas, [c.main_scale_m for c in curve]), x, y, label="main scale, span read").opts(
         color="#9467bd", line_width=2, tools=["hover"])]
+    spread = np.array([c.spread_main_scale_m for c in curve])
+    if out["case"].target.kind == "line":  # a disc's two reads are one
+        layers.append(hv.Curve((cpas, spread), x, y, label="main scale, second-moment read").opts(
+            color="#17becf", line_width=2, tools=["hover"]))
+    limit = SIZABLE_FRACTION * out["case"].target.main_scale
+    layers.append(hv.HLine(limit).opts(color="#17becf", line_dash="dotted", line_width=1))
     rigid = np.array([c.rigid_main_scale_m for c in curve])
     if np.isfinite(rigid).all():
         layers.append(hv.Curve((cpas, rigid), x, y, label="main scale (rigid line, 9)").opts(
@@ -373,7 +342,7 @@ def bound_view(out):
         color="#8c564b", line_width=2, tools=["hover"]))
     t = out["case"].target
     layers.append(hv.HLine(t.main_scale).opts(color=TRUTH, line_dash="dotted", line_width=1))
-    layers.append(hv.Scatter(([out["cpa"]], [b.main_scale_m]), x, y, label="this pass").opts(
+    layers.append(hv.Scatter(([out["cpa"]], [b.best_main_scale_m]), x, y, label="this pass").opts(
         color="black", marker="star", size=16, tools=["hover"]))
     return hv.Overlay(layers).opts(
         title="Bound vs closest approach", logx=True, logy=True, legend_position="bottom",

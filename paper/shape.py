@@ -14,17 +14,33 @@ from core.shape import experiment as ex
 from core.shape import model as md
 from core.shape.cases import CASES, FIG5_OUTLIERS, TABLE_LAG
 from core.shape.pca import DISC_FACTOR, PLANE_RATIO
+from core.shape.targets import Target, attitude_matrix
 from core.tracking import unscented as uk
 
 #: Monte-Carlo passes per figure case, and per table row.
 FIG_RUNS = 40
 TABLE_RUNS = 10
 SEED = 3
-#: The spec's quoted main-scale bounds (§11): closest approach (m) -> σ (m).
-SPEC_FIGURES = ((float(np.sqrt(50.0)), 0.004), (15.0, 0.3), (30.0, 17.0))
-#: Closest approaches of the bound's table (m); √50 is seed 003's pass.
-BOUND_CPA = (5.0, float(np.sqrt(50.0)), 10.0, 15.0, 20.0, 30.0)
-FILTERS = ("euler", "ukf", "nhukf")
+#: The spec's quoted main-scale bounds of the second-moment read with the cylinder's axis along
+#: body x (§11): closest approach (m) -> σ (m).
+SPEC_FIGURES = ((float(np.sqrt(50.0)), 0.0043), (15.0, 0.26), (30.0, 17.0))
+#: Relative agreement that counts as reproducing them: they are printed to 2 digits (17 m is
+#: ±3 % by rounding alone).
+SPEC_RTOL = 0.05
+#: Closest approaches of the bound's table (m); √50 is seed 003's pass, 10√2 its pass at
+#: twice the distance (offset 10 m, 10 m above).
+BOUND_CPA = (5.0, float(np.sqrt(50.0)), 10.0, float(10 * np.sqrt(2.0)), 15.0, 20.0, 30.0)
+FILTERS = ("euler", "ukf", "nhukf", "fit")
+#: Estimators with a track (the fit has one estimate per pass).
+TRACKED = ("euler", "ukf", "nhukf")
+
+
+def body_x_target():
+    """Seed 003's cylinder with its axis along body x (R e_x of its attitude), the orientation of
+    the spec's quoted figures: the attitude R · Ry(π/2) as roll, pitch, yaw."""
+    R = attitude_matrix(*Target().attitude) @ np.array([[0.0, 0, 1], [0, 1, 0], [-1, 0, 0]])
+    return Target(attitude=(float(np.arctan2(R[2, 1], R[2, 2])), float(-np.arcsin(R[2, 0])),
+                            float(np.arctan2(R[1, 0], R[0, 0]))))
 
 
 def _row(res):
@@ -34,6 +50,7 @@ def _row(res):
         f = dict(s[name])
         err = res.errors[name]
         f["centroid_error_p90_m"] = float(np.nanpercentile(err[:, -1], 90))
+        f.setdefault("peak_error_m", None)
         if name in res.final:
             f["main_scale_p10_p90_m"] = [float(v) for v in np.percentile(res.final[name]["main_scale_m"], [10, 90])]
             f["axis_error_p90_deg"] = float(np.percentile(res.final[name]["axis_error_deg"], 90))
@@ -56,7 +73,7 @@ def numbers(fig_runs=FIG_RUNS, table_runs=TABLE_RUNS):
             d["outlier_samples"] = hit
             if hit:  # error at the outlier samples, median over runs
                 d["at_outliers_m"] = {n: [float(np.nanmedian(res.errors[n][:, k])) for k in hit]
-                                      for n in FILTERS}
+                                      for n in TRACKED}
             out["one_sample" if row.comparison else "fig"][key] = d
     for key in ("seed003-table1", "seed003-table2", "seed003-table3", "seed003-table4", "seed003-table5"):
         desc, rows = CASES[key]
@@ -67,29 +84,22 @@ def numbers(fig_runs=FIG_RUNS, table_runs=TABLE_RUNS):
                                                "truth_kind": case.target.kind, "lag": case.lag,
                                                "filters": _row(res)})
     out["bound"] = [b.to_dict() for b in bd.shape_bound_curve(BOUND_CPA)]
+    out["bound_body_x"] = [b.to_dict() for b in bd.shape_bound_curve([c for c, _ in SPEC_FIGURES],
+                                                                     body_x_target())]
     return out
 
 
-def _spec_sentence(bound, rslope):
-    """Where the spec's quoted figures fall against the two bounds (computed, not typed)."""
-    at = {c: next(r for r in bound if abs(r["closest_approach_m"] - c) < 1e-6) for c, _ in SPEC_FIGURES}
-    between = all(at[c]["rigid_main_scale_m"] <= v <= at[c]["main_scale_m"] for c, v in SPEC_FIGURES)
-    # reproduced: one model within a factor 1.5 of all three figures
-    close = any(all(abs(np.log(at[c][k] / v)) < np.log(1.5) for c, v in SPEC_FIGURES)
-                for k in ("main_scale_m", "rigid_main_scale_m"))
-    (c1, v1), _, (c3, v3) = SPEC_FIGURES
-    spec_slope = np.log(v3 / v1) / np.log(c3 / c1)
+def _spec_sentence(n):
+    """Whether the spec's quoted figures are reproduced (computed, not typed)."""
+    got = [r["spread_main_scale_m"] for r in n["bound_body_x"]]
+    ok = all(abs(g / v - 1) <= SPEC_RTOL for g, (_, v) in zip(got, SPEC_FIGURES))
     figs = ", ".join(f"{v:g} m at {c:.3g} m" for c, v in SPEC_FIGURES)
-    ours = "; ".join(f"{at[c]['main_scale_m']:.2g} / {at[c]['rigid_main_scale_m']:.2g} m at {c:.3g} m"
-                     for c, _ in SPEC_FIGURES)
+    ours = ", ".join(f"{g:.2g} m" for g in got)
     return (f"**The spec's main-scale figures ({figs}) are "
-            + ("reproduced" if close else "not reproduced")
-            + f"** by either model here (free / rigid line: {ours}); they "
-            f"{'lie between' if between else 'do not lie between'} the two, and their growth "
-            f"(CPA^{spec_slope:.1f}) is near the rigid line's (CPA^{rslope:.1f}). The variants we tried and "
-            "the checks are listed in `docs/shape.md`. The point dipole's bound, "
-            f"{at[SPEC_FIGURES[0][0]]['point_position_m'] * 1e6:.0f} µm on seed 003's pass, is the "
-            "spec's \"~20 µm\".\n")
+            + ("reproduced" if ok else "not reproduced")
+            + f"** by the second-moment read with the cylinder's axis along body x ({ours}, within "
+            f"{100 * SPEC_RTOL:g} %); at seed 003's attitude (axis along body z) the same read gives "
+            "the column above. ")
 
 
 def _m(v, nd=3):
@@ -152,7 +162,7 @@ def section(nums=None):
     for part, upd in (("fig", "window"), ("one_sample", "one-sample update")):
         at = n[part]["seed003-fig5"]["at_outliers_m"]
         w(f"At Fig. 5's outlier samples ({upd}) the median position error is "
-          + "; ".join(f"{nm.upper()} " + ", ".join(_m(e) for e in at[nm]) + " m" for nm in FILTERS)
+          + "; ".join(f"{nm.upper()} " + ", ".join(_m(e) for e in at[nm]) + " m" for nm in TRACKED)
           + " (x = −20, −10, 0 m).\n")
     o5 = n["one_sample"]["seed003-fig5"]["nhukf"]
     w(f"Locating holds up: both filters end a few centimetres from the centroid (median "
@@ -177,18 +187,30 @@ def section(nums=None):
       f"axis is {o5['axis_error_deg']:.0f}° off. (The one-sample filter is inconsistent here too, "
       "from the model mismatch, and consistent on a truth that is itself 4 dipoles: "
       "`tests/test_shape.py`.) Every case therefore runs the paper's window.\n")
+    fit4, fit5 = f4["fit"], f5["fit"]
+    w("**Beyond the paper: the batch fit** (`core/shape/fit.py`). A survey is processed after the "
+      "pass, so the 4-dipole model can be fitted to every reading at once, each once: Huber's "
+      "M-estimate by Levenberg–Marquardt, the 0.5 m array modelled, started from the filters' end "
+      "states, its covariance the inverse Fisher information times the residuals' variance "
+      f"factor. Fig. 4: axis {fit4['axis_error_deg']:.3f}°, main scale {_m(fit4['main_scale_m'], 3)} m "
+      f"(error {_m(fit4['main_scale_error_m'], 3)} m), centroid {_m(fit4['centroid_error_m'], 4)} m, "
+      f"NEES {fit4['nees']:.2g} (99 % band {fit4['nees_band'][0]:.2g}–{fit4['nees_band'][1]:.2g}); "
+      f"Fig. 5: axis {fit5['axis_error_deg']:.3f}°, main scale {_m(fit5['main_scale_m'], 3)} m, NEES "
+      f"{fit5['nees']:.2g}: the paper's < 1–2° axis, which neither filter reaches, and a covariance "
+      "that is not optimistic. The fit's row is the same whichever update the filters that start "
+      "it used.\n")
     w(f"### Tables 1–5 (our rows; {n.get('table_runs', TABLE_RUNS)} passes per row, lagged window "
       f"n = {TABLE_LAG}, medians; the main scale is the median over the runs of the majority "
       "verdict, — on a tie)\n")
     w("| table | row | truth | UKF scale (m) / axis (°) / verdict | NHUKF scale (m) / axis (°) / verdict "
-      "| NHUKF centroid error (m) |")
-    w("|---|---|---|---|---|---|")
+      "| batch fit scale (m) / axis (°) / verdict | NHUKF centroid error (m) |")
+    w("|---|---|---|---|---|---|---|")
     for key, t in n["tables"].items():
         for r in t["rows"]:
             cell = lambda v: f"{_m(v['main_scale_m'], 2)} / {v['axis_error_deg']:.1f} / {v['kind']}"
             f = r["filters"]
             w(f"| {key[-1]} | {r['label']} | {r['truth_scale_m']:g} m, {r['truth_kind']} | {cell(f['ukf'])} "
-              f"| {cell(f['nhukf'])} | {_m(f['nhukf']['centroid_error_m'])} |")
+              f"| {cell(f['nhukf'])} | {cell(f['fit'])} | {_m(f['nhukf']['centroid_error_m'])} |")
     w("")
 
     wrong = [f"{k[-1]}: {r['label']}" for k, t in n["tables"].items() for r in t["rows"]
@@ -203,34 +225,45 @@ def section(nums=None):
     w("### What the bound says\n")
     w("Cramér–Rao bound of the one-sample 15-state model at the target's own 4-dipole "
       "representation (dipoles at the centres of 4 equal segments of the axis, M/4 each), σ = "
-      "0.01 nT/m, the same pass moved to each closest approach (`core.shape.bound`); beside it "
-      "the bound if the 4 dipoles were a rigid evenly spaced line (9 parameters), and the "
-      "position bound of a point dipole of the same total moment at the centroid (6 parameters):\n")
-    w("| closest approach (m) | centroid (m) | main scale (m) | axis (°) | rigid line: centroid (m) "
-      "| main scale (m) | axis (°) | point dipole: position (m) |")
-    w("|---|---|---|---|---|---|---|---|")
+      "0.01 nT/m, the same pass moved to each closest approach (`core.shape.bound`). The main "
+      "scale has two reads of the 4 dipoles: their span along the axis (eq. (18)) and their "
+      "second moment along it (√(12 λ1 N/(N+1))); beside them the bound if the 4 dipoles were a "
+      "rigid evenly spaced line (9 parameters), the position bound of a point dipole of the same "
+      f"total moment (6 parameters), and the verdict: **sizable** when the read that sizes best "
+      f"has σ ≤ {100 * bd.SIZABLE_FRACTION:g} % of the main scale:\n")
+    w("| closest approach (m) | centroid (m) | main scale, span read (m) | main scale, second moment (m) "
+      "| axis (°) | rigid line: main scale (m) | axis (°) | point dipole: position (m) | sizable |")
+    w("|---|---|---|---|---|---|---|---|---|")
     for r in b:
         w(f"| {r['closest_approach_m']:.2f} | {r['centroid_m']:.2g} | {r['main_scale_m']:.2g} | "
-          f"{r['axis_deg']:.2g} | {r['rigid_centroid_m']:.2g} | {r['rigid_main_scale_m']:.2g} | "
-          f"{r['rigid_axis_deg']:.2g} | {r['point_position_m']:.2g} |")
+          f"{r['spread_main_scale_m']:.2g} | {r['axis_deg']:.2g} | {r['rigid_main_scale_m']:.2g} | "
+          f"{r['rigid_axis_deg']:.2g} | {r['point_position_m']:.2g} | {'yes' if r['sizable'] else 'no'} |")
     b7 = next(r for r in b if abs(r["closest_approach_m"] - np.sqrt(50)) < 1e-6)
+    b14 = next(r for r in b if abs(r["closest_approach_m"] - 10 * np.sqrt(2)) < 1e-6)
     b15 = next(r for r in b if abs(r["closest_approach_m"] - 15) < 1e-6)
     b30 = next(r for r in b if abs(r["closest_approach_m"] - 30) < 1e-6)
     slope = np.log(b30["main_scale_m"] / b15["main_scale_m"]) / np.log(2.0)
+    sslope = np.log(b30["spread_main_scale_m"] / b15["spread_main_scale_m"]) / np.log(2.0)
     rslope = np.log(b30["rigid_main_scale_m"] / b15["rigid_main_scale_m"]) / np.log(2.0)
     w("")
-    w(f"On seed 003's pass noise allows the main scale to {b7['main_scale_m'] * 1e3:.1f} mm, the "
-      f"centroid to {b7['centroid_m'] * 1e3:.2f} mm and a point dipole's position to "
+    w(f"On seed 003's pass noise allows the main scale to {b7['main_scale_m'] * 1e3:.1f} mm (span) "
+      f"or {b7['spread_main_scale_m'] * 1e3:.1f} mm (second moment), the centroid to "
+      f"{b7['centroid_m'] * 1e3:.2f} mm and a point dipole's position to "
       f"{b7['point_position_m'] * 1e6:.0f} µm, while the NHUKF's median errors are "
       f"{_m(lag['main_scale_error_m'], 2)} m (main scale, lagged window; "
       f"{_m(one['main_scale_error_m'], 2)} m one-sample) and {_m(lag['centroid_error_m'])} m "
-      "(centroid): the paper's 0.1–0.3 m are model "
-      "mismatch (4 dipoles for 2400 cells, and a filter that linearises a nearly unobservable "
-      "spread), not noise. Shape is a near-field capability: between 15 and 30 m the main "
-      f"scale's bound grows as CPA^{slope:.1f} (rigid line: CPA^{rslope:.1f}), to "
-      f"{b15['main_scale_m']:.2g} m at 15 m and {b30['main_scale_m']:.2g} m at 30 m for the free "
-      f"model ({b15['rigid_main_scale_m']:.2g} m and {b30['rigid_main_scale_m']:.2g} m for the "
-      "rigid line). " + _spec_sentence(b, rslope))
+      f"(centroid), and the batch fit's {_m(fit4['main_scale_error_m'], 2)} m: the paper's "
+      "0.1–0.3 m are model mismatch (4 dipoles for 2400 cells), not noise. Shape is a near-field "
+      f"capability: between 15 and 30 m the span read's bound grows as CPA^{slope:.1f} (it hangs on "
+      "the end dipoles' spacing, a fourth-order term of the field), the second moment's as "
+      f"CPA^{sslope:.1f}, the rigid line's as CPA^{rslope:.1f}. **How the verdict is decided**: "
+      f"by the read that sizes best, not the span alone. At twice seed 003's distance (offset 10 m, "
+      f"10 m above, {b14['closest_approach_m']:.1f} m) the span read's σ is "
+      f"{b14['main_scale_m']:.2g} m but the second moment's {b14['spread_main_scale_m'] * 100:.1f} cm: "
+      "sizable, and the filters and the fit do size the cylinder there; the rule is checked "
+      "against their Monte-Carlo on both sides of its edge (`tests/test_shape_sizable.py`; "
+      "`python -m core.shape --cpa-sweep` draws the curve and answers how close the pass must "
+      "be). " + _spec_sentence(n) + "\n")
     return "\n".join(L)
 
 

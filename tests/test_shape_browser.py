@@ -1,5 +1,6 @@
 """The dashboard's Shape tab in headless Chromium: it draws its four plots with units, and a
-changed lateral offset changes the closest approach, the verdict and the bound."""
+changed lateral offset changes the closest approach, the verdict and the bound (no ✓ where the
+pass cannot size the target)."""
 
 import html
 import os
@@ -54,8 +55,8 @@ def _wait(pg, predicate, timeout=120.0):
 
 
 def _bound(text):
-    """The NHUKF's 'main scale X m ± B m' bound B (m) and the closest approach (m)."""
-    b = re.search(r"NHUKF \(Huber\): .*?main scale [\d.e+-]+ m ± ([\d.e+-]+) m", text)
+    """The main scale's bound of the span read, 'span read ± B m' (m), and the closest approach (m)."""
+    b = re.search(r"span read ± ([\d.e+-]+) m", text)
     c = re.search(r"closest approach ([\d.e+-]+) m", text)
     return float(b.group(1)), float(c.group(1))
 
@@ -73,7 +74,8 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
         for label in ("x (m)", "y (m)", "z (down) (m)", "platform x (m)", "position error (m)",
                       "closest approach (m)", "1σ bound (m)"):
             assert label in labels, labels
-        assert "NHUKF (Huber): line" in text
+        assert "NHUKF (Huber): line ✓" in text and "Batch fit (whole pass): line ✓" in text
+        assert "This pass can size the target" in text
         bound0, cpa0 = _bound(text)
         assert cpa0 == pytest.approx(7.07, abs=0.01)
         pg.wait_for_timeout(500)
@@ -84,8 +86,15 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
         _, text = _wait(pg, lambda got, text: "closest approach 15.8 m" in text)
         bound1, cpa1 = _bound(text)
         assert cpa1 == pytest.approx(15.8, abs=0.05)
-        assert bound1 > 100 * bound0  # the bound grows steeply with the closest approach
-        assert "cannot size the target" in text
+        assert bound1 > 100 * bound0  # the span read's bound grows steeply with the closest approach
+        assert "This pass can size the target" in text  # the second-moment read still sizes it
+        box.fill("40")
+        box.press("Enter")
+        _, text = _wait(pg, lambda got, text: "closest approach 40.3 m" in text)
+        assert "This pass cannot size the target" in text and "line ✓" not in text
+        box.fill("15")
+        box.press("Enter")
+        _, text = _wait(pg, lambda got, text: "closest approach 15.8 m" in text)
         assert "shape_offset=15" in pg.evaluate("() => window.location.search")
         runs = pg.locator(".w-shape_runs input").first  # 20 passes: long enough to see it busy
         runs.fill("20")

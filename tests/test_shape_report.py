@@ -26,20 +26,31 @@ def test_section_has_its_parts(nums):
     for key, t in nums["tables"].items():
         for r in t["rows"]:
             assert f"| {key[-1]} | {r['label']} |" in text, r["label"]
-    # the bound's table: header and one row per closest approach, point dipole column
-    assert "| closest approach (m) | centroid (m) | main scale (m) | axis (°) |" in text
-    assert "point dipole: position (m) |" in text
-    rows = re.findall(r"^\| (\d+\.\d\d) \|(?: [^|]+ \|){7}$", text, flags=re.M)
-    assert [float(r) for r in rows] == pytest.approx([round(c, 2) for c in ps.BOUND_CPA])
-    # the spec's figures: stated as not reproduced, with the point dipole's ~20 µm
-    assert "are not reproduced** by either model here" in text
-    assert re.search(r"The point dipole's bound, (\d+) µm on seed 003's pass", text)
+    # the bound's table: header and one row per closest approach, both reads, the verdict
+    assert ("| closest approach (m) | centroid (m) | main scale, span read (m) | main scale, second "
+            "moment (m) |") in text
+    assert "point dipole: position (m) | sizable |" in text
+    rows = re.findall(r"^\| (\d+\.\d\d) \|(?: [^|]+ \|){7} (yes|no) \|$", text, flags=re.M)
+    assert [float(r[0]) for r in rows] == pytest.approx([round(c, 2) for c in ps.BOUND_CPA])
+    assert [r[1] for r in rows] == ["yes"] * 5 + ["no"] * 2  # sizable to 15 m, not at 20 and 30
+    # the spec's figures: reproduced by the second-moment read with the axis along body x
+    assert "are reproduced** by the second-moment read with the cylinder's axis along body x" in text
+    assert re.search(r"a point dipole's position to (\d+) µm", text)
+    # the one-sample update beside the window, and the batch fit, for both figures
+    for label in ("Fig. 4", "Fig. 5"):
+        assert f"| {label} | window (lag 5) | NHUKF |" in text
+        assert f"| {label} | one sample (comparison) | NHUKF |" in text
+        assert f"| {label} | window (lag 5) | FIT |" in text
+    assert "**Beyond the paper: the batch fit**" in text
     assert not re.search(r"\bnan\b", text, flags=re.I)  # a tie's scale prints as —
 
 
 def test_numbers_run_each_case_with_its_own_update(nums):
-    """The tables use cases.py's lag (5), as the CLI does; the bound has the point dipole."""
+    """Every case uses cases.py's lag (5), as the CLI does, the figures' comparison rows one
+    sample; the bound has the point dipole."""
     assert nums["fig_runs"] == 2 and nums["table_runs"] == 1
     assert {r["lag"] for t in nums["tables"].values() for r in t["rows"]} == {5}
+    assert {d["lag"] for d in nums["fig"].values()} == {5}
+    assert {d["lag"] for d in nums["one_sample"].values()} == {0}
     b7 = next(r for r in nums["bound"] if abs(r["closest_approach_m"] - np.sqrt(50)) < 1e-6)
     assert 15e-6 < b7["point_position_m"] < 25e-6  # the spec's "~20 µm"

@@ -107,12 +107,14 @@ def test_verdict_and_bound_are_cores_and_the_bound_grows_with_the_offset():
     assert near["cpa"] == pytest.approx(np.hypot(5.0, 5.0), abs=1e-9)  # fig4: y 5 m, 5 m above
     text = shape.verdict_text(near)
     s = near["res"].summary["filters"]["nhukf"]
-    assert f"{s['main_scale_m']:.3g} m ± {b.main_scale_m:.2g} m" in text
+    assert f"main scale **{s['main_scale_m']:.3g} m**" in text
+    assert f"span read ± {b.main_scale_m:.2g} m, second-moment read ± {b.spread_main_scale_m:.2g} m" in text
     far_scenario = Scenario()
     far_scenario.shape.shape_offset = 20.0
     far = shape.compute(shape.key_of(far_scenario))
     assert far["cpa"] > near["cpa"]
     assert far["bound"].main_scale_m > 100 * near["bound"].main_scale_m  # CPA^7.6: docs/shape.md
+    assert far["bound"].spread_main_scale_m < far["bound"].main_scale_m / 10
     # the curve is increasing and holds the current pass
     ms = [c.main_scale_m for c in far["curve"]]
     assert np.all(np.diff(ms) > 0) and far["cpa"] in far["cpas"]
@@ -149,3 +151,37 @@ def test_a_tie_between_line_and_plane_is_shown_as_such_with_both_scales():
     text = shape.verdict_text(tied)
     assert "a tie (line 50 %, 3.1 m, plane 50 %, 1.2 m)" in text
     assert "nan" not in text and "100 %" not in text
+
+
+def test_the_defaults_run_the_papers_window_and_show_the_batch_fit():
+    """The tab's default update is seed 003's window (the one-sample update is a choice, and its
+    Fig. 4 preset a comparison); the verdict, the plan view and the error view show the batch
+    fit beside the filters, and say how the verdict is decided."""
+    s = Scenario()
+    assert s.shape.shape_window == "seed 003 window (lag 5)"
+    assert "seed003-fig4 (one-sample update, for comparison)" in shape.PRESETS
+    out = shape.compute(shape.key_of(s))
+    assert out["case"].lag == 5
+    text = shape.verdict_text(out)
+    assert "filters: seed 003's window update (lag 5)" in text
+    assert "**Batch fit (whole pass)**: **line** ✓" in text and "**This pass can size the target**" in text
+    assert "How the verdict is decided" in text
+    v = shape.views(shape.key_of(s))
+    assert "Batch fit dipoles" in [el.label for el in v["plan"]]
+    assert "Batch fit (whole pass)" in [el.label for el in v["error"]]
+    assert "main scale, second-moment read" in [el.label for el in v["bound"]]
+
+
+def test_a_pass_that_cannot_size_the_target_gets_no_tick():
+    """Issue 40, defect 10: at a lateral offset of 60 m the page showed "line ✓, main scale
+    2.89 m ± 1.8e+05 m" beside "this pass cannot size the target". Now nothing gets a ✓ there,
+    and the text says why, with both reads' bounds; at the paper's pass the right kind does."""
+    s = Scenario()
+    s.shape.shape_offset = 60.0
+    out = shape.compute(shape.key_of(s))
+    assert not out["bound"].sizable
+    text = shape.verdict_text(out)
+    assert "✓" not in text.replace("Only then does a verdict get a ✓", "") and "** ✓" not in text
+    assert "**This pass cannot size the target**" in text and "second-moment read ±" in text
+    near = shape.verdict_text(shape.compute(shape.key_of(Scenario())))
+    assert near.count("** ✓") >= 2  # at least the NHUKF and the fit: right kind and sizable
