@@ -1,18 +1,23 @@
-"""Benchmark of issue 26 (one measurement model, magnetic kinds), same run:
+"""Benchmark of one engine for every sensor kind (issue 36), before and after, in one run.
 
-- the electric 400 × 400 map (log10|det Γ|, the paper's) and CRLB map (core.crlb_maps) of this
-  core against the core before the change (commit 47b19e9), each version in its own interpreter
-  kept alive, the two called alternately call by call (order swapped every time), so that both
-  see the same machine load; target: within 10 %. Reported: the medians, the minima (load only
-  ever adds time) and the median of the paired ratios (each call against its neighbour);
-- the magnetic BG CRLB map against the electric CRLB map of this core (each BG call paired with
-  an electric call next to it); target: ≤ 2×.
+The maps a user gets on the Maps tab, ``core.evaluate_map(plane, dual_station(100, 15), …,
+measure=…, sensor=…)`` on the page's plane (±300 m, 120 m deep) at 200² and 400², for the
+electric kind and the magnetic kinds B, G and BG (moment (1e3, −2e3, 5e2) A·m²), the measures
+``crlb_position`` and ``d_optimal``; and the region criterion ``core.layout_criterion``
+(``mean_dopt`` on a 41² region) of each kind.
 
-    python -m bench.bench_sensor_kinds [--base DIR] [--n 400] [--repeat 15]
+"Before" is the core of a base commit (default ``ecd374c``, the last one with the magnetic kinds
+on numpy), "now" this tree; each runs in its own interpreter kept alive, the two called
+alternately call by call (order swapped each time), so that both see the same machine load.
+Reported per task: the medians over ``repeat`` calls after a warm-up call (compilation and
+caches excluded), the ratio now/before, and each magnetic kind's ratio to the electric kind of
+the same version. Targets: the BG (and B, G) CRLB map ≤ 1.5× the electric one; the electric
+maps no slower than before.
 
-``--base`` is a checkout of the old commit (default: ``git archive 47b19e9`` into
-``$TMPDIR/bench-base-47b19e9``, kept between runs so that its kernels compile once). Medians
-over ``repeat`` calls after a warm-up call (compilation and caches excluded).
+    python -m bench.bench_sensor_kinds [--base DIR] [--n 200 400] [--repeat 5]
+
+``--base`` is a checkout of the base commit (default: ``git archive`` of it into
+``$TMPDIR/bench-base-<commit>``, kept between runs so that its kernels compile once).
 """
 
 from __future__ import annotations
@@ -23,41 +28,47 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-BASE_COMMIT = "47b19e9"
+BASE_COMMIT = "ecd374c"
+KINDS = ("E", "B", "G", "BG")
+MEASURES = ("crlb_position", "d_optimal")
 
 WORKER = r"""
 import sys, time
 import core
-n = int(sys.argv[1])
-plane = core.Plane("xy", (-300, 300), (-300, 300), 120.0, n)
 st = core.dual_station(100, 15)
-mplane = core.Plane("xy", (-60, 60), (-60, 60), 15.0, n)
-TASKS = {
-    "map": lambda: core.evaluate_map(plane, st, velocity=(2, 2), moments=(100, 20)),
-    "crlb_map": lambda: core.crlb_maps(plane, st, velocity=(2, 2), moments=(100, 20)),
-    "bg_crlb_map": lambda: core.crlb_maps(mplane, [[0.0, 0.0, 0.0]], velocity=(2, 2),
-                                          moments=(1e3, -2e3, 5e2), sensor="BG"),
-}
+MOM = {"E": (100, 20), "B": (1e3, -2e3, 5e2), "G": (1e3, -2e3, 5e2), "BG": (1e3, -2e3, 5e2)}
+region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 41)
+
+def task(name):
+    what, kind, n = name.split(":")
+    sensor = None if kind == "E" else kind
+    if what == "criterion":
+        return lambda: core.layout_criterion(st, region, moments=MOM[kind], sensor=sensor)
+    plane = core.Plane("xy", (-300, 300), (-300, 300), 120.0, int(n))
+    return lambda: core.evaluate_map(plane, st, velocity=(2, 2), moments=MOM[kind], measure=what,
+                                     sensor=sensor)
+
 print("ready", flush=True)
+cache = {}
 for line in sys.stdin:
-    task = line.strip()
+    name = line.strip()
+    fn = cache.setdefault(name, task(name))
     t0 = time.perf_counter()
-    TASKS[task]()
+    fn()
     print(time.perf_counter() - t0, flush=True)
 """
 
 
 class Worker:
     """One interpreter of one version, kept alive: it runs a task per request and says how long
-    it took (the call only; imports and compilation happen before the first timed call)."""
+    it took (the call only; imports and compilation happen in the warm-up call)."""
 
-    def __init__(self, root, n):
+    def __init__(self, root):
         env = dict(os.environ, PYTHONPATH=str(root))
-        self.proc = subprocess.Popen([sys.executable, "-c", WORKER, str(n)], cwd=root, env=env,
+        self.proc = subprocess.Popen([sys.executable, "-c", WORKER], cwd=root, env=env,
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         if self.proc.stdout.readline().strip() != "ready":
             raise RuntimeError(f"the worker of {root} did not start")
@@ -72,52 +83,54 @@ class Worker:
         self.proc.wait()
 
 
+def base_checkout(commit):
+    """A checkout of ``commit`` under the temporary directory (made once, kept)."""
+    base = Path(tempfile.gettempdir()) / f"bench-base-{commit}"
+    if not (base / "core").is_dir():
+        base.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", commit], check=True,
+                                 capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(base)], input=archive, check=True)
+    return base
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", type=Path, default=None)
-    ap.add_argument("--n", type=int, default=400)
-    ap.add_argument("--repeat", type=int, default=15, help="timed calls of each task per version")
+    ap.add_argument("--n", type=int, nargs="+", default=[200, 400])
+    ap.add_argument("--repeat", type=int, default=5, help="timed calls of each task per version")
     args = ap.parse_args(argv)
-    base = args.base
-    if base is None:
-        base = Path(tempfile.gettempdir()) / f"bench-base-{BASE_COMMIT}"
-        if not (base / "core").is_dir():
-            base.mkdir(parents=True, exist_ok=True)
-            archive = subprocess.run(["git", "-C", str(ROOT), "archive", BASE_COMMIT], check=True,
-                                     capture_output=True).stdout
-            subprocess.run(["tar", "-x", "-C", str(base)], input=archive, check=True)
-    old, new = Worker(base, args.n), Worker(ROOT, args.n)
-    times = {(v, k): [] for v in ("old", "new") for k in ("map", "crlb_map")}
-    times["new", "bg_crlb_map"], times["new", "crlb_map_bg"] = [], []
+    base = args.base or base_checkout(BASE_COMMIT)
+    tasks = [f"{m}:{k}:{n}" for n in args.n for m in MEASURES for k in KINDS]
+    tasks += [f"criterion:{k}:0" for k in KINDS]
+    old, new = Worker(base), Worker(ROOT)
+    times = {(v, t): [] for v in ("before", "now") for t in tasks}
     try:
-        for task in ("map", "crlb_map"):
+        for task in tasks:
             old.time(task)  # warm-up: compilation (or the cache's load) and first-touch memory
             new.time(task)
-        new.time("bg_crlb_map")
         for i in range(args.repeat):  # call by call, the order swapped every time: same load
-            for task in ("map", "crlb_map"):
-                pair = ((old, "old"), (new, "new")) if i % 2 == 0 else ((new, "new"), (old, "old"))
-                for worker, name in pair:
-                    times[name, task].append(worker.time(task))
-            times["new", "bg_crlb_map"].append(new.time("bg_crlb_map"))
-            times["new", "crlb_map_bg"].append(new.time("crlb_map"))  # its electric neighbour
+            for task in tasks:
+                pair = (((old, "before"), (new, "now")) if i % 2 == 0
+                        else ((new, "now"), (old, "before")))
+                for worker, version in pair:
+                    times[version, task].append(worker.time(task))
     finally:
         old.close()
         new.close()
-    med = statistics.median
-    print(f"{args.n} × {args.n}, {args.repeat} calls per task and version, alternated call by call "
-          f"({time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores; load {os.getloadavg()[0]:.1f})")
-    print("                     median before → now (ratio)     min before → now (ratio)   "
-          "median of paired ratios")
-    for k in ("map", "crlb_map"):
-        o, w = times["old", k], times["new", k]
-        paired = med(b / a for a, b in zip(o, w))
-        print(f"electric {k:9s}: {1e3 * med(o):8.1f} → {1e3 * med(w):8.1f} ms ({med(w) / med(o):.3f})"
-              f"   {1e3 * min(o):8.1f} → {1e3 * min(w):8.1f} ms ({min(w) / min(o):.3f})   {paired:.3f}")
-    b, e = times["new", "bg_crlb_map"], times["new", "crlb_map_bg"]
-    paired = med(x / y for x, y in zip(b, e))
-    print(f"magnetic BG CRLB map: {1e3 * med(b):8.1f} ms = {med(b) / med(e):.2f} × the electric "
-          f"CRLB map (min {min(b) / min(e):.2f}×, paired {paired:.2f}×)")
+    med = {key: statistics.median(v) for key, v in times.items()}
+    print(f"dual station (d = 15 m, h = 100 m), plane ±300 m at 120 m; medians of {args.repeat} "
+          f"calls per task and version, alternated call by call; {os.cpu_count()} cores, load "
+          f"{os.getloadavg()[0]:.1f}; before = {BASE_COMMIT if args.base is None else base}")
+    print(f"{'task':26s} {'before ms':>10s} {'now ms':>9s} {'now/before':>10s} "
+          f"{'before ×E':>10s} {'now ×E':>8s}")
+    for task in tasks:
+        what, kind, n = task.split(":")
+        e_task = f"{what}:E:{n}"
+        b, w = med["before", task], med["now", task]
+        rel_b, rel_w = b / med["before", e_task], w / med["now", e_task]
+        label = f"{what} {kind}" + ("" if what == "criterion" else f" {n}²")
+        print(f"{label:26s} {1e3 * b:10.1f} {1e3 * w:9.1f} {w / b:10.2f} {rel_b:10.2f} {rel_w:8.2f}")
 
 
 if __name__ == "__main__":

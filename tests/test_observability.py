@@ -294,7 +294,7 @@ def test_map_flag_never_disagrees_with_observable_rank(stations, known, model, m
 def test_kernel_bracket_holds_and_undecided_points_go_to_the_svd(rng):
     """rcond ≤ σ_min/σ_max ≤ n·rcond (core.kernels); where the bracket cannot decide, the flag
     is the SVD's verdict (forced here by handing _full_rank an undecided rcond everywhere)."""
-    from core.kernels import gamma as kernels
+    from core.kernels import measures as kernels
     from core.observability.gamma import _full_rank, _options
 
     stations = core.dual_station(100, 2)
@@ -302,7 +302,7 @@ def test_kernel_bracket_holds_and_undecided_points_go_to_the_svd(rng):
                              core.Plane("xy", (-9e3, 9e3), (-9e3, 9e3), 150.0, 15)
                              .states((2, 2), (100, 20)).reshape(-1, 7)])
     for steps in (None, 3):
-        options, n_rows = _options(stations, 1.0, 4.0, "exact", (), steps)
+        options, n_rows, _ = _options(stations, 1.0, core.Sensor("E"), (), steps)
         rc = np.empty(len(states))
         if steps is None:
             kernels.square_measures(states, *options, np.empty(len(states)), np.empty(len(states)), rc)

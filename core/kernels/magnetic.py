@@ -239,3 +239,165 @@ def measurement_rows(states, stations, with_b, with_g, baseline, dt, h_out, j_ou
 def measurement_rows_serial(states, stations, with_b, with_g, baseline, dt, h_out, j_out):
     """:func:`measurement_rows` on the calling thread (for at most :data:`BLOCK` points)."""
     _rows_block(states, stations, with_b, with_g, baseline, dt, h_out, j_out, 0, states.shape[0])
+
+
+# --- Rows for the map kernels (core.kernels.gamma), LANES states side by side ------------------
+#: Kernel codes of the magnetic kinds: the rows code of :mod:`core.kernels.gamma`, after the
+#: electric field models (0 exact, 1 paper). The one place where a kind picks its rows.
+CODE_B, CODE_G, CODE_BG = 2, 3, 4
+#: Workspace rows of one component in the lane kernels: its value, then ∂/∂ the 8 states.
+LANE_ROW = 1 + N_STATE
+#: Most components of one station (BG: 3 + 5).
+MAX_COMPONENTS = 8
+#: Scratch rows of :func:`rows_lanes`: two sets (the station's point, one magnetometer of a
+#: gradiometer) of r (3), m (3), m·r, 100/r³, 100/r⁵, 100/r⁷, 100/r⁹.
+LANE_SCRATCH = 22
+#: Entries of the lane parameters ``params``: [near, baseline L, 1/noise of B, 1/noise of G].
+N_PARAMS = 4
+
+
+@nb.njit(inline="always", **JIT)
+def n_components(code):
+    """Components per station of a magnetic rows code: 3 (B), 5 (G), 8 (BG)."""
+    return 3 if code == CODE_B else (5 if code == CODE_G else 8)
+
+
+@nb.njit(inline="always", **JIT)
+def _powers_lanes(w, sc, lanes):
+    """w[sc+6:sc+11] = m·r, 100/r³, 100/r⁵, 100/r⁷, 100/r⁹ from r = w[sc:sc+3], m = w[sc+3:sc+6]."""
+    for lane in range(lanes):
+        rx, ry, rz = w[sc, lane], w[sc + 1, lane], w[sc + 2, lane]
+        inv2 = 1.0 / (rx * rx + ry * ry + rz * rz)
+        c3 = MU0_4PI * inv2 * math.sqrt(inv2)
+        w[sc + 6, lane] = w[sc + 3, lane] * rx + w[sc + 4, lane] * ry + w[sc + 5, lane] * rz
+        w[sc + 7, lane] = c3
+        w[sc + 8, lane] = c3 * inv2
+        w[sc + 9, lane] = c3 * inv2 * inv2
+        w[sc + 10, lane] = c3 * inv2 * inv2 * inv2
+
+
+@nb.njit(inline="always", **JIT)
+def _b_rows_lanes(w, sc, dst, lanes, weight):
+    """Rows of B (3, stride LANE_ROW) at w[dst…], times ``weight``: B_i, ∂B_i/∂x_k = −G_ik,
+    ∂B_i/∂v = 0, ∂B_i/∂m_k = 100 (3 r_i r_k / r⁵ − δ_ik / r³)."""
+    for i in range(3):
+        d = dst + LANE_ROW * i
+        for lane in range(lanes):
+            q, c3, c5 = w[sc + 6, lane], w[sc + 7, lane], w[sc + 8, lane]
+            w[d, lane] = weight * (3.0 * q * w[sc + i, lane] * c5 - w[sc + 3 + i, lane] * c3)
+            w[d + 4, lane] = 0.0
+            w[d + 5, lane] = 0.0
+        for k in range(3):
+            dik = 1.0 if i == k else 0.0
+            for lane in range(lanes):
+                ri, rk = w[sc + i, lane], w[sc + k, lane]
+                mi, mk = w[sc + 3 + i, lane], w[sc + 3 + k, lane]
+                q, c3, c5, c7 = w[sc + 6, lane], w[sc + 7, lane], w[sc + 8, lane], w[sc + 9, lane]
+                g_ik = 3.0 * c5 * (mi * rk + mk * ri + q * dik) - 15.0 * c7 * q * ri * rk
+                w[d + 1 + k, lane] = -weight * g_ik  # dB_i/dx_k
+                w[d + 6 + k, lane] = weight * (3.0 * ri * rk * c5 - dik * c3)  # dB_i/dm_k
+
+
+@nb.njit(inline="always", **JIT)
+def _g_rows_lanes(w, sc, dst, lanes, weight):
+    """Rows of the point tensor's five components (stride LANE_ROW) at w[dst…], times
+    ``weight``: G_ij, ∂G_ij/∂x_k = −T_ijk, ∂/∂v = 0, ∂G_ij/∂m_k (module notes)."""
+    for c in range(5):
+        i, j = G_PAIRS[c]
+        d = dst + LANE_ROW * c
+        dij = 1.0 if i == j else 0.0
+        for lane in range(lanes):
+            ri, rj = w[sc + i, lane], w[sc + j, lane]
+            mi, mj = w[sc + 3 + i, lane], w[sc + 3 + j, lane]
+            q, c5, c7 = w[sc + 6, lane], w[sc + 8, lane], w[sc + 9, lane]
+            w[d, lane] = weight * (3.0 * c5 * (mi * rj + mj * ri + q * dij) - 15.0 * c7 * q * ri * rj)
+            w[d + 4, lane] = 0.0
+            w[d + 5, lane] = 0.0
+        for k in range(3):
+            dik, djk = 1.0 if i == k else 0.0, 1.0 if j == k else 0.0
+            for lane in range(lanes):
+                ri, rj, rk = w[sc + i, lane], w[sc + j, lane], w[sc + k, lane]
+                mi, mj, mk = w[sc + 3 + i, lane], w[sc + 3 + j, lane], w[sc + 3 + k, lane]
+                q, c5, c7, c9 = w[sc + 6, lane], w[sc + 8, lane], w[sc + 9, lane], w[sc + 10, lane]
+                t = (3.0 * c5 * (mi * djk + mj * dik + mk * dij)
+                     - 15.0 * c7 * (mi * rj * rk + mj * ri * rk + mk * ri * rj
+                                    + q * (dij * rk + dik * rj + djk * ri))
+                     + 105.0 * c9 * q * ri * rj * rk)
+                w[d + 1 + k, lane] = -weight * t  # dG_ij/dx_k = −T_ijk
+                w[d + 6 + k, lane] = weight * (3.0 * c5 * (dik * rj + djk * ri + rk * dij)
+                                               - 15.0 * c7 * ri * rj * rk)  # dG_ij/dm_k
+
+
+@nb.njit(inline="always", **JIT)
+def _baseline_rows_lanes(w, sc, dst, lanes, weight, baseline):
+    """Rows of a gradiometer of baseline L (five components, stride LANE_ROW) at w[dst…]:
+    G_ij = (B_i(r + L/2 e_j) − B_i(r − L/2 e_j)) / L and its derivatives, from the field of each
+    magnetometer (as :func:`baseline_point`), times ``weight``."""
+    s2 = sc + 11  # the magnetometer's scratch set
+    for c in range(5):
+        d = dst + LANE_ROW * c
+        for e in range(LANE_ROW):
+            for lane in range(lanes):
+                w[d + e, lane] = 0.0
+    for j in range(3):
+        for half in range(2):
+            sign = 1.0 if half == 0 else -1.0
+            for lane in range(lanes):
+                for k in range(6):
+                    w[s2 + k, lane] = w[sc + k, lane]
+                w[s2 + j, lane] += 0.5 * sign * baseline
+            _powers_lanes(w, s2, lanes)
+            ws = weight * sign / baseline
+            for c in range(5):
+                i, jj = G_PAIRS[c]
+                if jj != j:
+                    continue
+                d = dst + LANE_ROW * c
+                for lane in range(lanes):
+                    q, c3, c5 = w[s2 + 6, lane], w[s2 + 7, lane], w[s2 + 8, lane]
+                    w[d, lane] += ws * (3.0 * q * w[s2 + i, lane] * c5 - w[s2 + 3 + i, lane] * c3)
+                for k in range(3):
+                    dik = 1.0 if i == k else 0.0
+                    for lane in range(lanes):
+                        ri, rk = w[s2 + i, lane], w[s2 + k, lane]
+                        mi, mk = w[s2 + 3 + i, lane], w[s2 + 3 + k, lane]
+                        q, c3, c5, c7 = (w[s2 + 6, lane], w[s2 + 7, lane], w[s2 + 8, lane],
+                                         w[s2 + 9, lane])
+                        g_ik = 3.0 * c5 * (mi * rk + mk * ri + q * dik) - 15.0 * c7 * q * ri * rk
+                        w[d + 1 + k, lane] -= ws * g_ik  # −∂B_i/∂s_k of this magnetometer
+                        w[d + 6 + k, lane] += ws * (3.0 * ri * rk * c5 - dik * c3)
+
+
+@nb.njit(inline="always", **JIT)
+def rows_lanes(w, x0, dst, sc, bad, lanes, dt, sx, sy, sz, code, params):
+    """Measurement rows of one station at (sx, sy, sz) for ``lanes`` states side by side (the
+    map kernels' workspace: one row of ``lanes`` values per quantity).
+
+    States w[x0:x0+8] (their position moved by dt·(vx, vy)); rows (value, ∂/∂ the 8 states)
+    of the kind's components (B then G) into w[dst + LANE_ROW·c …]; scratch w[sc:sc+LANE_SCRATCH].
+    ``params`` = [near, L, 1/noise_B, 1/noise_G] (:data:`N_PARAMS`): a target within ``near``
+    of the station sets w[bad] = 1 (its offset is replaced by a harmless one; the caller masks
+    it); L > 0 differences the magnetometers of a gradiometer; each row is multiplied by the
+    weight of its kind (1/noise: the whitened rows R^-½ H, or 1 for the rows themselves).
+    """
+    near, baseline, wb, wg = params[0], params[1], params[2], params[3]
+    for lane in range(lanes):
+        rx = sx - (w[x0, lane] + dt * w[x0 + 3, lane])  # r = sensor − target
+        ry = sy - (w[x0 + 1, lane] + dt * w[x0 + 4, lane])
+        rz = sz - w[x0 + 2, lane]
+        close = rx * rx + ry * ry + rz * rz < near * near
+        w[bad, lane] = 1.0 if close else w[bad, lane]
+        w[sc, lane] = 1.0 + near if close else rx
+        w[sc + 1, lane], w[sc + 2, lane] = ry, rz
+        w[sc + 3, lane], w[sc + 4, lane], w[sc + 5, lane] = (w[x0 + 5, lane], w[x0 + 6, lane],
+                                                             w[x0 + 7, lane])
+    _powers_lanes(w, sc, lanes)
+    d = dst
+    if code != CODE_G:
+        _b_rows_lanes(w, sc, d, lanes, wb)
+        d += 3 * LANE_ROW
+    if code != CODE_B:
+        if baseline > 0.0:
+            _baseline_rows_lanes(w, sc, d, lanes, wg, baseline)
+        else:
+            _g_rows_lanes(w, sc, d, lanes, wg)

@@ -7,12 +7,13 @@ electric field formula (``exact`` / ``paper``), the medium (conductivity σ, or 
 Fisher, CRLB, maps and CRLB maps take it as ``sensor=`` (a kind name builds one with the
 defaults); their old keywords ``sigma``, ``model``, ``sea`` still work and build the electric one.
 
-Electric kinds go through the compiled electric kernels (:mod:`core.kernels`); magnetic kinds
-through :mod:`core.kernels.magnetic` with the same Γ (time-major, then station, then
-component) and the same rank criterion (column-scaled SVD, :data:`core.RANK_RTOL`), on Γ
-whitened by the noise of each component (B in nT, G in nT/m, so that B + G rows are
-commensurate). The paper's square-Γ rule is the electric paper's and is refused for magnetic
-kinds.
+Every kind goes through the same compiled pipeline (:mod:`core.kernels.gamma` for Γ's rows,
+:mod:`core.kernels.measures` for the QR, the rank test and the measures): a kind only picks its
+rows, in :meth:`Sensor.kernel_rows` here and in the kernels' rows dispatch. Γ is the same for
+every kind (time-major, then station, then component), and so is the rank criterion
+(column-scaled, :data:`core.RANK_RTOL`); the magnetic rows come whitened by the noise of each
+component (B in nT, G in nT/m, so that B + G rows are commensurate). The paper's square-Γ rule
+is the electric paper's and is refused for magnetic kinds.
 """
 
 from __future__ import annotations
@@ -21,10 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernels import magnetic as mk
 from ..kernels.electric import N_COMPONENTS as ELECTRIC_COMPONENTS
 from ..kernels.electric import N_STATES as ELECTRIC_STATES
 from ..kernels.magnetic import N_STATE as MAGNETIC_STATES
 from . import magnetic, validation
+from . import sea as sea_module
 from .fields import MODELS, field_jacobian
 from .sea import Sea
 
@@ -46,6 +49,9 @@ KINDS = {
 MAGNETIC_NOISE = (0.01, 0.01)
 #: Default electric noise (V/m) per component, as core.DEFAULT_NOISE.
 ELECTRIC_NOISE = 1e-7
+#: Rows code of each magnetic kind in :mod:`core.kernels.gamma` (the electric kinds use their
+#: field model's code, 0 exact, 1 paper).
+_MAGNETIC_CODES = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}
 
 
 @dataclass(frozen=True)
@@ -178,6 +184,69 @@ class Sensor:
         h = J[..., 5] * states[..., None, None, 5] + J[..., 6] * states[..., None, None, 6]
         return h, J
 
+    @property
+    def near(self):
+        """Targets closer than this to a station (m) are on it: ON_STATION, or a gradiometer's
+        baseline (its magnetometers sit ±L/2 about the station)."""
+        if "G" in self.kind:
+            return max(validation.ON_STATION, magnetic.baseline_value(self.baseline))
+        return validation.ON_STATION
+
+    def kernel_rows(self, whiten=True):
+        """The rows arguments ``(kappa, code, medium)`` of :mod:`core.kernels.gamma` (the one
+        place where a kind picks its rows) and the noise left to apply outside the kernels.
+
+        Electric: κ = 1/(4πσ), the field model's code, the medium of :func:`core.model.sea.medium`;
+        its rows share one noise, applied outside (returned). Magnetic: the kind's code and
+        [near, baseline, 1/noise_B, 1/noise_G], so that the rows come whitened (R^-½ H: B in nT
+        and G in nT/m made commensurate) and the noise outside is 1; ``whiten=False`` gives
+        the rows themselves (weights 1).
+        """
+        if not self.magnetic:
+            code = validation.model_code(self.model, MODELS)
+            return (1.0 / (4.0 * np.pi * self.sigma), code, sea_module.medium(self.sea, self.sigma)), \
+                self.noise_vector[0]
+        noise = self.noise_vector
+        wb, wg = (1.0 / noise[0], 1.0 / noise[-1]) if whiten else (1.0, 1.0)
+        params = np.array([self.near, magnetic.baseline_value(self.baseline), wb, wg])
+        return (0.0, _MAGNETIC_CODES[self.kind], params), 1.0
+
+    def states(self, value):
+        """Validated states of this kind as a contiguous (P, n_states) array, and the leading
+        shape (electric states need a speed > 0: the field's heading is the velocity's)."""
+        return (magnetic.states if self.magnetic else validation.states)(value)
+
+    def check_column(self, states, stations):
+        """ValueError if targets or stations lie outside the medium's water column (a layered
+        sea); a magnetostatic field does not see the sea."""
+        if not self.magnetic:
+            sea_module.check_column(self.sea, states, stations, self.model)
+
+    def check_clear(self, states, stations, steps, T):
+        """ValueError if a target (P, n_states) is on a station: electric, at the first instant
+        (the kernels give NaN later); magnetic, within :attr:`near` at any of the ``steps``
+        instants."""
+        if not self.magnetic:
+            validation.no_target_on_station(states, stations)
+            return
+        baseline = magnetic.baseline_value(self.baseline) if "G" in self.kind else 0.0
+        for i in range(1 if steps is None else steps):
+            moved = states.copy()
+            moved[:, :2] += i * T * states[:, 3:5]
+            magnetic.check_distances(moved, stations, baseline)
+
+    def clear(self, states, stations, steps, T):
+        """(P,) True where a target (P, n_states) is off every station: electric, at the first
+        instant; magnetic, farther than :attr:`near` at every instant of Γ."""
+        n = 1 if not self.magnetic else validation.steps(steps, 1)
+        T = validation.positive("T", T, "s")
+        clear = np.ones(states.shape[0], dtype=bool)
+        for i in range(n):
+            moved = states[:, :3].copy()
+            moved[:, :2] += i * T * states[:, 3:5]
+            clear &= np.min(validation.station_distances(moved, stations), axis=1) >= self.near
+        return clear
+
     def free_columns(self, known):
         """Indices of the unknown states, given the names of the known ones."""
         if not self.magnetic:
@@ -225,22 +294,3 @@ def refuse_square(sensor, what):
             f"and its 7 states); sensor kind {sensor.kind!r} needs the all-rows Γ: pass steps=N "
             "(or a Fisher / CRLB measure)"
         )
-
-
-def magnetic_gamma(states, stations, sensor, *, T, steps, known, whiten=False):
-    """All-rows Γ of a magnetic kind: (..., N·S·C, n_free), rows time-major, then station, then
-    component. ``whiten``: each row divided by its component's noise (R^-½ Γ)."""
-    if steps is None:
-        refuse_square(sensor, "steps=None")
-    n = validation.steps(steps, 1)
-    step = validation.positive("T", T, "s")
-    free = sensor.free_columns(known)
-    stations = validation.stations(stations)
-    blocks = []
-    for i in range(n):
-        _, jac = magnetic.measurement_rows(states, stations, sensor.kind, sensor.baseline, i * step)
-        if whiten:
-            jac = jac / np.asarray(sensor.noise_vector)[:, None]
-        blocks.append(jac.reshape(jac.shape[:-3] + (-1, jac.shape[-1])))
-    g = np.concatenate(blocks, axis=-2)  # (..., N·S·C, 8)
-    return g[..., free]

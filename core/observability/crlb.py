@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import magnetic, sensors, validation
-from .fisher import DEFAULT_STEPS, fisher_measures, magnetic_fisher
-from .gamma import gamma
+from ..model import sensors, validation
+from .fisher import DEFAULT_STEPS, fisher_measures
+from .gamma import _gamma
 from .grids import Plane
 
 __all__ = [
@@ -39,21 +39,21 @@ __all__ = [
 _CHUNK_ENTRIES = 1 << 22
 
 
-def _covariance_flat(states, stations, observable, noise, steps, T, sigma, model, sea, known):
-    """Full 7 × 7 CRLB covariance of (P, 7) valid states, (P, 7, 7).
+def _covariance_flat(states, stations, observable, steps, T, known, sensor):
+    """Full CRLB covariance of (P, n_states) valid states, (P, n_states, n_states).
 
     Known states get zero rows and columns (they are known exactly). Where ``observable`` is
     False the unknown block is NaN off the diagonal and +inf on it.
     """
-    free = validation.free_columns(known)
-    npts, n = states.shape[0], free.size
-    cov = np.zeros((npts, sensors.ELECTRIC_STATES, sensors.ELECTRIC_STATES))
+    free = sensor.free_columns(known)
+    npts, n, n_x = states.shape[0], free.size, sensor.n_states
+    cov = np.zeros((npts, n_x, n_x))
     block = np.full((npts, n, n), np.nan)
     block[:, np.arange(n), np.arange(n)] = np.inf
     idx = np.flatnonzero(observable)
     if idx.size:
-        g = gamma(states[idx], stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps,
-                  known=known)
+        _, noise = sensor.kernel_rows()  # the noise the whitened Γ leaves (electric: all of it)
+        g = _gamma(states[idx], stations, T, sensor, steps, known)
         norms = np.linalg.norm(g, axis=-2)  # (p, n): column norms, (V/m) per state unit
         # 1. Γ_s = Γ / ‖Γ_j‖ = Q R; (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ. The flag guarantees R is invertible.
         r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (p, n, n)
@@ -105,19 +105,11 @@ def crlb_covariance(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
     ((7, 7), True)
     """
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    if sensor.magnetic:
-        m, block, lead = magnetic_fisher(states, stations, sensor, T, steps, known)
-        free = sensor.free_columns(known)
-        n = sensor.n_states
-        cov = np.zeros((block.shape[0], n, n))
-        cov[:, free[:, None], free[None, :]] = block
-        return cov.reshape(lead + (n, n)), m.observable.reshape(lead)
-    sigma, model, sea, noise = sensor.sigma, sensor.model, sensor.sea, sensor.noise_vector[0]
-    m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
-                        model=model, sea=sea, known=known)  # validates everything, flags observability
-    flat, lead = validation.states(states)
-    cov = _covariance_flat(flat, validation.stations(stations), m.observable.reshape(-1),
-                           float(noise), steps, T, sigma, model, sea, known)
+    m = fisher_measures(states, stations, steps=steps, T=T, known=known,
+                        sensor=sensor)  # validates everything, flags observability
+    flat, lead = sensor.states(states)
+    cov = _covariance_flat(flat, validation.stations(stations), m.observable.reshape(-1), steps,
+                           T, known, sensor)
     return cov.reshape(lead + (sensor.n_states,) * 2), m.observable
 
 
@@ -218,48 +210,41 @@ def horizontal_error_ellipse(states, stations, *, noise=None, steps=DEFAULT_STEP
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     cov, observable = crlb_covariance(states, stations, steps=steps, T=T, known=known,
                                       sensor=sensor)
-    flat, lead = (magnetic.states if sensor.magnetic else validation.states)(states)
+    flat, lead = sensor.states(states)
     n = sensor.n_states
     fields = _errors_from_cov(flat, cov.reshape(-1, n, n), observable.reshape(-1))
     return CrlbErrors(**{k: v.reshape(lead) for k, v in fields.items()})
 
 
-def _plane_states(plane, velocity, moments, sensor=None):
+def _plane_states(plane, velocity, moments, sensor=None, rows=slice(None)):
+    """Target states (rows · n, n_states) on a plane's grid: velocity (vx, vy) and the kind's
+    moments everywhere (validated as the kind's states: a speed > 0 for the electric kind)."""
     if not isinstance(plane, Plane):  # ValueError for all bad input, as core does
         raise ValueError(
             f"plane must be a core.Plane; got {type(plane).__name__}")
-    if sensor is not None and sensor.magnetic:
-        return magnetic_plane_states(plane, velocity, moments)
-    template, _ = validation.states([0.0, 0.0, 0.0, *_pair("velocity", velocity),
-                                     *_pair("moments", moments)])  # checks speed > 0
-    return plane.states(template[0, 3:5], template[0, 5:]).reshape(-1, template.shape[-1])
+    sensor = sensors.sensor_model(sensor)
+    vel = _pair("velocity", velocity)
+    n_moments = sensor.n_states - 5
+    mom = np.asarray(moments, dtype=np.float64) if np.ndim(moments) == 1 else None
+    if mom is None or mom.shape != (n_moments,) or not np.all(np.isfinite(mom)):
+        names = ", ".join(sensor.state_names[5:])
+        raise ValueError(f"moments of sensor kind {sensor.kind!r} must be ({names}), finite; "
+                         f"got {moments!r}")
+    sensor.states(np.concatenate([[0.0, 0.0, 0.0], vel, mom]))  # the kind's checks (speed > 0)
+    out = plane.states(vel, mom, rows)  # the grid of any state size (compiled grid_states)
+    return out.reshape(-1, out.shape[-1])
 
 
 def magnetic_plane_states(plane, velocity, moments, rows=slice(None)):
     """Magnetic target states (rows · n, 8) on a plane's grid: velocity (vx, vy) m/s and moment
     (mx, my, mz) A·m² everywhere."""
-    vel = _pair("velocity", velocity)
-    mom = np.asarray(moments, dtype=np.float64) if np.ndim(moments) == 1 else None
-    if mom is None or mom.shape != (3,) or not np.all(np.isfinite(mom)):
-        raise ValueError(f"moments of a magnetic kind must be (mx, my, mz) in A·m², finite; got {moments!r}")
-    out = plane.states(vel, mom, rows)  # the grid of any state size (compiled grid_states)
-    return out.reshape(-1, out.shape[-1])
+    return _plane_states(plane, velocity, moments, sensors.Sensor("BG"), rows)
 
 
 def magnetic_clear(states, stations, sensor, steps, T):
     """(P,) True where a magnetic target (P, 8) stays clear of every station at every instant
-    of Γ: farther than ON_STATION, and than a gradiometer's baseline (its magnetometers sit
-    ±L/2 about the station)."""
-    near = validation.ON_STATION
-    if sensor.kind in ("G", "BG"):
-        near = max(near, magnetic.baseline_value(sensor.baseline))
-    T = validation.positive("T", T, "s")
-    clear = np.ones(states.shape[0], dtype=bool)
-    for i in range(validation.steps(steps, 1)):
-        moved = states[:, :3].copy()
-        moved[:, :2] += i * T * states[:, 3:5]
-        clear &= np.min(validation.station_distances(moved, stations), axis=1) >= near
-    return clear
+    of Γ (:meth:`core.Sensor.clear`)."""
+    return sensor.clear(states, stations, steps, T)
 
 
 def _pair(name, value):
@@ -307,10 +292,7 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=None, steps=DEFAULT_S
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     states = _plane_states(plane, velocity, moments, sensor)
     stations = validation.stations(stations)
-    if sensor.magnetic:
-        ok = np.flatnonzero(magnetic_clear(states, stations, sensor, steps, T))
-    else:
-        ok = np.flatnonzero(_off_station(states, stations))
+    ok = np.flatnonzero(sensor.clear(states, stations, steps, T))
     out = {k: np.full(states.shape[0], np.nan) for k in
            ("semi_major", "semi_minor", "orientation", "sigma_z", "sigma_speed", "position")}
     out["observable"] = np.zeros(states.shape[0], dtype=bool)

@@ -40,17 +40,15 @@ from .. import dask_backend
 from ..model import sensors, validation
 from .crlb import (
     CrlbErrors,
-    _off_station,
     _pair,
     _plane_states,
     crlb_covariance,
     crlb_maps,
     horizontal_error_ellipse,
-    magnetic_clear,
     magnetic_plane_states,  # noqa: F401  (re-exported: importable from here before the split)
 )
-from .fisher import DEFAULT_STEPS, fisher_measures, magnetic_fisher
-from .gamma import RANK_RTOL, gamma
+from .fisher import DEFAULT_STEPS, fisher_measures
+from .gamma import RANK_RTOL, _gamma
 from .grids import Plane
 from .layouts import LAYOUTS, MAX_STATIONS, _n_stations, station_layout
 
@@ -111,47 +109,21 @@ def _region_states(region, velocity, moments, sensor=None):
     return _plane_states(region, velocity, moments, sensor)
 
 
-def _magnetic_criterion(states, stations, criterion, threshold, steps, T, known, sensor):
-    """:func:`_criterion` of a magnetic kind: the Fisher measures of the whitened Γ."""
-    states = states[magnetic_clear(states, stations, sensor, steps, T)]
+def _criterion(states, stations, criterion, threshold, steps, T, known, sensor):
+    """Criterion over (P, n_states) region states of ``sensor``; points on a station are left
+    out."""
+    states = states[sensor.clear(states, stations, steps, T)]
     if states.shape[0] == 0:
         raise ValueError("every point of the region lies on a station; nothing to evaluate")
-    m, _, _ = magnetic_fisher(states, stations, sensor, T, steps, known)
+    m = fisher_measures(states, stations, steps=steps, T=T, known=known, sensor=sensor)
     frac = float(np.mean(m.observable))
     if criterion == "area_crlb":
         return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
     d_opt = m.d_optimal.copy()
     bad = np.flatnonzero(~m.observable)
-    if bad.size:  # the D-optimal floor of the module notes, on the whitened Γ (noise 1)
-        g = sensors.magnetic_gamma(states[bad], stations, sensor, T=T, steps=steps, known=known,
-                                   whiten=True)
-        with np.errstate(divide="ignore"):
-            log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
-        n = g.shape[-1]
-        d_opt[bad] = np.log10(RANK_RTOL * np.sqrt(np.e * n)) + log_norms
-    value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
-    return CriterionResult(float(value), frac)
-
-
-def _criterion(states, stations, criterion, threshold, noise, steps, T, sigma, model, sea, known,
-               sensor=None):
-    """Criterion over (P, 7) region states; on-station points are left out. A magnetic
-    ``sensor`` (its (P, 8) states) goes to :func:`_magnetic_criterion`."""
-    if sensor is not None and sensor.magnetic:
-        return _magnetic_criterion(states, stations, criterion, threshold, steps, T, known, sensor)
-    states = states[_off_station(states, stations)]
-    if states.shape[0] == 0:
-        raise ValueError("every point of the region lies on a station; nothing to evaluate")
-    m = fisher_measures(states, stations, noise=noise, steps=steps, T=T, sigma=sigma,
-                        model=model, sea=sea, known=known)
-    frac = float(np.mean(m.observable))
-    if criterion == "area_crlb":
-        return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
-    d_opt = m.d_optimal.copy()
-    bad = np.flatnonzero(~m.observable)
-    if bad.size:  # the D-optimal floor of the module notes
-        g = gamma(states[bad], stations, T=T, sigma=sigma, model=model, sea=sea, steps=steps,
-                  known=known)
+    if bad.size:  # the D-optimal floor of the module notes (R^-½ Γ of a magnetic kind: noise 1)
+        _, noise = sensor.kernel_rows()
+        g = _gamma(states[bad], stations, T, sensor, steps, known)
         with np.errstate(divide="ignore"):
             log_norms = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1)
         n = g.shape[-1]
@@ -203,23 +175,9 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
     """
     threshold = _check_criterion(criterion, threshold)
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    if sensor.magnetic:
-        return _magnetic_criterion(_region_states(region, velocity, moments, sensor),
-                                   validation.stations(stations), criterion, threshold, steps,
-                                   validation.positive("T", T, "s"), known, sensor)
-    noise = sensor.noise_vector[0]
-    return _criterion(_region_states(region, velocity, moments), validation.stations(stations),
-                      criterion, threshold, noise, steps, T, sensor.sigma, sensor.model,
-                      sensor.sea, known)
-
-
-def _sensor_args(sensor, sigma, model, sea, noise):
-    """The optimisers' measurement model: (noise, sigma, model, sea, magnetic Sensor or None)
-    from ``sensor=`` or the old keywords (electric: the keywords of :func:`_criterion`)."""
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    if sensor.magnetic:
-        return None, 4.0, "exact", None, sensor
-    return sensor.noise_vector[0], sensor.sigma, sensor.model, sensor.sea, None
+    return _criterion(_region_states(region, velocity, moments, sensor),
+                      validation.stations(stations), criterion, threshold, steps,
+                      validation.positive("T", T, "s"), known, sensor)
 
 
 def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
@@ -229,13 +187,13 @@ def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, cri
         raise ValueError(f"a spaced layout kind must be 'line', 'triangle' or 'square'; got {kind!r}")
     n_stations = _n_stations(n_stations)
     threshold = _check_criterion(criterion, threshold)
-    noise, sigma, model, sea, mag = _sensor_args(sensor, sigma, model, sea, noise)
-    states = _region_states(region, velocity, moments, mag)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    states = _region_states(region, velocity, moments, sensor)
     station_layout(kind, n_stations, d=1.0, h=h)  # validates h
 
     def value(d):
         return _criterion(states, station_layout(kind, n_stations, d=d, h=h), criterion,
-                          threshold, noise, steps, T, sigma, model, sea, known, mag).value
+                          threshold, steps, T, known, sensor).value
     return value
 
 
@@ -534,15 +492,14 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     """
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
-    the_sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    noise, sigma, model, sea, mag = _sensor_args(the_sensor, 4.0, "exact", None, None)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     common = {"h": h, "velocity": velocity, "moments": moments, "criterion": criterion,
               "threshold": threshold, "steps": steps, "T": T, "known": known,
-              "sensor": the_sensor}
+              "sensor": sensor}
     n = _n_stations(n_stations)
     if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
         raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
-    states = _region_states(region, velocity, moments, mag)
+    states = _region_states(region, velocity, moments, sensor)
     (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
         _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
     if not (xlo < xhi and ylo < yhi):
@@ -559,8 +516,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         h = station_layout("line", 1, h=h)[0, 2]  # validates h
 
         def objective(st):
-            return _criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
-                              sea, known, mag).value
+            return _criterion(states, st, criterion, threshold, steps, T, known, sensor).value
 
         d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective,
                                                     client)
@@ -581,8 +537,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
 
     def objective(p):
         st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
-        return -_criterion(states, st, criterion, threshold, noise, steps, T, sigma, model,
-                           sea, known, mag).value
+        return -_criterion(states, st, criterion, threshold, steps, T, known, sensor).value
 
     res = optimize.minimize(objective, xy.ravel(), method="Powell",
                             bounds=[(xlo, xhi), (ylo, yhi)] * n,

@@ -15,16 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import gamma as kernels
-from ..model import magnetic, sensors, validation
-from .gamma import (
-    _BRACKET_MARGIN,
-    RANK_RTOL,
-    _full_rank,
-    _prepare,
-    _svd_rank,
-    gamma,
-)
+from ..kernels import measures
+from ..model import sensors
+from .gamma import _full_rank, _gamma, _prepare
 
 __all__ = ["DEFAULT_NOISE", "DEFAULT_STEPS", "FisherMeasures", "fisher_information", "fisher_measures"]
 
@@ -92,13 +85,8 @@ def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
     False
     """
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    if sensor.magnetic:
-        m, _, lead = magnetic_fisher(states, stations, sensor, T, steps, known)
-    else:
-        noise = sensor.noise_vector[0]
-        args, n_rows, lead = _prepare(states, stations, T, sensor.sigma, sensor.model, known,
-                                      steps, sensor.sea)
-        m = _fisher_from_kernel(args[0], args[1:], n_rows, noise)
+    args, n_rows, lead, scale = _prepare(states, stations, T, sensor, known, steps)
+    m = _fisher_from_kernel(args[0], args[1:], n_rows, scale, sensor.state_names)
     return FisherMeasures(
         d_optimal=m.d_optimal.reshape(lead),
         log10_eta=m.log10_eta.reshape(lead),
@@ -109,12 +97,14 @@ def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
     )
 
 
-def _fisher_from_kernel(states, options, n_rows, noise):
-    """Run the compiled kernel on (P, 7) valid states; FisherMeasures with flat (P,) arrays."""
+def _fisher_from_kernel(states, options, n_rows, noise, names):
+    """Run the compiled kernel on (P, n_states) valid states; FisherMeasures with flat (P,)
+    arrays. ``noise``: the noise left to apply outside the kernel (1 for whitened rows),
+    ``names``: the state names."""
     npts, free = states.shape[0], options[-1]
     log_eta, log_norms, inv_diag = np.empty(npts), np.empty(npts), np.empty((npts, free.size))
     log_rcond = np.empty(npts)
-    kernels.fisher_measures(states, *options, n_rows, log_eta, log_norms, inv_diag, log_rcond)
+    measures.fisher_measures(states, *options, n_rows, log_eta, log_norms, inv_diag, log_rcond)
     observable = _full_rank(log_rcond, states, options, n_rows)  # False on a station (NaN)
     # ½ log10 det(ΓᵀΓ / noise²) = log10 η + Σ log10‖Γ_j‖ − n log10(noise)
     d_opt = np.where(observable, log_eta + log_norms - free.size * np.log10(noise), -np.inf)
@@ -129,7 +119,7 @@ def _fisher_from_kernel(states, options, n_rows, noise):
         observable=observable,
         std=np.sqrt(var),
         position_std=pos_std,
-        free=tuple(validation.STATE_NAMES[j] for j in free),
+        free=tuple(names[j] for j in free),
     )
 
 
@@ -145,62 +135,6 @@ def fisher_information(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1
         In 1 / (state unit × state unit), n = 7 − len(known) (8 − len(known) magnetic).
     """
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    if sensor.magnetic:
-        g = sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known,
-                                   whiten=True)
-        return np.einsum("...ri,...rj->...ij", g, g)
-    noise = sensor.noise_vector[0]
-    g = gamma(states, stations, T=T, steps=steps, known=known, sensor=sensor)
-    return np.einsum("...ri,...rj->...ij", g, g) / noise**2  # (..., n, n)
-
-
-def magnetic_fisher(states, stations, sensor, T, steps, known):
-    """Fisher measures of a magnetic kind from the whitened all-rows Γ (numpy: QR of the
-    column-scaled Γ, as the electric CRLB covariance). Returns (FisherMeasures with flat (P,)
-    arrays, covariance of the free states (P, n, n), leading shape)."""
-    flat, lead = magnetic.states(states)
-    g = sensors.magnetic_gamma(flat, stations, sensor, T=T, steps=steps, known=known, whiten=True)
-    free = sensor.free_columns(known)
-    npts, n = flat.shape[0], free.size
-    if g.shape[-2] < n:  # fewer rows than unknowns: rank < n everywhere; pad Γ with zero rows
-        g = np.concatenate([g, np.zeros(g.shape[:-2] + (n - g.shape[-2], n))], axis=-2)
-    norms = np.linalg.norm(g, axis=-2)  # (P, n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.linalg.qr(g / norms[:, None, :], mode="r")  # (P, n, n): Γ_s = Q R
-        diag = np.abs(np.diagonal(r, axis1=-2, axis2=-1))
-        log_eta = np.sum(np.log10(diag), axis=-1)
-        log_norms = np.sum(np.log10(norms), axis=-1)
-    # The one rank criterion without an SVD per point: rcond = 1 / (‖Γ_s‖_F ‖R⁻¹‖_F), with
-    # ‖Γ_s‖_F² = n, brackets σmin/σmax in [rcond, n·rcond] (core.kernels); the thin band where
-    # the bracket straddles RANK_RTOL is decided by the SVD, as core.observability.gamma._full_rank.
-    invertible = np.all(diag > 0.0, axis=-1) & np.all(np.isfinite(r), axis=(-2, -1))
-    idx = np.flatnonzero(invertible)
-    rinv = np.full((npts, n, n), np.nan)
-    if idx.size:
-        rinv[idx] = np.linalg.solve(r[idx], np.broadcast_to(np.eye(n), (idx.size, n, n)))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        frob2 = np.sum(rinv * rinv, axis=(-2, -1))
-        log_rcond = np.where(invertible & np.isfinite(frob2), -0.5 * np.log10(n * frob2), -np.inf)
-    observable = log_rcond >= np.log10(RANK_RTOL * _BRACKET_MARGIN)
-    unsure = ~observable & (log_rcond + np.log10(n) > np.log10(RANK_RTOL / _BRACKET_MARGIN))
-    if np.any(unsure):
-        observable[unsure] = _svd_rank(g[unsure]) == n
-    cov = np.full((npts, n, n), np.nan)
-    cov[:, np.arange(n), np.arange(n)] = np.inf
-    idx = np.flatnonzero(observable)
-    if idx.size:
-        inv_s = rinv[idx] @ np.swapaxes(rinv[idx], -1, -2)  # (Γ_sᵀΓ_s)⁻¹ = R⁻¹ R⁻ᵀ
-        cov[idx] = inv_s / (norms[idx, :, None] * norms[idx, None, :])
-    var = np.diagonal(cov, axis1=-2, axis2=-1)
-    pos = [q for q, j in enumerate(free) if j < 3]
-    pos_std = np.sqrt(var[:, pos].sum(axis=1)) if pos else np.zeros(npts)
-    m = FisherMeasures(
-        d_optimal=np.where(observable, log_eta + log_norms, -np.inf),
-        log10_eta=log_eta,
-        observable=observable,
-        std=np.sqrt(var),
-        position_std=pos_std,
-        free=tuple(sensor.state_names[j] for j in free),
-    )
-    return m, cov, lead
-
+    _, scale = sensor.kernel_rows()
+    g = _gamma(states, stations, T, sensor, steps, known)  # R^-½ Γ of a magnetic kind
+    return np.einsum("...ri,...rj->...ij", g, g) / scale**2  # (..., n, n)

@@ -31,9 +31,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import gamma as kernels
-from ..model import sea as sea_module
+from ..kernels import measures
 from ..model import sensors, validation
-from ..model.fields import MODELS
 
 __all__ = [
     "RANK_RTOL",
@@ -57,29 +56,32 @@ RANK_RTOL = 1e-10
 _BRACKET_MARGIN = 10.0
 
 
-def _options(stations, T, sigma, model, known, steps, sea=None):
+def _options(stations, T, sensor, known, steps, whiten=True):
     """Validate everything but the states: returns the kernel arguments after ``states``
-    (stations, T, κ = 1/(4πσ), model code, medium of :func:`core.model.sea.medium`, free columns)
-    and the number of rows of Γ."""
+    (stations, T, then the sensor's rows arguments κ, code, medium of
+    :meth:`core.Sensor.kernel_rows`, then the free columns), the number of rows of Γ and the
+    noise left to apply outside the kernels (1 for whitened magnetic rows)."""
     stations = validation.stations(stations)
     step = validation.positive("T", T, "s")
-    sigma = validation.positive("sigma", sigma, "S/m")
-    code = validation.model_code(model, MODELS)
-    medium = sea_module.medium(sea, sigma)
-    sea_module.check_column(sea, np.zeros((0, sensors.ELECTRIC_STATES)), stations, model)
-    free = validation.free_columns(known)
-    n_rows = (free.size if steps is None
-              else sensors.ELECTRIC_COMPONENTS * stations.shape[0] * validation.steps(steps, 1))
-    return (stations, step, 1.0 / (4.0 * np.pi * sigma), code, medium, free), n_rows
+    rows, scale = sensor.kernel_rows(whiten)
+    sensor.check_column(np.zeros((0, sensor.n_states)), stations)
+    free = sensor.free_columns(known)
+    if steps is None:
+        sensors.refuse_square(sensor, "steps=None")
+        n_rows = free.size
+    else:
+        n_rows = sensor.n_components * stations.shape[0] * validation.steps(steps, 1)
+    return (stations, step, *rows, free), n_rows, scale
 
 
-def _prepare(states, stations, T, sigma, model, known, steps, sea=None):
-    """Validate states and options; return the kernel arguments, rows of Γ, leading shape."""
-    options, n_rows = _options(stations, T, sigma, model, known, steps, sea)
-    states, lead = validation.states(states)
-    sea_module.check_column(sea, states, options[0], model)
-    validation.no_target_on_station(states, options[0])
-    return (states, *options), n_rows, lead
+def _prepare(states, stations, T, sensor, known, steps, whiten=True):
+    """Validate states and options; return the kernel arguments, rows of Γ, leading shape and
+    the noise left to apply outside the kernels."""
+    options, n_rows, scale = _options(stations, T, sensor, known, steps, whiten)
+    states, lead = sensor.states(states)
+    sensor.check_column(states, options[0])
+    sensor.check_clear(states, options[0], steps, options[1])
+    return (states, *options), n_rows, lead, scale
 
 
 def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None, known=(),
@@ -133,20 +135,23 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=
     (16, 8)
     """
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
-    if sensor.magnetic:
-        return sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known)
-    sigma, model, sea = sensor.sigma, sensor.model, sensor.sea
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
+    return _gamma(states, stations, T, sensor, steps, known, whiten=False)
+
+
+def _gamma(states, stations, T, sensor, steps, known, whiten=True):
+    """Γ of :func:`gamma`; ``whiten``: R^-½ Γ for the magnetic kinds (their rows in nT and
+    nT/m made commensurate by their noise; the electric rows are never whitened: one noise)."""
+    args, n_rows, lead, _ = _prepare(states, stations, T, sensor, known, steps, whiten)
     n_free = args[-1].size
     out = np.empty((args[0].shape[0], n_rows, n_free))
     kernels.fill_gamma(*args, n_rows, out)
     return out.reshape(lead + (n_rows, n_free))
 
 
-def _square(states, stations, T, sigma, model, known, sea=None):
-    args, _, lead = _prepare(states, stations, T, sigma, model, known, None, sea)
+def _square(states, stations, T, sensor, known):
+    args, _, lead, _ = _prepare(states, stations, T, sensor, known, None)
     log_det, log_eta, log_rcond = (np.empty(args[0].shape[0]) for _ in range(3))
-    kernels.square_measures(*args, log_det, log_eta, log_rcond)
+    measures.square_measures(*args, log_det, log_eta, log_rcond)
     return log_det.reshape(lead), log_eta.reshape(lead)
 
 
@@ -173,7 +178,7 @@ def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", se
     """
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
     sensors.refuse_square(sensor, "log10_abs_det_gamma")
-    return _square(states, stations, T, sensor.sigma, sensor.model, known, sensor.sea)[0]
+    return _square(states, stations, T, sensor, known)[0]
 
 
 def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None,
@@ -191,19 +196,12 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", se
         log10 η (dimensionless, ≤ 0).
     """
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
-    if sensor.magnetic:
-        g = sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known,
-                                   whiten=True)
-        (_, s, _), _ = _scaled_svd(g)
-        with np.errstate(divide="ignore"):
-            return np.sum(np.log10(s), axis=-1)
-    sigma, model, sea = sensor.sigma, sensor.model, sensor.sea
     if steps is None:
-        return _square(states, stations, T, sigma, model, known, sea)[1]
-    args, n_rows, lead = _prepare(states, stations, T, sigma, model, known, steps, sea)
+        return _square(states, stations, T, sensor, known)[1]
+    args, n_rows, lead, _ = _prepare(states, stations, T, sensor, known, steps)
     npts, n = args[0].shape[0], args[-1].size
     log_eta, lns, inv, rc = np.empty(npts), np.empty(npts), np.empty((npts, n)), np.empty(npts)
-    kernels.fisher_measures(*args, n_rows, log_eta, lns, inv, rc)
+    measures.fisher_measures(*args, n_rows, log_eta, lns, inv, rc)
     return log_eta.reshape(lead)
 
 
@@ -224,7 +222,7 @@ def _svd_rank(g):
 
 
 def _full_rank(log_rcond, states, options, n_rows):
-    """``observable_rank == n`` at (P, 7) valid states, from the kernels' log10 rcond (P,).
+    """``observable_rank == n`` at (P, n_states) valid states, from the kernels' log10 rcond (P,).
 
     rcond = 1 / (‖Γ_s‖_F ‖Γ_s⁺‖_F) brackets σ_min/σ_max in [rcond, n · rcond]
     (:mod:`core.kernels`). Where the bracket lies clear of RANK_RTOL by :data:`_BRACKET_MARGIN`
@@ -247,10 +245,7 @@ def _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor
     """Γ of the electric kind (one noise for every row: whitening changes nothing), or R^-½ Γ
     of a magnetic kind (its rows in nT and nT/m made commensurate by their noise)."""
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
-    if sensor.magnetic:
-        return sensors.magnetic_gamma(states, stations, sensor, T=T, steps=steps, known=known,
-                                      whiten=True)
-    return gamma(states, stations, T=T, steps=steps, known=known, sensor=sensor)
+    return _gamma(states, stations, T, sensor, steps, known)
 
 
 def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None,

@@ -10,11 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import gamma as kernels
-from ..model import sea as sea_module
-from ..model import sensors, validation
-from .crlb import magnetic_clear, magnetic_plane_states
-from .fisher import DEFAULT_STEPS, _fisher_from_kernel, magnetic_fisher
+from ..kernels import measures
+from ..model import sensors
+from .crlb import _plane_states
+from .fisher import DEFAULT_STEPS, _fisher_from_kernel
 from .gamma import _full_rank, _options
 
 __all__ = ["MEASURES", "MapResult", "evaluate_map", "log10_positive_difference", "log10_ratio"]
@@ -78,18 +77,14 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
         raise ValueError(f"measure must be one of {sorted(MEASURES)}; got {measure!r}")
     square = MEASURES[measure][2]
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    if sensor.magnetic:
-        if square:
-            sensors.refuse_square(sensor, f"measure {measure!r}")
-        return _magnetic_map(plane, stations, velocity, moments, measure, T, known, steps, sensor)
-    sigma, model, sea, noise = sensor.sigma, sensor.model, sensor.sea, sensor.noise_vector[0]
-    options, n_rows = _options(stations, T, sigma, model, known, None if square else steps, sea)
-    template, _ = validation.states([0.0, 0.0, 0.0, *velocity, *moments])  # checks speed > 0
-    if sea is not None:  # the plane's depths: its fixed z, or its z range
-        depths = [plane.fixed] if plane.kind == "xy" else list(plane.v)
-        sea_module.check_column(sea, np.array([[0.0, 0.0, z, 0, 0, 0, 0] for z in depths]),
-                                options[0], model)
-    noise = validation.positive("noise", noise, "V/m")
+    if square:
+        sensors.refuse_square(sensor, f"measure {measure!r}")
+    options, n_rows, noise = _options(stations, T, sensor, known, None if square else steps)
+    _plane_states(plane, velocity, moments, sensor, slice(0, 0))  # validates velocity, moments
+    depths = [plane.fixed] if plane.kind == "xy" else list(plane.v)  # the plane's depths
+    column = np.zeros((len(depths), sensor.n_states))
+    column[:, 2] = depths
+    sensor.check_column(column, options[0])
     n = plane.n
     value = np.empty((n, n))
     log_eta = np.empty((n, n))
@@ -97,42 +92,22 @@ def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1
     rows_per_chunk = max(1, CHUNK_POINTS // n)
     for r0 in range(0, n, rows_per_chunk):
         rows = slice(r0, min(n, r0 + rows_per_chunk))
-        states = plane.states(template[0, 3:5], template[0, 5:], rows).reshape(-1, template.shape[-1])
+        states = _plane_states(plane, velocity, moments, sensor, rows)
         eta = log_eta[rows].reshape(-1)  # views: the kernels write straight into the map
         out = value[rows].reshape(-1)
         if square:
             rcond = np.empty(len(states))
-            kernels.square_measures(states, *options, out if measure == "log10_det" else
-                                    np.empty(len(states)), eta, rcond)
+            measures.square_measures(states, *options, out if measure == "log10_det" else
+                                     np.empty(len(states)), eta, rcond)
             if measure == "log10_eta":
                 out[:] = eta
             observable[rows] = _full_rank(rcond, states, options, n_rows).reshape(-1, n)
         else:
-            m = _fisher_from_kernel(states, options, n_rows, noise)
+            m = _fisher_from_kernel(states, options, n_rows, noise, sensor.state_names)
             eta[:] = m.log10_eta
             out[:] = m.d_optimal if measure == "d_optimal" else m.position_std
             observable[rows] = m.observable.reshape(-1, n)
     return MapResult(value=value, observable=observable, measure=measure)
-
-
-def _magnetic_map(plane, stations, velocity, moments, measure, T, known, steps, sensor):
-    """:func:`evaluate_map` for a magnetic kind (all-rows measures only)."""
-    stations = validation.stations(stations)
-    n = plane.n
-    value = np.full(n * n, np.nan)
-    observable = np.zeros(n * n, dtype=bool)
-    rows_per_chunk = max(1, CHUNK_POINTS // (4 * n))
-    for r0 in range(0, n, rows_per_chunk):
-        rows = slice(r0, min(n, r0 + rows_per_chunk))
-        states = magnetic_plane_states(plane, velocity, moments, rows)
-        ok = np.flatnonzero(magnetic_clear(states, stations, sensor, steps, T))
-        base = rows.start * n
-        if ok.size:
-            m, _, _ = magnetic_fisher(states[ok], stations, sensor, T, steps, known)
-            value[base + ok] = m.d_optimal if measure == "d_optimal" else m.position_std
-            observable[base + ok] = m.observable
-    return MapResult(value=value.reshape(n, n), observable=observable.reshape(n, n),
-                     measure=measure)
 
 
 def log10_positive_difference(log_a, log_b):
