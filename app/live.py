@@ -13,10 +13,11 @@ inputs is dragged, the path here is shorter, through public Bokeh and Panel only
   at once, ``released`` set;
 * on the server, Bokeh's ``on_change`` of that model runs :meth:`Live.changed` on the event loop
   as the message arrives (no debounce). A preview is computed off the loop at PREVIEW_N² points
-  (:meth:`app.compute.Snapshot.of_values`: the handle's value, not the scenario's) and drawn
+  (fewer when that takes longer than PREVIEW_BUDGET_S: :func:`next_n`) of the handle's value,
+  not the scenario's (:meth:`app.compute.Snapshot.of_values`), and drawn
   into each map's preview layer: uint8 levels colour-mapped in the browser (app/map_figures.py),
   veils uint8 and sent only when they change, colour bars, titles (" — preview") and captions
-  (their "grid 100 × 100") of the value under the handle. A session computes one preview at a
+  (their "grid n × n") of the value under the handle. A session computes one preview at a
   time; values arriving meanwhile replace each other, and the latest is computed next;
 * on release the value is set on the scenario at once (Panel's own ``value_throttled``, 50 ms
   later, then changes nothing), which draws the exact maps through app/maps.py as any change
@@ -31,6 +32,7 @@ unless a drag of it is under way. Nothing is previewed while the Maps tab is hid
 from __future__ import annotations
 
 import asyncio
+import time
 import weakref
 from functools import partial
 
@@ -43,8 +45,14 @@ from .compute import MAP_INPUTS, Snapshot, compute
 
 #: Shortest interval (ms) between two values a dragged slider sends.
 THROTTLE_MS = 40
-#: Points per axis of a preview (at most the scenario's resolution).
-PREVIEW_N = 100
+#: Points per axis of a preview (at most the scenario's resolution), and the fewest it may
+#: come down to (:data:`PREVIEW_BUDGET_S`).
+PREVIEW_N, PREVIEW_MIN_N = 100, 30
+#: Seconds of compute a preview may take: a slower one (a magnetic kind: ~0.6 s at 100², its
+#: kernels not yet as fast as the electric ones) makes the next previews coarser, so the maps
+#: still follow the hand (and hold the kernels, which every session shares, for less long); a
+#: fast one lets the grid grow back to PREVIEW_N.
+PREVIEW_BUDGET_S = 0.06
 
 #: Previews of every session, off the event loop (core runs one kernel at a time anyway).
 _PREVIEWS = offloop.pool("previews", 2)
@@ -99,6 +107,7 @@ class Live:
         self.computing = False
         self.generation = 0  # a release starts a new one: previews of an older one are dropped
         self.drawn = 0  # previews drawn (for tests and the benchmark)
+        self.preview_n = PREVIEW_N  # points per axis of the next preview (PREVIEW_BUDGET_S)
         if doc is not None and doc.session_context is not None:
             _SESSIONS[doc] = self
             doc.on_session_destroyed(lambda _ctx: _SESSIONS.pop(doc, None))
@@ -133,20 +142,22 @@ class Live:
         name, value = self.pending
         self.pending, self.computing = None, True
         scenario = self.scenario
-        n = min(PREVIEW_N, int(scenario.value("resolution")))
+        n = min(self.preview_n, int(scenario.value("resolution")))
         try:
             snapshot = Snapshot.of_values(scenario, {name: value, "resolution": n})
         except (KeyError, ValueError):
             self.computing = False
             return
-        future = _PREVIEWS.submit(lambda: map_figures.prepare(compute(snapshot), preview=True))
-        offloop.schedule(self.doc, partial(self._finish, self.generation, future))
+        future = _PREVIEWS.submit(_preview, snapshot)
+        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n))
 
-    async def _finish(self, generation, future):
+    async def _finish(self, generation, future, n):
         try:
-            prepared = await asyncio.wrap_future(future)
+            prepared, seconds = await asyncio.wrap_future(future)
         except Exception:  # noqa: BLE001 (a value the scenario would refuse: no preview)
             prepared = None
+        else:
+            self.preview_n = next_n(n, seconds)
         self.computing = False
         if prepared is not None and generation == self.generation and self.shown:
             with pn.io.hold():  # the maps' own models in one message, as app/maps.py draws them
@@ -161,6 +172,24 @@ class Live:
         computed before them is drawn over them."""
         self.previewed = False
         self.generation += 1
+
+
+def _preview(snapshot):
+    """(the preview's arrays, seconds its compute took): on a worker thread."""
+    t0 = time.perf_counter()
+    panels = compute(snapshot)
+    seconds = time.perf_counter() - t0
+    return map_figures.prepare(panels, preview=True), seconds
+
+
+def next_n(n, seconds):
+    """Points per axis of the next preview after one of ``n`` took ``seconds``: the compute
+    grows as n², so n scaled by √(budget / seconds), within PREVIEW_MIN_N … PREVIEW_N; kept
+    when within a factor 2 of the budget (no back and forth on noise)."""
+    if PREVIEW_BUDGET_S / 2 <= seconds <= PREVIEW_BUDGET_S * 2:
+        return n
+    scaled = int(round(n * (PREVIEW_BUDGET_S / max(seconds, 1e-4)) ** 0.5 / 10.0) * 10)
+    return max(PREVIEW_MIN_N, min(PREVIEW_N, scaled))
 
 
 def follow(slider, name):
@@ -188,4 +217,4 @@ def shown_with(tabs, index):
     tabs.param.watch(active, ["active"])
 
 
-__all__ = ["Drag", "Live", "PREVIEW_N", "THROTTLE_MS", "follow", "shown_with"]
+__all__ = ["Drag", "Live", "PREVIEW_N", "THROTTLE_MS", "follow", "next_n", "shown_with"]

@@ -121,11 +121,13 @@ def compute_cpu_ms(name, repeat=15):
 
 
 @contextlib.contextmanager
-def served_floor(kind, timeout=120):
-    """Serve bench/floor/{kind}_app.py (``bokeh serve`` or ``panel serve``); yield (url of the
-    app's page, process). Built once before it is yielded, as served_app does for the project."""
+def served_floor(kind, timeout=120, stem=None):
+    """Serve bench/floor/{stem}_app.py (``stem`` default ``kind``) with ``{kind} serve`` (bokeh or
+    panel); yield (url of the app's page, process). Built once before it is yielded, as
+    served_app does for the project."""
     port = free_port()
-    script = f"bench/floor/{kind}_app.py"
+    stem = stem or kind
+    script = f"bench/floor/{stem}_app.py"
     cmd = [sys.executable, "-m", kind, "serve", script, "--port", str(port), "--address", "127.0.0.1",
            "--allow-websocket-origin", f"127.0.0.1:{port}"]
     env = {**os.environ, **SERVER_ENV, "PYTHONPATH": str(ROOT)}
@@ -133,7 +135,7 @@ def served_floor(kind, timeout=120):
         log = Path(tmp) / "server.log"
         with open(log, "w") as fh:
             proc = subprocess.Popen(cmd, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT, env=env)
-        url = f"http://127.0.0.1:{port}/{kind}_app"
+        url = f"http://127.0.0.1:{port}/{stem}_app"
         try:
             deadline = time.time() + timeout
             while True:

@@ -1,0 +1,76 @@
+"""app/live.py without a browser: previews of a dragged value, the release, what is ignored."""
+
+import numpy as np
+import pytest
+
+from app import live, maps
+from app.compute import SHARED, Snapshot
+from app.scenario import Scenario
+
+pytestmark = pytest.mark.filterwarnings(  # Panel 1.9 deprecates button_type (as test_calibration_tab)
+    "ignore:.*deprecated and will be removed in version 2.0:PendingDeprecationWarning")
+
+
+@pytest.fixture
+def tab():
+    scenario = Scenario()
+    return scenario, maps.maps_tab(scenario, SHARED)  # outside a server: each preview drawn at once
+
+
+def drag(lv, name, value, seq, released=False):
+    lv.changed("state", [], [name, value, seq, released])
+
+
+def test_a_dragged_value_is_previewed_and_its_release_draws_the_exact_maps(tab):
+    scenario, t = tab
+    figs, lv = t.figures, t.live
+    drag(lv, "Ph", 150.0, 1)
+    assert lv.drawn == 1 and scenario.target.Ph == 100.0  # the scenario keeps its value until release
+    assert all(layer.visible for layer in figs.preview_layers)
+    pv = figs.previews[1].data["pv"][0]
+    assert pv.dtype == np.uint8 and pv.shape == (lv.preview_n,) * 2
+    assert "P = (150, 20)" in figs.captions[0].text and figs.figures[0].title.text.endswith("— preview")
+    assert figs.veils[0].data["image"][0].dtype == np.uint8
+    drag(lv, "Ph", 150.0, 2, released=True)
+    assert scenario.target.Ph == 150.0
+    assert not any(layer.visible for layer in figs.preview_layers)
+    assert "preview" not in figs.figures[0].title.text and "grid 200 × 200" in figs.captions[0].text.replace("\n", " ")
+
+
+def test_a_release_where_nothing_changes_still_replaces_the_previews(tab):
+    scenario, t = tab
+    drag(t.live, "Ph", 333.0, 1)
+    drag(t.live, "Ph", 100.0, 2, released=True)  # the hand came back: the scenario does not change
+    assert scenario.target.Ph == 100.0
+    assert not any(layer.visible for layer in t.figures.preview_layers)
+
+
+def test_a_value_the_server_set_is_not_previewed_and_hidden_tabs_are_skipped(tab):
+    scenario, t = tab
+    drag(t.live, "Ph", 100.0, 1)  # the handle moved to the scenario's value (a preset, a typed value)
+    assert t.live.drawn == 0
+    t.live.shown = False
+    drag(t.live, "Ph", 150.0, 2)
+    assert t.live.drawn == 0
+    drag(t.live, "noise", 1e-6, 3)  # not a slider the maps follow: ignored
+    drag(t.live, "track_speed", 3.0, 4)
+    assert t.live.drawn == 0
+
+
+def test_previews_come_from_explicit_values_not_the_scenario():
+    sc = Scenario()
+    snap = Snapshot.of_values(sc, {"Ph": 321.0, "resolution": 50})
+    values = dict(snap.items)
+    assert values["Ph"] == 321.0 and values["resolution"] == 50 and sc.target.Ph == 100.0
+    assert Snapshot.of_values(sc, {}) == Snapshot.of(sc)
+    with pytest.raises(KeyError):
+        Snapshot.of_values(sc, {"track_speed": 1.0})
+
+
+def test_the_preview_grid_follows_the_compute_time():
+    n, budget = live.PREVIEW_N, live.PREVIEW_BUDGET_S
+    assert live.next_n(n, budget) == n  # within budget: kept
+    assert live.next_n(n, budget / 10) == n  # never above PREVIEW_N
+    assert live.next_n(n, 0.6) == 30  # a magnetic preview at 100² (~0.6 s): ~√(0.06 / 0.6) × 100
+    assert live.next_n(30, 0.6 * 0.09 * 2) == live.PREVIEW_MIN_N  # never below the minimum
+    assert live.next_n(30, 0.005) == 100  # fast again: back to PREVIEW_N
