@@ -5,7 +5,7 @@
 The sweep is ``mean_dopt`` (a region measure: every cell a layout criterion over
 region-n² target positions) over d × z. Timed in this run, median of ``--repeat``:
 
-- serial: :func:`core.cli.sweep.run` with ``workers=1`` in this process (numba's default threads);
+- serial: :func:`core.sweep.run` with ``workers=1`` in this process (numba's default threads);
 - pool: ``workers=2``, the CLI's default (spawned processes, one numba thread each; the
   pool's start-up is inside the time, as it is for every CLI run);
 - LocalCluster: 2 worker processes × 1 thread, ``NUMBA_NUM_THREADS=1`` (started once, its
@@ -30,7 +30,7 @@ import time
 import numba
 import numpy as np
 
-from core.cli import sweep
+from core import sweep
 
 
 def _children_cpu():

@@ -1,6 +1,6 @@
 """Optional Dask backend: independent evaluations on a ``dask.distributed`` cluster.
 
-The sweep (:func:`core.cli.sweep.run`) and the layout search (:func:`core.spacing_curve`,
+The sweep (:func:`core.sweep.run`) and the layout search (:func:`core.spacing_curve`,
 :func:`core.best_spacing`, :func:`core.optimise_layout`) evaluate many independent cells or
 candidates. Given a ``client`` they hand them to the cluster through this module; without one
 they run locally as before.

@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 import core
-from core import dask_backend
-from core.cli import sweep
+from core import dask_backend, sweep
+from core.cli import sweep as sweep_cli
 
 START_TIMEOUT = 60.0  # s: scheduler up and both workers registered (usually 3–6 s here)
 
@@ -75,7 +75,7 @@ def cluster(tmp_path_factory):
     try:
         client = distributed.Client(address, timeout=START_TIMEOUT, set_as_default=False)
         client.wait_for_workers(2, timeout=START_TIMEOUT)
-        client.run(importlib.import_module, "core.cli.sweep")  # warm: numba, scipy, the JIT cache
+        client.run(importlib.import_module, "core.sweep")  # warm: numba, scipy, the JIT cache
         yield address, client
     finally:
         if client is not None:
@@ -194,12 +194,12 @@ def test_cli_unreachable_scheduler_fails_fast_with_a_message(tmp_path, capsys):
     address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
     argv = ["--x", "d=5,10", "--y", "z=110,150", "--out", str(out), "--no-progress"]
     t0 = time.monotonic()
-    assert sweep.main([*argv, "--scheduler", address, "--connect-timeout", "2"]) == 1
+    assert sweep_cli.main([*argv, "--scheduler", address, "--connect-timeout", "2"]) == 1
     assert time.monotonic() - t0 < 10  # the 2 s timeout, not a hang
     assert f"cannot reach a Dask scheduler at '{address}' within 2 s" in capsys.readouterr().err
     assert not out.exists()
     with pytest.raises(SystemExit) as exc:  # argparse's usage error
-        sweep.main([*argv, "--scheduler", "localhost"])
+        sweep_cli.main([*argv, "--scheduler", "localhost"])
     assert exc.value.code == 2
     assert "bad scheduler address 'localhost'" in capsys.readouterr().err
 
@@ -235,7 +235,7 @@ def test_connect_to_a_scheduler_without_workers():
 
 
 def test_import_core_does_not_import_dask():
-    code = ("import sys, core, core.cli.sweep, core.dask_backend; "
+    code = ("import sys, core, core.sweep, core.cli.sweep, core.dask_backend; "
             "print(sorted(m for m in ('dask', 'distributed') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60, check=True)

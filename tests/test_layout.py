@@ -21,7 +21,7 @@ CORE = Path(core.__file__).resolve().parent
 
 #: Modules that may import argparse, matplotlib or tqdm: the command-line tools and their
 #: ``python -m`` entry points.
-CLI = ("core.cli", "core.sweep", "core.track", "core.calibration.__main__", "core.shape.__main__")
+CLI = ("core.cli", "core.sweep.__main__", "core.track", "core.calibration.__main__", "core.shape.__main__")
 CLI_ONLY = ("argparse", "matplotlib", "tqdm")
 
 
@@ -108,7 +108,8 @@ def test_the_graph_is_read():
     assert "core.kernels.electric" in GRAPH["core.kernels.gamma"][0]
     assert "core.kernels.gamma" in GRAPH["core.model.fields"][0]
     assert "core.model.validation" in GRAPH["core.tracking.motion"][0]
-    assert "core.cli.sweep" in GRAPH["core.sweep"][0]
+    assert "core.cli.sweep" in GRAPH["core.sweep.__main__"][0]
+    assert "core.sweep" in GRAPH["core.cli.sweep"][0]  # the engine, out of the CLI
     assert "argparse" in GRAPH["core.cli"][1] and "tqdm" in GRAPH["core.cli.sweep"][1]
 
 

@@ -14,7 +14,8 @@ import pytest
 from scipy import stats
 
 import core
-from core.cli import sweep
+from core import sweep
+from core.cli import sweep as sweep_cli
 from core.tracking import montecarlo as tr
 
 ORIGIN = [[0.0, 0.0, 0.0]]
@@ -204,7 +205,7 @@ def test_sweep_refuses_what_the_kind_does_not_have():
 
 def test_sweep_cli_with_sensor(tmp_path):
     out = tmp_path / "bg"
-    code = sweep.main(["--x", "d=2,5,10", "--y", "mz=100,1000", "--sensor", "BG", "--measure",
+    code = sweep_cli.main(["--x", "d=2,5,10", "--y", "mz=100,1000", "--sensor", "BG", "--measure",
                        "crlb_position", "--set", "h=0", "--set", "z=10", "--set", "x=10",
                        "--set", "y=5", "--workers", "1", "--no-progress", "--out", str(out)])
     assert code == 0
@@ -220,7 +221,7 @@ def test_sweep_cli_with_sensor(tmp_path):
     ref = core.horizontal_error_ellipse(x, st, steps=3, sensor=core.Sensor("BG")).position
     np.testing.assert_allclose(vals[0], ref, rtol=1e-12)
     with pytest.raises(SystemExit):
-        sweep.main(["--x", "Ph=1,2", "--y", "z=5,10", "--sensor", "B", "--out", str(out)])
+        sweep_cli.main(["--x", "Ph=1,2", "--y", "z=5,10", "--sensor", "B", "--out", str(out)])
 
 
 def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():

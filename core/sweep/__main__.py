@@ -3,7 +3,7 @@
 import os
 import sys
 
-from .cli.sweep import main
+from ..cli.sweep import main
 
 if __name__ == "__main__":
     os.environ.setdefault("MPLBACKEND", "Agg")
