@@ -1,6 +1,14 @@
 """The page a session gets while the server is still compiling the kernels the maps need
 (first start after install or after an edit of a kernel): what is happening and for how long,
-updated every second; it reloads itself, keeping its address, when the maps can be computed."""
+updated every second; it reloads itself, keeping its address, when the maps can be computed.
+
+The reload is race-free by construction: it is asked for only once the page has told the server
+it is up (``pn.state.onload``, run when the browser reports the document rendered), and then as
+soon as the kernels are ready. Asked for earlier, from the periodic callback alone, a reload set
+before the browser had connected arrived as the page's initial state, which the browser does not
+act on (it reloads on a *change*): a page opened as the warm-up ended stood on "loading the
+dashboard…" for good.
+"""
 
 from __future__ import annotations
 
@@ -28,12 +36,25 @@ def warming_page(warmup=WARMUP):
     page = pn.Column(pn.pane.Markdown(INTRO), pn.Row(spinner, status), margin=(20, 40),
                      css_classes=["warming-page"])
 
-    def poll():
-        status.object = warmup.status()
-        if warmup.ready(0):
+    loaded, sent = [False], [False]
+    location = pn.state.location
+
+    def reload_when_ready():
+        if loaded[0] and warmup.ready(0) and not sent[0]:
+            sent[0] = True
             callback.stop()
             status.object = "The maps' kernels are ready: loading the dashboard…"
-            pn.state.location.reload = True  # Panel's Location reloads the page, same address
+            location.reload = True  # Panel's Location reloads the page, same address
+
+    def poll():
+        if not sent[0]:
+            status.object = warmup.status()
+        reload_when_ready()
+
+    def page_up():  # the browser has rendered the page: a change of ``reload`` now reaches it
+        loaded[0] = True
+        reload_when_ready()
 
     callback = pn.state.add_periodic_callback(poll, period=int(POLL_S * 1000))
+    pn.state.onload(page_up)
     return page

@@ -102,3 +102,103 @@ def test_the_warming_page_shows_progress_and_reloads_into_the_dashboard_when_rea
         release.set()
         server.stop()
         warmup.out.close()
+
+
+def test_a_page_whose_browser_connects_after_the_warm_up_ended_still_reloads():
+    """The race of issue 40 (a page opened as the warm-up ends stood on "loading the dashboard…"
+    for good): the kernels are ready right after the warming page is built, and the browser is
+    held back (its Panel bundle delayed 3 s) so that it connects only after the server's first
+    poll. A reload asked for before the browser had connected came as the page's initial state,
+    which the browser does not act on."""
+    release = threading.Event()
+    warmup = Warmup(stages=(("held stage", release.wait),), out=open(os.devnull, "w"))
+    warmup.start()
+
+    def page():
+        if not warmup.ready(0):
+            shown = warming_page(warmup)
+            release.set()  # ready before this page's browser has even loaded its scripts
+            return shown
+        return pn.pane.Markdown("dashboard served", css_classes=["served-after-reload"])
+
+    port = free_port()
+    server = pn.serve({"app": page}, port=port, address="127.0.0.1", show=False, threaded=True,
+                      websocket_origin=[f"127.0.0.1:{port}"])
+
+    def slow(route):
+        time.sleep(3.0)  # > POLL_S: the server's poll has seen the kernels ready by then
+        route.continue_()
+
+    try:
+        with chromium_browser() as browser:
+            tab = browser.new_page(viewport={"width": 1280, "height": 800})
+            tab.route("**/panel.min.js*", slow)
+            tab.goto(f"http://127.0.0.1:{port}/app?d=20", timeout=60_000)
+            tab.locator(".served-after-reload").wait_for(timeout=30_000)
+            assert tab.url.endswith("/app?d=20")
+            tab.close()
+    finally:
+        release.set()
+        server.stop()
+        warmup.out.close()
+
+
+#: Seconds a page opened at a start may take to show the dashboard's three maps: a warm start
+#: loads the kernels in seconds; the bound leaves room for a machine loaded by other work (the
+#: issue saw 16 s to the first answer at load 5-8).
+DASHBOARD_WITHIN_S = 180.0
+
+
+def starts_reach_the_dashboard(starts, env=None, browser=None):
+    """Start `panel serve app` ``starts`` times in a row; each time open /app in Chromium as soon
+    as /liveness answers, touch nothing, and wait for the dashboard's three maps. Returns the
+    seconds from the start to the maps, per start; raises on a page that never gets there."""
+    from support.page import maps
+
+    times = []
+    env = {**os.environ, **SERVER_ENV, **(env or {})}
+    for _ in range(starts):
+        port = free_port()
+        cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address",
+               "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness"]
+        t0 = time.monotonic()
+        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                env=env)
+        try:
+            while True:
+                assert proc.poll() is None, "the server ended"
+                try:
+                    _get(f"http://127.0.0.1:{port}/liveness", timeout=2.0)
+                    break
+                except OSError:
+                    time.sleep(0.05)
+            tab = browser.new_page(viewport={"width": 1280, "height": 800})
+            try:
+                tab.goto(f"http://127.0.0.1:{port}/app", timeout=120_000)
+                while len(_maps_or_none(tab, maps) or []) != 3:
+                    assert time.monotonic() - t0 < DASHBOARD_WITHIN_S, (
+                        f"start {len(times) + 1}: no dashboard after {DASHBOARD_WITHIN_S} s "
+                        f"(page: {tab.inner_text('body')[:200]!r})")
+                    time.sleep(0.25)
+            finally:
+                tab.close()
+            times.append(time.monotonic() - t0)
+        finally:
+            stop(proc)
+    return times
+
+
+def _maps_or_none(tab, maps):
+    try:  # a page that is reloading, or the warming page, has no maps to read
+        return maps(tab) if tab.evaluate("() => !!(window.Bokeh && Bokeh.index)") else None
+    except Exception:  # noqa: BLE001 (Playwright: the execution context was destroyed)
+        return None
+
+
+def test_ten_starts_in_a_row_each_reach_the_dashboard_with_a_warm_cache():
+    """Issue 40: a page opened as soon as /liveness answers, on a fresh server with the numba
+    cache warm, stood on the warming page for good in 2 of 8 and 5 of 5 starts."""
+    with chromium_browser() as browser:
+        times = starts_reach_the_dashboard(10, browser=browser)
+    print("seconds from the start to the maps, per start:", [round(t, 1) for t in times])
+    assert len(times) == 10
