@@ -161,3 +161,19 @@ def test_speed_and_rate_set_the_samples():
     assert r.noise_g == r.noise_b == 0.02
     assert r.track.positions[-1, 0] == pytest.approx(40.0)
     assert cli.geometry(row) == row  # no option: the case's own pass
+
+
+def test_a_verdict_that_is_not_the_targets_kind_gets_a_caution():
+    """Issue 40, defect 14: the command printed "plane" for a line with no caution."""
+    row = {"truth": {"target": {"kind": "line"}},
+           "filters": {"euler": {"centroid_error_m": 0.4},
+                       "ukf": {"kind": "line", "kind_share": {"line": 1.0}},
+                       "nhukf": {"kind": "plane", "kind_share": {"plane": 0.6, "line": 0.4}},
+                       "fit": {"kind": "tie", "kind_share": {"plane": 0.5, "line": 0.5}}}}
+    got = cli.cautions(row)
+    assert got == ["CAUTION: nhukf reads a plane (60 % of runs) but the target is a line: its main "
+                   "scale and axis are not the target's",
+                   "CAUTION: fit reads a tie (50 % of runs) but the target is a line: its main "
+                   "scale and axis are not the target's"]
+    row["filters"]["nhukf"]["kind"] = row["filters"]["fit"]["kind"] = "line"
+    assert cli.cautions(row) == []

@@ -39,7 +39,8 @@ update each row ran.
 errors of the filters and the fit against the closest approach, and prints how close the pass
 must be to size the target to ``--size-to`` metres (default 10 % of its main scale).
 
-A row the pass cannot size prints a WARNING line: its main scales and kinds mean nothing.
+A row the pass cannot size prints a WARNING line: its main scales and kinds mean nothing; an
+estimator whose line / plane verdict is not the target's prints a CAUTION line.
 Every bad input prints one line ``python -m core.shape: error: …`` and exits with status 2.
 """
 
@@ -256,7 +257,7 @@ def _plot_shape(res, path):
     for ax, (i, j, lab) in zip(axes, ((0, 1, "plan: x–y"), (0, 2, "side: x–z"))):
         for ln in t.outline():
             ax.plot(ln[:, i], ln[:, j], color="0.6", lw=1)
-        for name, mk in (("ukf", "o"), ("nhukf", "^")):
+        for name, mk in (("ukf", "o"), ("nhukf", "^"), ("fit", "s")):
             if name not in res.dipoles:
                 continue
             d = res.dipoles[name][0]
@@ -307,6 +308,19 @@ def run(case, runs=1, seed=0, lag=None, out=None, plots=True, **geo):
                 _plot_errors(r, os.path.join(out, f"errors_row{i}.png"))
                 _plot_shape(r, os.path.join(out, f"shape_row{i}.png"))
     return summary
+
+
+def cautions(row):
+    """CAUTION lines of a summary row: an estimator whose verdict is not the truth's kind."""
+    truth = row["truth"]["target"]["kind"]
+    out = []
+    for name, v in row["filters"].items():
+        if "kind" in v and v["kind"] != truth:
+            share = v["kind_share"].get(v["kind"], 0.0) if v["kind"] != "tie" else 0.5
+            out.append(f"CAUTION: {name} reads {'a tie' if v['kind'] == 'tie' else 'a ' + v['kind']}"
+                       f" ({100 * share:.0f} % of runs) but the target is a {truth}: its main scale "
+                       f"and axis are not the target's")
+    return out
 
 
 def warning(row):
@@ -491,6 +505,8 @@ def main(argv=None):
                 print(f"  WARNING: the fit's centroid NEES {f['fit']['nees']:.3g} is outside its 99 % "
                       f"band {band[0]:.3g} … {band[1]:.3g}: its σ is "
                       + ("optimistic" if f["fit"]["nees"] > band[1] else "pessimistic"))
+        for line in cautions(row):
+            print("  " + line)
         w = warning(row)
         if w:
             print("  " + w)
