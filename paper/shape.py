@@ -106,6 +106,14 @@ def _m(v, nd=3):
     return "—" if v is None or not np.isfinite(v) else f"{v:.{nd}f}"
 
 
+def _small(v, nd=3):
+    """As :func:`_m`, but two significant digits where fixed decimals would print 0.0…: the batch
+    fit's centroid and axis errors are below them."""
+    if v is None or not np.isfinite(v) or abs(v) >= 10.0**-nd * 10 or v == 0:
+        return _m(v, nd)
+    return f"{v:.2g}"
+
+
 def section(nums=None):
     """The markdown section of seed 003 (a string; computes :func:`numbers` if not given)."""
     n = numbers() if nums is None else nums
@@ -153,11 +161,12 @@ def section(nums=None):
             for name in FILTERS:
                 v = d[name]
                 shape = (f"{_m(v['main_scale_m'], 2)} ({_m(v['main_scale_p10_p90_m'][0], 2)}–"
-                         f"{_m(v['main_scale_p10_p90_m'][1], 2)}) | {v['axis_error_deg']:.1f} "
-                         f"({v['axis_error_p90_deg']:.1f}) | {v['kind']} ({100 * max(v['kind_share'].values()):.0f} %) "
+                         f"{_m(v['main_scale_p10_p90_m'][1], 2)}) | {_small(v['axis_error_deg'], 1)} "
+                         f"({_small(v['axis_error_p90_deg'], 1)}) | {v['kind']} "
+                         f"({100 * max(v['kind_share'].values()):.0f} %) "
                          f"| {v['nees']:.2g}") if "kind" in v else "— | — | — | —"
-                w(f"| {label} | {upd} | {name.upper()} | {_m(v['centroid_error_m'])} "
-                  f"({_m(v['centroid_error_p90_m'])}) | {_m(v['peak_error_m'])} | {shape} |")
+                w(f"| {label} | {upd} | {name.upper()} | {_small(v['centroid_error_m'])} "
+                  f"({_small(v['centroid_error_p90_m'])}) | {_m(v['peak_error_m'])} | {shape} |")
     w("")
     for part, upd in (("fig", "window"), ("one_sample", "one-sample update")):
         at = n[part]["seed003-fig5"]["at_outliers_m"]
@@ -207,7 +216,7 @@ def section(nums=None):
     w("|---|---|---|---|---|---|---|")
     for key, t in n["tables"].items():
         for r in t["rows"]:
-            cell = lambda v: f"{_m(v['main_scale_m'], 2)} / {v['axis_error_deg']:.1f} / {v['kind']}"
+            cell = lambda v: f"{_m(v['main_scale_m'], 2)} / {_small(v['axis_error_deg'], 1)} / {v['kind']}"
             f = r["filters"]
             w(f"| {key[-1]} | {r['label']} | {r['truth_scale_m']:g} m, {r['truth_kind']} | {cell(f['ukf'])} "
               f"| {cell(f['nhukf'])} | {cell(f['fit'])} | {_m(f['nhukf']['centroid_error_m'])} |")
