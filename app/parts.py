@@ -479,7 +479,7 @@ class Shape(Part):
                                   doc="Seed 003's window of three lagged readings (eq. 15, the paper's "
                                       "method; every sample counts three times, so the filters' σ is "
                                       "optimistic). One sample: the honest update, shown for "
-                                      "comparison (it misreads the axis in about a third of passes).")
+                                      "comparison (it misreads the axis in about half of the passes).")
     shape_runs = param.Integer(1, softbounds=(1, 20), label="Monte-Carlo passes",
                                doc="Noise realisations: errors and shape are their medians, 1 to 20.")
     shape_seed = param.Integer(0, softbounds=(0, 100), label="Random seed", doc="Seed of the noise.")

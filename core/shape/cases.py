@@ -4,7 +4,7 @@ rows below are our choice, each a variation of the Fig. 4 set-up in one property
 Every case runs the paper's method: seed 003's window of three lagged readings
 (:data:`PAPER_LAG`, eq. (15)). Figs. 4 and 5 also carry, as a second row marked
 ``comparison``, the same pass with the honest one-sample update (lag 0): it does not count a
-sample three times, but it reads the axis wrong by > 45° in about a third of Fig. 4's passes
+sample three times, but it reads the axis wrong by > 45° in about half of Fig. 4's passes (48 % of 40)
 and loses Fig. 5's shape (docs/shape.md). The command line, the report and the dashboard's
 presets all take the lag from here (``--lag`` overrides it for every row and drops the
 comparison rows). A case's description names no update: :func:`describe` adds the one each
