@@ -223,8 +223,9 @@ DESIGN_SENSOR = ("Sensor: {name}. The Cramér–Rao maps, spacing and layouts be
                  "kind: moment m = ({mx:g}, {my:g}, {mz:g}) A·m², noise {noise}, point gradient tensor.")
 TRACK_SENSOR = ("The track below is seen by the sidebar's sensor, {name}: a magnetic target of "
                 "moment m = ({mx:g}, {my:g}, {mz:g}) A·m² (8 states: position, horizontal velocity, "
-                "moment), noise {noise}. The EKF and PU-EKF run on it through the same measurement "
-                "model as the maps; seed 001's filter bank is for the electric dipole only.")
+                "moment), noise {noise}. The EKF, PU-EKF and seed 001's filter bank run on it through "
+                "the same measurement model as the maps (the bank's hypotheses: vertical moments "
+                "of ½, 1 and 2 × |m|).")
 
 
 def sensor_banner(scenario, tab):

@@ -7,7 +7,8 @@ sensor axes, process noise, tracker, runs) and, from the rest of the scenario, t
 moments ``Ph``/``Pv``, ``noise``, ``sigma`` and the sea (``sea_model``, ``sea_depth``,
 ``seabed_sigma``: :func:`sea_of`); magnetic (magnetometer, gradiometer or both), the moment
 ``mx``/``my``/``mz`` (A·m²) and ``noise_b``/``noise_g`` — the same ``core.Sensor`` the maps use,
-through the same EKF and PU-EKF (seed 001's filter bank is electric only).
+through the same EKF, PU-EKF and seed 001's filter bank (for a magnetic kind its hypotheses are
+vertical moments of ½, 1 and 2 × |m|: :meth:`core.Sensor.bank_moments`).
 
 It shows
 
@@ -81,8 +82,10 @@ def magnetic_options(s):
     noise = {"B": s.noise_b, "G": s.noise_g, "BG": (s.noise_b, s.noise_g)}[kind]
     moments = (float(s.mx), float(s.my), float(s.mz))
     sm = max(1.0, MAGNETIC_PRIOR_SHARE * float(np.linalg.norm(moments)))
+    m = max(1.0, float(np.linalg.norm(moments)))
     return dict(sensor=core.Sensor(kind, noise), moments=moments,
-                prior_std=(20.0, 20.0, 0.5, 0.5, 0.5, sm, sm, sm))
+                prior_std=(20.0, 20.0, 0.5, 0.5, 0.5, sm, sm, sm),
+                bank_strengths=(0.5 * m, m, 2.0 * m))
 
 
 #: The command line's sea-trial case (``python -m core.track --case seed001-trial``): the
@@ -94,12 +97,8 @@ _PRIORS = ("prior_std", "bank_depth_std", "bank_pv_std")
 
 
 def tracker_of(s):
-    """(the tracker the tab runs, why it is not the one chosen or ''): the filter bank is seed
-    001's, for the electric dipole; with a magnetic sensor the tab runs the EKF, and says so."""
-    if s.track_filter == "bank" and SENSORS[s.sensor] != "E":
-        return "ekf", ("The filter bank is seed 001's, for the electric dipole only: with a "
-                       f"{s.sensor.split(' (')[0]} the tab runs the **EKF** (choose the EKF or the "
-                       "PU-EKF as the tracker to make this the setting).")
+    """(the tracker the tab runs, why it is not the one chosen or ''): every tracker runs on
+    every sensor kind, so the one chosen."""
     return s.track_filter, ""
 
 

@@ -79,8 +79,8 @@ def test_tracking_functions_take_stations_and_sensor():
     F, Q = core.dwna_model(n_states=8)
     with pytest.raises(ValueError, match=r"x0 must have shape \(N, 8\)"):
         core.run_filters(np.zeros((1, 7)), np.eye(7), np.zeros((1, 2, 8)), ORIGIN, F, Q, sensor="BG")
-    with pytest.raises(ValueError, match="magnetic"):
-        core.run_bank(np.zeros((1, 2, 8)), core.SensorModel(ORIGIN, sensor="BG"), F, Q, depth=1.0)
+    with pytest.raises(ValueError, match=r"ys must have shape \(R, K, 8\)"):
+        core.run_bank(np.zeros((1, 2, 3)), core.SensorModel(ORIGIN, sensor="BG"), F, Q, depth=1.0)
 
 
 def _electric_track():
@@ -227,7 +227,7 @@ def test_sweep_cli_with_sensor(tmp_path):
 def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():
     """The Track tab's case is the sidebar's sensor (issue 26 item 5): a magnetic kind gives an
     8-state case with the scenario's moment and core.Sensor, its PCRLB and map from the same
-    model; the electric bank is refused for it with a reason."""
+    model; seed 001's bank runs on it too (issue 36)."""
     from app import track
     from app.scenario import Scenario
 
@@ -243,10 +243,76 @@ def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():
     np.testing.assert_allclose(out["res"].pcrlb_m, direct.pcrlb_m, rtol=1e-12)
     assert "(8 states: 8 if consistent)" in track.summary_text(out)
     # issue 40 defect 9: a magnetometer with the bank tracker ran nothing ("Computing the track"
-    # for good); the tab runs the EKF and says so
+    # for good); issue 36: the bank runs on the magnetic kinds, its levels about |m|
     s.track.track_filter = "bank"
-    assert track.tracker_of(s.snapshot())[0] == "ekf"
+    assert track.tracker_of(s.snapshot()) == ("bank", "")
     out = track.compute(s)
-    assert out["res"].summary["filter"] == "ekf"
-    text = track.summary_text(out)
-    assert "electric dipole only" in text and "runs the **EKF**" in text
+    summary = out["res"].summary
+    assert summary["filter"] == "bank" and summary["nees_dof"] == 8
+    m = np.linalg.norm(case.moments)
+    assert track.case_of(s.snapshot()).bank_strengths == (0.5 * m, m, 2.0 * m)
+    assert sum(summary["winners"].values()) == 2
+
+
+# ------------------------------------------------------------------------------------------
+# seed 001's bank, the command line and Dask with a magnetic sensor (issue 36 item 3)
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kind", ["B", "G", "BG"])
+def test_start_range_inverts_the_magnetic_field_magnitude(kind):
+    # noise-free, exactly on a hypothesis (vertical moment p, bearing π/4, inbound): the bank's
+    # bisection on ‖h‖ must give back the range (the field is monotonic in r along the bearing)
+    stations = [[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]]
+    p, r = 1e5, np.hypot(150.0, 150.0)
+    sensors = core.SensorModel(stations, sensor=core.Sensor(kind, (1e-12, 1e-12) if kind == "BG"
+                                                              else 1e-12))
+    x = core.straight_track([150.0, 150.0, 0.2], 5 * np.pi / 4, 2.0, 1, moments=(0.0, 0.0, p))[0]
+    y0 = sensors.h(x)[None]
+    got = core.start_range(y0, sensors, [p], [np.pi / 4], depth=0.2, speed=2.0, centre=(0.0, 0.0))
+    np.testing.assert_allclose(got[0, 0], r, rtol=1e-6)  # 48 bisection steps in log r: ~1e-13
+
+
+def test_cli_tracks_seed001_with_a_magnetic_sensor(tmp_path, capsys):
+    from core.cli import track as track_cli
+
+    out = tmp_path / "bg"
+    assert track_cli.main(["--case", "seed001-sim", "--sensor", "BG", "--filter", "ekf",
+                           "--runs", "4", "--seed", "1", "--out", str(out)]) == 0
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["case"] == "seed001-sim-BG" and summary["nees_dof"] == 8
+    assert summary["diverged"] == 0.0
+    # 4 runs from a prior about the truth: the final RMS error near the PCRLB (4 runs: the RMS
+    # of 3-D errors scatters by ~±40 % about its mean, so a factor 2.5 either way)
+    assert 0.4 < summary["trmse_final_m"] / summary["pcrlb_final_m"] < 2.5
+    with (out / "trmse.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 300 and all(np.isfinite(float(r["pcrlb_m"])) for r in rows[1:])
+
+
+def test_bank_runs_on_a_magnetic_sensor_and_finds_the_bearing():
+    case = tr.case_for_sensor("seed001-sim", "BG")
+    res = tr.monte_carlo(case, filter="bank", runs=3, seed=2)
+    s = res.summary
+    assert s["nees_dof"] == 8 and sum(s["winners"].values()) == 3
+    assert s["nearest_hypothesis"].endswith("ψ=5π/4")  # the true start bearing
+    assert s["nearest_bearing_wins"] == 1.0  # the bank's winner has the right bearing every run
+    assert s["diverged"] == 0.0
+
+
+def test_magnetic_monte_carlo_on_dask_equals_serial():
+    from dask.distributed import Client, LocalCluster
+
+    case = tr.TrackCase(name="bg-pass", stations=tuple(map(tuple, ORIGIN)), axes=3,
+                        start=(-30.0, 12.0, 8.0), heading=0.0, speed=2.0, steps=20,
+                        sigma_a=0.002, alpha=1.0, moments=MOMENT, sensor=core.Sensor("BG", (0.1, 0.1)),
+                        prior_std=(0.3, 0.3, 0.3, 0.05, 0.05, 20.0, 20.0, 20.0))
+    a = tr.monte_carlo(case, filter="ekf", runs=4, seed=5, workers=1)
+    # a real scheduler and two workers in this process, as tests/test_track.py's electric test
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as lc:
+        with Client(lc) as client:
+            b = tr.monte_carlo(case, filter="ekf", runs=4, seed=5, scheduler=lc.scheduler_address)
+            assert len(client.scheduler_info()["workers"]) == 2
+    np.testing.assert_array_equal(a.error_m, b.error_m)
+    assert b.summary["workers"] == "dask" and b.summary["nees_dof"] == 8

@@ -1,9 +1,10 @@
 """``python -m core.track``: Monte-Carlo tracking on seed 001's cases, from the command line.
 
-``python -m core.track --case seed001-sim|seed001-trial [--filter ekf|puekf|bank] [--runs N]
-[--seed S] [--n-pu N] [--workers W] [--scheduler ADDR] [--truth-noise] --out DIR`` runs
-:func:`core.tracking.montecarlo.monte_carlo` (the cases and the method are in its module notes)
-and writes
+``python -m core.track --case seed001-sim|seed001-trial [--sensor E|B|G|BG]
+[--filter ekf|puekf|bank] [--runs N] [--seed S] [--n-pu N] [--workers W] [--scheduler ADDR]
+[--truth-noise] --out DIR`` runs :func:`core.tracking.montecarlo.monte_carlo` (the cases and the
+method are in its module notes; ``--sensor`` other than E measures the case with a magnetic
+sensor, :func:`core.tracking.montecarlo.case_for_sensor`) and writes
 
 - ``DIR/trmse.csv``: ``step, time_s, trmse_m, pcrlb_m`` (TRMSE_k of seed 001 eq. (18): the RMS
   over runs of the 3-D position error of the reported estimate at step k);
@@ -24,7 +25,8 @@ import sys
 import numpy as np
 from tqdm import tqdm
 
-from ..tracking.montecarlo import CASES, DEFAULT_N_PU, FILTERS, monte_carlo
+from ..model.sensors import KINDS
+from ..tracking.montecarlo import CASES, DEFAULT_N_PU, FILTERS, case_for_sensor, monte_carlo
 from . import ArgumentParser
 
 __all__ = ["main", "write_outputs"]
@@ -109,6 +111,10 @@ def main(argv=None):
                                  description="Monte-Carlo tracking on seed 001's cases: TRMSE vs PCRLB")
     ap.add_argument("--case", required=True, choices=sorted(CASES))
     ap.add_argument("--filter", default="bank", choices=FILTERS)
+    ap.add_argument("--sensor", default="E", choices=list(KINDS),
+                    help="what the stations measure: E electric (seed 001), B magnetometer, "
+                         "G gradiometer, BG both (the case's target then carries a magnetic "
+                         "moment, core.tracking.montecarlo.case_for_sensor)")
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-pu", type=int, default=None, help=f"progressive sub-updates (default {DEFAULT_N_PU} for puekf, 1 otherwise)")
@@ -122,7 +128,7 @@ def main(argv=None):
     if a.workers is None:
         a.workers = min(2, os.cpu_count() or 1) if a.runs >= 200 else 1
     try:
-        res = monte_carlo(a.case, filter=a.filter, runs=a.runs, seed=a.seed, n_pu=a.n_pu,
+        res = monte_carlo(case_for_sensor(a.case, a.sensor), filter=a.filter, runs=a.runs, seed=a.seed, n_pu=a.n_pu,
                           workers=a.workers, scheduler=a.scheduler, truth_noise=a.truth_noise,
                           progress=_Bar(f"{a.case} {a.filter}"))
     except ValueError as exc:

@@ -247,6 +247,22 @@ class Sensor:
             clear &= np.min(validation.station_distances(moved, stations), axis=1) >= self.near
         return clear
 
+    def bank_moments(self, strength, strength_frac, pv_std):
+        """Moment entries of seed 001's filter-bank hypotheses of strength p (..., H) and their
+        prior σ: (mean, std), each (..., H, n_states − 5).
+
+        Electric: (Ph, Pv) = (p, 0), σ = (strength_frac·p, pv_std) (seed 001: a horizontal
+        dipole along the motion). Magnetic: (mx, my, mz) = (0, 0, p), a vertical moment (depth
+        down: the induced moment of a hull under a mostly vertical geomagnetic field; a
+        permanent moment's direction is not known beforehand), σ = strength_frac·p on each
+        component, wide enough for any direction of strength ≤ p within ~2σ."""
+        p = np.asarray(strength, float)[..., None]
+        if self.magnetic:
+            mean = np.concatenate([np.zeros(p.shape[:-1] + (2,)), p], axis=-1)
+            return mean, np.repeat(strength_frac * p, 3, axis=-1)
+        mean = np.concatenate([p, np.zeros_like(p)], axis=-1)
+        return mean, np.concatenate([strength_frac * p, np.full_like(p, pv_std)], axis=-1)
+
     def free_columns(self, known):
         """Indices of the unknown states, given the names of the known ones."""
         if not self.magnetic:

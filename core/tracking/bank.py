@@ -21,6 +21,11 @@ Hypotheses (our reading of seed 001 eqs. (11)–(15); eq. (14) is lost in the te
   truth between neighbouring bearings), ξ_z in depth, σ_v per velocity axis, ξ_p = ``strength_frac``
   · p_i on Ph and ``pv_std`` on Pv.
 
+Any sensor kind: the hypotheses' moments come from :meth:`core.Sensor.bank_moments` (electric
+as above; magnetic a vertical moment of strength p A·m², σ = ``strength_frac`` · p on each
+component) and the start range from the kind's own field, so the bank runs on B, G and BG too
+(n = 8 states).
+
 Numbering follows seed 001: filter n = N_F·(i − 1) + j (1-based), strength-major, so with the
 defaults filter 7 is (100 A·m, ψ₃) — seed 001's simulation winner.
 """
@@ -32,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.measurement import SensorModel
-from ..model.sensors import ELECTRIC_STATES
+from ..model.sensors import sensor_model
 from .filters import run_filters
 
 __all__ = ["BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "bank_hypotheses",
@@ -84,15 +89,15 @@ def start_range(y0, sensors, strengths, bearings, *, depth, speed=2.0,
     p = np.repeat(np.asarray(strengths, float), len(bearings))  # (H,)
     psi = np.tile(np.asarray(bearings, float), len(strengths))  # (H,)
     c = np.mean(sensors.stations[:, :2], axis=0) if centre is None else np.asarray(centre, float)
-    # ‖h‖² estimate: E‖y‖² = ‖h‖² + m σ²; keep it positive (a field below the noise → r_max).
-    target = np.maximum((y0**2).sum(axis=2).mean(axis=1) - sensors.n_meas * sensors.noise**2,
-                        1e-6 * sensors.noise**2)  # (R,)
+    # ‖h‖² estimate: E‖y‖² = ‖h‖² + Σ σ²; keep it positive (a field below the noise → r_max).
+    var = np.sum(np.asarray(sensors.noise_vector, float) ** 2)
+    target = np.maximum((y0**2).sum(axis=2).mean(axis=1) - var, 1e-6 * var / sensors.n_meas)
     n_runs, n_h = y0.shape[0], p.size
     lo = np.full((n_runs, n_h), np.log(r_min))
     hi = np.full((n_runs, n_h), np.log(r_max))
 
     def norm2(logr):
-        st = hypothesis_states(np.exp(logr), p, psi, c, depth, speed)  # (R, H, 7)
+        st = hypothesis_states(np.exp(logr), p, psi, c, depth, speed, sensors.sensor)  # (R, H, n)
         return (sensors.h(st) ** 2).sum(axis=-1)
 
     for _ in range(iterations):
@@ -103,18 +108,19 @@ def start_range(y0, sensors, strengths, bearings, *, depth, speed=2.0,
     return np.exp(0.5 * (lo + hi))
 
 
-def hypothesis_states(r, p, psi, centre, depth, speed):
-    """States (…, H, 7) of hypotheses at range r (…, H), strength p (H,), bearing ψ (H,):
-    position centre + r (cos ψ, sin ψ) at ``depth``, inbound heading ψ + π at ``speed``."""
+def hypothesis_states(r, p, psi, centre, depth, speed, sensor=None):
+    """States (…, H, n) of hypotheses at range r (…, H), strength p (H,), bearing ψ (H,):
+    position centre + r (cos ψ, sin ψ) at ``depth``, inbound heading ψ + π at ``speed``, the
+    moments of :meth:`core.Sensor.bank_moments` (electric when ``sensor`` is None)."""
+    sensor = sensor_model(sensor)
     r = np.asarray(r, float)
-    out = np.empty(r.shape + (ELECTRIC_STATES,))
+    out = np.empty(r.shape + (sensor.n_states,))
     out[..., 0] = centre[0] + r * np.cos(psi)
     out[..., 1] = centre[1] + r * np.sin(psi)
     out[..., 2] = depth
     out[..., 3] = -speed * np.cos(psi)
     out[..., 4] = -speed * np.sin(psi)
-    out[..., 5] = p
-    out[..., 6] = 0.0
+    out[..., 5:] = sensor.bank_moments(np.broadcast_to(p, r.shape), 1.0, 1.0)[0]
     return out
 
 
@@ -147,8 +153,8 @@ def bank_hypotheses(y0, sensors, *, depth, strengths=BANK_STRENGTHS, bearings=BA
 
     Returns
     -------
-    x0 : ndarray, shape (R, H, 7)
-    P0 : ndarray, shape (R, H, 7, 7)
+    x0 : ndarray, shape (R, H, n)
+    P0 : ndarray, shape (R, H, n, n)
     ranges : ndarray, shape (R, H)
         H = K · N_F, strength-major (filter n = N_F (i − 1) + j).
     """
@@ -167,15 +173,16 @@ def bank_hypotheses(y0, sensors, *, depth, strengths=BANK_STRENGTHS, bearings=BA
                          centre=c)
     p = np.repeat(strengths, bearings.size)
     psi = np.tile(bearings, strengths.size)
-    x0 = hypothesis_states(ranges, p, psi, c, depth, speed)
-    std = np.empty(ranges.shape + (ELECTRIC_STATES,))
+    x0 = hypothesis_states(ranges, p, psi, c, depth, speed, sensors.sensor)
+    n = sensors.n_states
+    std = np.empty(ranges.shape + (n,))
     std[..., 0] = std[..., 1] = position_frac * ranges
     std[..., 2] = depth_std
     std[..., 3] = std[..., 4] = speed_std
-    std[..., 5] = strength_frac * p
-    std[..., 6] = pv_std
-    P0 = np.zeros(ranges.shape + (ELECTRIC_STATES, ELECTRIC_STATES))
-    idx = np.arange(ELECTRIC_STATES)
+    std[..., 5:] = sensors.sensor.bank_moments(np.broadcast_to(p, ranges.shape), strength_frac,
+                                               pv_std)[1]
+    P0 = np.zeros(ranges.shape + (n, n))
+    idx = np.arange(n)
     P0[..., idx, idx] = std**2
     return x0, P0, ranges
 
@@ -186,7 +193,7 @@ class BankResult:
 
     Attributes
     ----------
-    x : ndarray, shape (R, K, 7)
+    x : ndarray, shape (R, K, n)
         The reported track: at each step the estimate of the filter with the largest
         accumulated log-likelihood (seed 001 eq. (17)).
     selected : ndarray of int, shape (R, K)
@@ -198,9 +205,9 @@ class BankResult:
         NEES of the reported filter.
     position_var : ndarray, shape (R, K)
         Trace of the reported filter's position covariance (m²).
-    x_all : ndarray, shape (R, H, K, 7)
+    x_all : ndarray, shape (R, H, K, n)
         Every filter's estimates.
-    x0 : ndarray, shape (R, H, 7)
+    x0 : ndarray, shape (R, H, n)
         The hypotheses.
     ranges : ndarray, shape (R, H)
         Start ranges from the field magnitude (m).
@@ -225,7 +232,7 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     ys : array_like, shape (R, K, m)
         Measurements (V/m).
     sensors : core.SensorModel
-    F, Q : ndarray, shape (7, 7)
+    F, Q : ndarray, shape (n, n)
         Filter model, :func:`core.dwna_model`.
     depth : float
         Hypothesised source depth (m).
@@ -236,7 +243,7 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
         (n = 1 is seed 001's single magnitude; more averages the noise down where the start is
         far and the field near the noise, e.g. seed 001's trial start at ~285 m). A track shorter
         than n steps uses all of its K steps: min(n, K).
-    truth : array_like, shape (R, K, 7), optional
+    truth : array_like, shape (R, K, n), optional
         True states, for the NEES.
     progress : callable, optional
         Called with 1 after every step.
@@ -249,11 +256,6 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     """
     if not isinstance(sensors, SensorModel):
         raise ValueError(f"sensors must be a core.SensorModel; got {type(sensors).__name__}")
-    if sensors.sensor.magnetic:
-        raise ValueError(
-            "the filter bank is seed 001's: its hypotheses are electric source strengths (Ph); "
-            f"sensor kind {sensors.kind!r} is magnetic: run core.run_filters (EKF / PUEKF) instead"
-        )
     ys = np.asarray(ys, dtype=float)
     if ys.ndim != 3 or ys.shape[2] != sensors.n_meas:
         raise ValueError(f"ys must have shape (R, K, {sensors.n_meas}); got {ys.shape}")
@@ -267,7 +269,7 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     n_h = x0.shape[1]
     # (R, H, ...) -> (R·H, ...): every filter of every run in one stack
     flat_truth = None if truth is None else np.repeat(np.asarray(truth, float), n_h, axis=0)
-    n = ELECTRIC_STATES
+    n = sensors.n_states
     run = run_filters(x0.reshape(-1, n), P0.reshape(-1, n, n), np.repeat(ys, n_h, axis=0),
                       sensors, F, Q, n_pu=n_pu, truth=flat_truth, progress=progress)
     ll = run.loglik.reshape(n_runs, n_h, k_steps)
@@ -275,7 +277,7 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     x_all = run.x.reshape(n_runs, n_h, k_steps, n)
     r_i = np.arange(n_runs)[:, None]
     k_i = np.arange(k_steps)[None, :]
-    x = x_all[r_i, selected, k_i]  # (R, K, 7)
+    x = x_all[r_i, selected, k_i]  # (R, K, n)
     nees = None if run.nees is None else run.nees.reshape(n_runs, n_h, k_steps)[r_i, selected, k_i]
     pos_var = run.position_var.reshape(n_runs, n_h, k_steps)[r_i, selected, k_i]
     with np.errstate(invalid="ignore"):

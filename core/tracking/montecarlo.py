@@ -50,12 +50,14 @@ import numpy as np
 
 from ..model.measurement import SensorModel
 from ..model.sea import Sea
+from ..model.sensors import Sensor, sensor_model
 from .bank import BANK_BEARINGS, BANK_STRENGTHS, SEED_BEARINGS, run_bank
 from .filters import run_filters
 from .motion import dwna_model, sample_tracks, straight_track
 from .pcrlb import linearisation_breaks, pcrlb
 
-__all__ = ["CASES", "FILTERS", "NEES_LEVEL", "MonteCarloResult", "TrackCase", "monte_carlo", "nees_band"]
+__all__ = ["CASES", "FILTERS", "MAGNETIC_MOMENT", "NEES_LEVEL", "MonteCarloResult", "TrackCase",
+           "case_for_sensor", "monte_carlo", "nees_band"]
 
 #: Filters of :func:`monte_carlo`.
 FILTERS = ("ekf", "puekf", "bank")
@@ -103,6 +105,9 @@ class TrackCase:
     #: The moment entries of the true state instead of (Ph, Pv): (mx, my, mz) in A·m² for a
     #: magnetic sensor.
     moments: tuple | None = None
+    #: The bank's strength levels (A·m electric, A·m² magnetic); None: seed 001's
+    #: :data:`core.BANK_STRENGTHS`.
+    bank_strengths: tuple | None = None
 
     def sensors(self):
         """The :class:`core.SensorModel` of the case (a :class:`core.Sea` where it has one)."""
@@ -125,12 +130,15 @@ class TrackCase:
         return np.diag(np.asarray(self.prior_std, float) ** 2)
 
     def bank_prior_info(self):
-        """What every bank hypothesis knows a priori, as information (7, 7): the depth (ξ_z)
-        and Pv; flat in x, y, velocity and Ph (those are what the hypotheses guess)."""
-        n = self.sensors().n_states
+        """What every bank hypothesis knows a priori, as information (n, n): the depth (ξ_z)
+        and, electric, Pv; flat in x, y, velocity and the strength (what the hypotheses guess;
+        a magnetic hypothesis guesses every moment component)."""
+        sensors = self.sensors()
+        n = sensors.n_states
         info = np.zeros((n, n))
         info[2, 2] = 1.0 / self.bank_depth_std**2
-        info[6, 6] = 1.0 / self.bank_pv_std**2
+        _, std = sensors.sensor.bank_moments(np.inf, 1.0, self.bank_pv_std)  # guessed: σ = ∞
+        info[np.arange(5, n), np.arange(5, n)] = 1.0 / std**2
         return info
 
     def check(self):
@@ -167,6 +175,35 @@ CASES = {
 }
 
 
+#: The magnetic target of :func:`case_for_sensor` (A·m²): |m| ≈ 1e5 A·m², a submarine's order
+#: of magnitude, mostly vertical (induced under a steep geomagnetic field) with a horizontal
+#: permanent part. At seed 001's start (≈ 285 m) B ≈ 0.4–0.9 nT (40–90 σ at 0.01 nT) while G
+#: (≈ 3B/r ≈ 0.005 nT/m) is below its 0.01 nT/m noise until the target comes within ~100 m.
+MAGNETIC_MOMENT = (3.0e4, 2.0e4, 9.0e4)
+
+
+def case_for_sensor(case, sensor):
+    """Seed 001's case (a name or a :class:`TrackCase`) measured by another sensor kind.
+
+    ``"E"`` (or None) returns the case. A magnetic kind (a name or a :class:`core.Sensor`) keeps
+    the geometry, track and filter model and changes what the target and the sensors are: the
+    target carries :data:`MAGNETIC_MOMENT` (A·m²), the stations report every component of the
+    kind (3 axes; a magnetostatic field does not see the layered sea), the prior σ of the
+    moment is 30 % of |m| per component, and the bank's strength levels are |m| × (½, 1, 2)
+    (seed 001's 50 / 100 / 200 around the truth).
+    """
+    case = _case(case)
+    sensor = sensor_model(sensor)
+    if sensor.kind == "E":
+        return case if sensor == Sensor("E") else dataclasses.replace(case, sensor=sensor)
+    m = float(np.linalg.norm(MAGNETIC_MOMENT))
+    return dataclasses.replace(
+        case, name=f"{case.name}-{sensor.kind}", sensor=sensor, axes=3, moments=MAGNETIC_MOMENT,
+        prior_std=tuple(case.prior_std[:5]) + (0.3 * m,) * 3,
+        bank_strengths=(0.5 * m, m, 2.0 * m),
+        description=f"{case.description}; sensor {sensor.kind}, moment {MAGNETIC_MOMENT} A·m²")
+
+
 def _case(case):
     if isinstance(case, TrackCase):
         return case
@@ -184,11 +221,14 @@ def hypothesis_labels(strengths=BANK_STRENGTHS, seed_bearings=SEED_BEARINGS):
     return out
 
 
-def nearest_hypothesis(truth0, centre, strengths=BANK_STRENGTHS, bearings=BANK_BEARINGS):
-    """Index of the hypothesis nearest a true start state (…, 7): the strength level nearest
-    in log and the bearing nearest the true start bearing from the array centre."""
+def nearest_hypothesis(truth0, centre, strengths=BANK_STRENGTHS, bearings=BANK_BEARINGS,
+                       strength=None):
+    """Index of the hypothesis nearest a true start state (…, n): the strength level nearest
+    in log and the bearing nearest the true start bearing from the array centre. ``strength``
+    (…): the true strength, default Ph = truth0[..., 5] (a magnetic target's is |m|)."""
     truth0 = np.asarray(truth0, float)
-    i = np.argmin(np.abs(np.log(np.asarray(strengths))[None] - np.log(truth0[..., 5:6])), axis=-1)
+    true_p = truth0[..., 5] if strength is None else np.asarray(strength, float)
+    i = np.argmin(np.abs(np.log(np.asarray(strengths))[None] - np.log(true_p[..., None])), axis=-1)
     b = np.arctan2(truth0[..., 1] - centre[1], truth0[..., 0] - centre[0])
     gap = np.abs(np.angle(np.exp(1j * (b[..., None] - np.asarray(bearings)))))
     j = np.argmin(gap, axis=-1)
@@ -237,8 +277,10 @@ def _chunk(case, filter_name, run_ids, seed, n_pu, truth_noise, keep_tracks=0, p
     ys = _measurements(case, sensors, truths, run_ids, seed)
     out = {"run_ids": np.asarray(run_ids)}
     if filter_name == "bank":
+        strengths = {} if case.bank_strengths is None else {"strengths": case.bank_strengths}
         res = run_bank(ys, sensors, F, Q, depth=case.bank_depth, n_pu=n_pu, truth=truths,
-                       progress=progress, depth_std=case.bank_depth_std, pv_std=case.bank_pv_std)
+                       progress=progress, depth_std=case.bank_depth_std, pv_std=case.bank_pv_std,
+                       **strengths)
         est, nees, selected = res.x, res.nees, res.selected[:, -1]
         out["selected"] = selected
         out["loglik"] = res.loglik[:keep_tracks]
@@ -478,10 +520,12 @@ def _collect(case, filter_name, n_pu, seed, runs, truth_noise, sensors, results,
     }
     tracks = {"truth": results[0]["truth"], "estimate": results[0]["estimate"]}
     if filter_name == "bank":
-        labels = hypothesis_labels()
+        levels = BANK_STRENGTHS if case.bank_strengths is None else case.bank_strengths
+        labels = hypothesis_labels(levels)
         selected = np.concatenate([r["selected"] for r in results])
         centre = np.mean(sensors.stations[:, :2], axis=0)
-        nearest = nearest_hypothesis(truths[:, 0], centre)
+        true_p = None if case.moments is None else np.linalg.norm(truths[:, 0, 5:], axis=-1)
+        nearest = nearest_hypothesis(truths[:, 0], centre, levels, strength=true_p)
         counts = np.bincount(selected, minlength=len(labels))
         summary["winners"] = {labels[i]: int(c) for i, c in enumerate(counts)}
         summary["nearest_hypothesis"] = labels[int(np.bincount(nearest).argmax())]
