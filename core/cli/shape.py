@@ -454,6 +454,9 @@ def _plot_sweep(sw, row, path):
     ax.axhline(sw["main_scale_m"], color="0.5", ls="-.", lw=1, label=f"main scale {sw['main_scale_m']:g} m")
     if sw["bound_cpa_m"] is not None and math.isfinite(sw["bound_cpa_m"]):
         ax.axvline(sw["bound_cpa_m"], color="k", lw=1, alpha=0.5)
+    from matplotlib.ticker import FormatStrFormatter
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
     ax.set_xlabel("closest approach (m)")
     ax.set_ylabel("main scale: 1σ bound or median |error| (m)")
     ax.set_title(f"{row.name}: how close must the pass be? ({sw['runs']} passes per point)")
