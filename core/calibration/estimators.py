@@ -13,12 +13,12 @@ from .observability import CAL_RANK_RTOL
 from .validation import (
     _array,
     _attitudes,
-    _be,
-    _count,
     _min_attitudes,
-    _noise,
     _readings,
     _square4,
+    checked_be,
+    checked_count,
+    checked_noise,
 )
 
 
@@ -155,7 +155,7 @@ def default_iterations(n_readings):
     >>> default_iterations(12), default_iterations(5000), default_iterations(1_000_000)
     (600, 60000, 1000000)
     """
-    n = _count("n_readings", n_readings, 1)
+    n = checked_count("n_readings", n_readings, 1)
     return n * max(1, min(50, KALMAN_STEP_BUDGET // n))
 
 
@@ -204,10 +204,10 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
     """
     att = _attitudes(attitudes)
     B = _readings(B, att)
-    be = _be(be)
-    sigma2 = _noise("sigma_nt", sigma_nt) ** 2
+    be = checked_be(be)
+    sigma2 = checked_noise("sigma_nt", sigma_nt) ** 2
     N = att.shape[-2]
-    M = _count("iterations", N if iterations is None else iterations, 1, MAX_KALMAN_ITERATIONS,
+    M = checked_count("iterations", N if iterations is None else iterations, 1, MAX_KALMAN_ITERATIONS,
                " (filter steps)")
     P = _square4("P0", DEFAULT_P0_DIAG if P0 is None else P0, allow_zero=False)
     Qm = _square4("Q", 0.0 if Q is None else Q, allow_zero=True)

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import CHUNK, _attitude, _convention
-from .validation import _K, _array, _attitudes, _be, _readings, _vector3
+from .validation import _K, _array, _attitudes, _readings, _vector3, checked_be
 
 
 def geomagnetic_solution(B, attitudes, K, Bp, *, convention="seed004"):
@@ -86,7 +86,7 @@ def geomagnetic_error(be_hat, be):
     -------
     GeomagneticError
     """
-    be = _be(be)
+    be = checked_be(be)
     est = _array("be_hat", be_hat, "shape (N, 3) in nT")
     if est.shape[-1:] != (3,):
         raise ValueError(f"be_hat must have shape (N, 3) in nT; got {est.shape}")

@@ -20,12 +20,12 @@ from .observability import calibration_observability
 from .validation import (
     _K,
     NOISE_RANGE_NT,
-    _angle_noise,
     _attitudes,
-    _be,
     _min_attitudes,
-    _noise,
     _readings,
+    checked_angle_noise,
+    checked_be,
+    checked_noise,
 )
 
 #: σ̂ / σ above this (at least; more for few readings, see :func:`fit_diagnosis`) says the
@@ -179,9 +179,9 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
         raise ValueError(f"attitudes must have shape (N, 3) for one log; got {att.shape}")
     _min_attitudes(att)
     B = _readings(B, att)
-    be = _be(be)
-    sb = _noise("noise_nt", noise_nt)
-    sa = _angle_noise("angle_noise_rad", angle_noise_rad)
+    be = checked_be(be)
+    sb = checked_noise("noise_nt", noise_nt)
+    sa = checked_angle_noise("angle_noise_rad", angle_noise_rad)
     factors = _convention(convention)
     N = att.shape[0]
     lsq = lsq_calibrate(B, att, be, convention=convention)

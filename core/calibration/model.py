@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .validation import _K, ANGLE_LIMIT, _array, _attitudes, _be, _vector3
+from .validation import _K, ANGLE_LIMIT, _array, _attitudes, _vector3, checked_be
 
 #: The 12 coefficients in the order of Γ's columns and of every 12-vector here: K row by row,
 #: then Bp. (Seed 004's state x = [K Bp]ᵀ is 4 × 3: its column i is ``[k_i1, k_i2, k_i3, Bp_i]``.)
@@ -151,7 +151,7 @@ def ship_field(K, Bp, attitudes, be, *, convention="seed004"):
     K, Bp = _K(K), _vector3("Bp", Bp, "nT")
     if K.shape != (3, 3):
         raise ValueError(f"K must have shape (3, 3); got {K.shape}")
-    h = _body_field(_attitudes(attitudes), _be(be), _convention(convention))
+    h = _body_field(_attitudes(attitudes), checked_be(be), _convention(convention))
     return h @ K.T + Bp
 
 
@@ -178,7 +178,7 @@ def design_rows(attitudes, be, *, convention="seed004"):
     ndarray, shape (..., N, 4)
         Columns in nT, nT, nT, 1: each sensor axis i reads ``C(n) · [k_i1, k_i2, k_i3, Bp_i]``.
     """
-    h = _body_field(_attitudes(attitudes), _be(be), _convention(convention))
+    h = _body_field(_attitudes(attitudes), checked_be(be), _convention(convention))
     return np.concatenate([h, np.ones(h.shape[:-1] + (1,))], axis=-1)
 
 

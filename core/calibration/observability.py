@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import CHUNK, _attitude, _convention, design_rows
-from .validation import _K, _angle_noise, _attitudes, _be, _noise, _positive
+from .validation import _K, _attitudes, _positive, checked_angle_noise, checked_be, checked_noise
 
 #: Γ (columns scaled to unit norm) has rank r when r singular values exceed CAL_RANK_RTOL times
 #: the largest. Exactly confounded coefficients (level headings) give ≤ 1e-15 (round-off); a
@@ -169,7 +169,7 @@ def calibration_observability(attitudes, be, *, convention="seed004", rtol=CAL_R
     if att.ndim != 2:
         raise ValueError(f"attitudes must have shape (N, 3) for one manoeuvre; got {att.shape}")
     rtol = _positive("rtol", rtol, "relative")
-    C = design_rows(att, _be(be), convention=convention)  # (N, 4)
+    C = design_rows(att, checked_be(be), convention=convention)  # (N, 4)
     scale, s, Vt, crank = _thin_svd(C, rtol)
     rank = 3 * crank
     # Γ's singular values are G's, each three times (one per sensor axis)
@@ -245,9 +245,9 @@ def calibration_covariance(attitudes, be, *, noise_nt, angle_noise_rad=0.0, K=No
     att = _attitudes(attitudes)
     if att.ndim != 2:
         raise ValueError(f"attitudes must have shape (N, 3) for one manoeuvre; got {att.shape}")
-    be = _be(be)
-    sb = _noise("noise_nt", noise_nt)
-    sa = _angle_noise("angle_noise_rad", angle_noise_rad)
+    be = checked_be(be)
+    sb = checked_noise("noise_nt", noise_nt)
+    sa = checked_angle_noise("angle_noise_rad", angle_noise_rad)
     if estimator not in ("crlb", "lsq"):
         raise ValueError(f"estimator must be 'crlb' or 'lsq'; got {estimator!r}")
     Kmat = np.eye(3) if K is None else _K(K)

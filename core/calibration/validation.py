@@ -50,7 +50,7 @@ def _vector3(name, value, unit):
     return arr
 
 
-def _be(value):
+def checked_be(value):
     be = _vector3("be", value, "nT")
     norm = np.sqrt(np.sum(be ** 2)) if np.abs(be).max() < BE_RANGE_NT[1] else np.inf
     if not norm > 0:
@@ -62,7 +62,7 @@ def _be(value):
     return be
 
 
-def _noise(name, value):
+def checked_noise(name, value):
     """A reading-noise σ in :data:`NOISE_RANGE_NT` (nT)."""
     v = _positive(name, value, "nT")
     lo, hi = NOISE_RANGE_NT
@@ -71,7 +71,7 @@ def _noise(name, value):
     return v
 
 
-def _angle_noise(name, value, unit="rad"):
+def checked_angle_noise(name, value, unit="rad"):
     """An angle-error σ ≥ 0, at most :data:`ANGLE_NOISE_MAX_RAD` (given in ``unit``)."""
     v = _positive(name, value, unit, allow_zero=True)
     hi = ANGLE_NOISE_MAX_RAD if unit == "rad" else float(np.rad2deg(ANGLE_NOISE_MAX_RAD))
@@ -109,7 +109,7 @@ def _positive(name, value, unit, allow_zero=False):
 
 
 
-def _count(name, value, low, high=None, what=""):
+def checked_count(name, value, low, high=None, what=""):
     """An integer in [low, high] (high None: no upper limit), or ValueError naming the range."""
     ok = not isinstance(value, bool) and isinstance(value, (int, np.integer))
     if not ok or value < low or (high is not None and value > high):

@@ -26,7 +26,13 @@ from ..calibration.geomagnetic import geomagnetic_error, geomagnetic_solution
 from ..calibration.misfit import fit_diagnosis
 from ..calibration.model import COEFFICIENTS, CONVENTIONS
 from ..calibration.observability import calibration_crlb, calibration_observability
-from ..calibration.validation import NOISE_RANGE_NT, _angle_noise, _be, _count, _noise
+from ..calibration.validation import (
+    NOISE_RANGE_NT,
+    checked_angle_noise,
+    checked_be,
+    checked_count,
+    checked_noise,
+)
 from . import ArgumentParser
 
 PROG = "python -m core.calibration"
@@ -50,7 +56,7 @@ def _parse_be(text):
         raise ValueError(f"--be must be three comma-separated numbers in nT (north, east, down), "
                          f"e.g. --be 34425,1961,35898; got {text!r}")
     try:
-        return _be(vals)
+        return checked_be(vals)
     except ValueError as exc:
         raise ValueError(f"--be: {exc}") from None
 
@@ -190,10 +196,10 @@ def main(argv=None):
     try:
         a = _parser().parse_args(argv)
         be = _parse_be(a.be)
-        sigma = _noise("--sigma-nt", a.sigma_nt)
-        angle_sigma = _angle_noise("--angle-sigma-deg", a.angle_sigma_deg, unit="deg")
+        sigma = checked_noise("--sigma-nt", a.sigma_nt)
+        angle_sigma = checked_angle_noise("--angle-sigma-deg", a.angle_sigma_deg, unit="deg")
         if a.iterations is not None:
-            _count("--iterations", a.iterations, 1, MAX_KALMAN_ITERATIONS)
+            checked_count("--iterations", a.iterations, 1, MAX_KALMAN_ITERATIONS)
         B, att = read_attitude_csv(a.csv)
         iters = default_iterations(att.shape[0]) if a.iterations is None else a.iterations
         r = _cli_result(B, att, be, sigma_nt=sigma, angle_sigma_deg=angle_sigma,

@@ -37,13 +37,13 @@ EULER_RCOND = 1e-10
 
 def states(value):
     """Magnetic states as a contiguous (P, 8) float64 array, and the leading shape."""
-    arr = validation._array("states", value)
+    arr = validation.as_array("states", value)
     if arr.ndim < 1 or arr.shape[-1] != mk.N_STATE:
         raise ValueError(
             "magnetic states must have shape (..., 8) = [x, y, z, vx, vy, mx, my, mz] "
             f"(m, m/s, A·m²); got shape {arr.shape}"
         )
-    validation._finite("states", arr)
+    validation.finite("states", arr)
     return np.ascontiguousarray(arr.reshape(-1, mk.N_STATE)), arr.shape[:-1]
 
 
@@ -214,10 +214,10 @@ def measurement_rows(states_value, stations_value, sensor, baseline, dt):
 
 
 def _tensor(name, value):
-    arr = validation._array(name, value)
+    arr = validation.as_array(name, value)
     if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
         raise ValueError(f"{name} must have shape (..., 3, 3) (a gradient tensor, nT/m); got shape {arr.shape}")
-    validation._finite(name, arr)
+    validation.finite(name, arr)
     return arr
 
 
@@ -298,10 +298,10 @@ def euler_locate(B, G):
     True
     """
     g = _tensor("G", G)
-    b = validation._array("B", B)
+    b = validation.as_array("B", B)
     if b.shape[-1:] != (3,) or b.shape[:-1] != g.shape[:-2]:
         raise ValueError(f"B must have shape (..., 3) matching G's (..., 3, 3) = {g.shape}; got {b.shape}")
-    validation._finite("B", b)
+    validation.finite("B", b)
     if g.size:
         sv = np.linalg.svd(g, compute_uv=False)
         rcond = sv[..., -1] / np.where(sv[..., 0] > 0, sv[..., 0], 1.0)

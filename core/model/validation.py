@@ -14,13 +14,13 @@ from ..kernels.electric import N_STATES, ON_STATION  # the kernels' bound and si
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "Ph", "Pv")
 
 
-def _finite(name, arr):
+def finite(name, arr):
     if not np.all(np.isfinite(arr)):
         bad = arr[~np.isfinite(arr)].ravel()[0]
         raise ValueError(f"{name} must be finite; got a value {bad!r} (NaN and inf are not accepted)")
 
 
-def _array(name, value):
+def as_array(name, value):
     try:
         return np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -29,13 +29,13 @@ def _array(name, value):
 
 def states(value):
     """Return electric states as a contiguous (P, 7) float64 array and the leading shape."""
-    arr = _array("states", value)
+    arr = as_array("states", value)
     if arr.ndim < 1 or arr.shape[-1] != N_STATES:
         raise ValueError(
             f"states must have shape (..., {N_STATES}) = [x, y, z, vx, vy, Ph, Pv]; got shape "
             f"{arr.shape}"
         )
-    _finite("states", arr)
+    finite("states", arr)
     flat = np.ascontiguousarray(arr.reshape(-1, N_STATES))
     if np.any((flat[:, 3] == 0.0) & (flat[:, 4] == 0.0)):
         raise ValueError(
@@ -47,14 +47,14 @@ def states(value):
 
 def stations(value):
     """Return stations as a contiguous (S, 3) float64 array, S ≥ 1."""
-    arr = _array("stations", value)
+    arr = as_array("stations", value)
     if arr.shape == (3,):
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"stations must have shape (S, 3) station positions in m; got shape {arr.shape}")
     if arr.shape[0] == 0:
         raise ValueError("stations must hold at least one station; got an empty list")
-    _finite("stations", arr)
+    finite("stations", arr)
     return np.ascontiguousarray(arr)
 
 
@@ -115,3 +115,8 @@ def no_target_on_station(states, stations):
             f"{tuple(stations[s])} m: the dipole field is singular at D = 0 (closer than {ON_STATION} m counts); "
             "move the target or mask such points (core.observability.maps does)"
         )
+
+
+#: The old private name, still used by core/observability/design.py (whose split into criteria,
+#: spacing and optimiser is under way elsewhere); drop it when that module uses ``as_array``.
+_array = as_array

@@ -71,7 +71,7 @@ def station_layout(kind, n_stations=2, *, d=15.0, h=100.0, positions=None):
     if kind == "free":
         if positions is None:
             raise ValueError("layout 'free' needs positions: an (S, 2) or (S, 3) array in m")
-        pos = validation._array("positions", positions)
+        pos = validation.as_array("positions", positions)
         if pos.ndim != 2 or pos.shape[1] not in (2, 3):
             raise ValueError(f"positions must have shape (S, 2) or (S, 3) in m; got shape {pos.shape}")
         if pos.shape[1] == 2:

@@ -139,10 +139,10 @@ def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0, mom
     >>> core.straight_track([0, 0, 5], 0.0, 2.0, 3, moments=(1.0, 2.0, 3.0)).shape
     (3, 8)
     """
-    start = validation._array("start", start)
+    start = validation.as_array("start", start)
     if start.shape != (3,):
         raise ValueError(f"start must be a position (x, y, z) in m, shape (3,); got shape {start.shape}")
-    validation._finite("start", start)
+    validation.finite("start", start)
     heading = float(heading)
     if not np.isfinite(heading):
         raise ValueError(f"heading must be a finite angle (rad); got {heading!r}")
@@ -155,11 +155,11 @@ def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0, mom
                 raise ValueError(f"{name} must be a finite moment (A·m); got {v!r}")
         mom = np.array([float(Ph), float(Pv)])
     else:
-        mom = validation._array("moments", moments)
+        mom = validation.as_array("moments", moments)
         if mom.ndim != 1 or _KINEMATIC + mom.size not in STATE_SIZES:
             raise ValueError("moments must be (Ph, Pv) in A·m or (mx, my, mz) in A·m²; got "
                              f"shape {mom.shape}")
-        validation._finite("moments", mom)
+        validation.finite("moments", mom)
     t = T * np.arange(steps)
     vx, vy = speed * np.cos(heading), speed * np.sin(heading)
     out = np.empty((steps, _KINEMATIC + mom.size))
@@ -188,7 +188,7 @@ def sample_tracks(x0, F, Q, steps, rng):
     -------
     ndarray, shape (..., steps, n)
     """
-    x0 = validation._array("x0", x0)
+    x0 = validation.as_array("x0", x0)
     if x0.ndim < 1 or x0.shape[-1] not in STATE_SIZES:
         raise ValueError(f"x0 must have shape (..., n), n in {STATE_SIZES}; got shape {x0.shape}")
     n = x0.shape[-1]

@@ -69,21 +69,21 @@ class PcrlbResult:
 
 
 def _tracks(track, n):
-    arr = validation._array("track", track)
+    arr = validation.as_array("track", track)
     if arr.ndim not in (2, 3) or arr.shape[-1] != n:
         raise ValueError(
             f"track must be true states of shape (steps, {n}), or (M, steps, {n}) for M sampled "
             f"tracks (the sensor's state size); got shape {arr.shape}"
         )
-    validation._finite("track", arr)
+    validation.finite("track", arr)
     return arr if arr.ndim == 3 else arr[None]
 
 
 def _matrix(name, value, shape):
-    arr = validation._array(name, value)
+    arr = validation.as_array(name, value)
     if arr.shape != shape:
         raise ValueError(f"{name} must have shape {shape}; got {arr.shape}")
-    validation._finite(name, arr)
+    validation.finite(name, arr)
     return arr
 
 
@@ -227,8 +227,8 @@ def linearisation_breaks(crlb_m, range_m, limit=0.3):
     >>> core.linearisation_breaks([1.0, 50.0, float("inf")], [100.0, 100.0, 100.0]).tolist()
     [False, True, True]
     """
-    crlb = validation._array("crlb_m", crlb_m)
-    rng = validation._array("range_m", range_m)
+    crlb = validation.as_array("crlb_m", crlb_m)
+    rng = validation.as_array("range_m", range_m)
     if np.any(crlb < 0):
         raise ValueError("crlb_m must be ≥ 0 (m) or +inf; got a negative value")
     if np.any(~np.isfinite(rng)) or np.any(rng <= 0):
