@@ -367,7 +367,7 @@ def caption(s, moments=None, stations=None, kinds="E"):
     if any(k in ("B", "BG") for k in used):
         noises.append(f"{s.noise_b:.3g} nT")
     if any(k in ("G", "BG") for k in used):
-        noises.append(f"{s.noise_g:.3g} nT/m")
+        noises.append(f"{s.noise_g:.3g} nT/m" + (f", baseline {s.baseline:g} m" if s.baseline > 0 else ""))
     states = s.state_set if electric else (
         "all 8 unknown" if s.state_set == "all 7 unknown" else "moments known (5 states)")
     model = f"{s.model}, " if electric else ""

@@ -40,7 +40,7 @@ SECTIONS = (
     ("Stations", ["h", "d", "layout"], False),
     ("Sea", ["sea_model", "sea_depth", "seabed_sigma"], False),
     ("Scenario B of Figs. 3, 4, 6", ["k", "Ph_b", "Pv_b", "mx_b", "my_b", "mz_b", "d_ref"], True),
-    ("Advanced", ["model", "state_set", "T", "sigma", "noise", "noise_b", "noise_g", "steps", "extent",
+    ("Advanced", ["model", "state_set", "T", "sigma", "noise", "noise_b", "noise_g", "baseline", "steps", "extent",
                   "z_min", "z_max", "resolution"], True),
 )
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
@@ -131,6 +131,7 @@ def applies(name, s, tab):
         "Ph": electric, "Pv": electric, "mx": magnetic, "my": magnetic, "mz": magnetic,
         "model": electric, "sigma": electric, "noise": electric,
         "noise_b": bool(kinds & {"B", "BG"}), "noise_g": bool(kinds & {"G", "BG"}),
+        "baseline": bool(kinds & {"G", "BG"}),
         "sensor_b": on_maps and kind == "sensor_kinds",
         # the Track tab has a speed and heading of its own (track_speed, track_heading)
         "speed": tab != TRACK_TAB, "heading": tab != TRACK_TAB,
@@ -220,12 +221,24 @@ def _section(scenario, tabs, title, names, collapsed):
 
 #: What the Layout design and Track tabs say over their content for a magnetic sensor kind.
 DESIGN_SENSOR = ("Sensor: {name}. The Cramér–Rao maps, spacing and layouts below are for this "
-                 "kind: moment m = ({mx:g}, {my:g}, {mz:g}) A·m², noise {noise}, point gradient tensor.")
+                 "kind: moment m = ({mx:g}, {my:g}, {mz:g}) A·m², noise {noise}, {tensor}.")
 TRACK_SENSOR = ("The track below is seen by the sidebar's sensor, {name}: a magnetic target of "
                 "moment m = ({mx:g}, {my:g}, {mz:g}) A·m² (8 states: position, horizontal velocity, "
-                "moment), noise {noise}. The EKF, PU-EKF and seed 001's filter bank run on it through "
+                "moment), noise {noise}, {tensor}. The EKF, PU-EKF and seed 001's filter bank run on it through "
                 "the same measurement model as the maps (the bank's hypotheses: vertical moments "
                 "of ½, 1 and 2 × |m|).")
+
+
+def tensor_text(kind, baseline):
+    """What the gradiometer reads, its baseline's effect and limits (issue 36 item 4)."""
+    if "G" not in kind:
+        return "no gradiometer"
+    if baseline <= 0:
+        return ("point gradient tensor (no baseline: one gradiometer alone cannot tell range from "
+                "moment, spec §11)")
+    return (f"gradiometer of baseline L = {baseline:g} m (magnetometer differences: it sets the "
+            "scale, so one gradiometer alone is observable, its bound growing steeply with "
+            "range / L; targets within L of a station masked)")
 
 
 def sensor_banner(scenario, tab):
@@ -241,9 +254,10 @@ def sensor_banner(scenario, tab):
                  "BG": f"{noise_b:g} nT and {noise_g:g} nT/m"}[kind]
         text = TRACK_SENSOR if tab == TRACK_TAB else DESIGN_SENSOR
         return _alert(text.format(name=name, mx=scenario.target.mx, my=scenario.target.my, mz=scenario.target.mz,
-                                  noise=noise), "info")
+                                  noise=noise, tensor=tensor_text(kind, scenario.sensor.baseline)),
+                      "info")
 
-    deps = [scenario.ref(n) for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g")]
+    deps = [scenario.ref(n) for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g", "baseline")]
     return pn.pane.HTML(pn.bind(text, *deps), visible=pn.bind(lambda k, *_: SENSORS[k] != "E", *deps),
                         sizing_mode="stretch_width",
                         css_classes=["w-track-sensor" if tab == TRACK_TAB else "w-design-sensor"])

@@ -221,6 +221,7 @@ class Sensor(Part):
         "noise": (1e-12, 1e-2, "V/m"),
         "noise_b": (1e-6, 1e3, "nT"),
         "noise_g": (1e-6, 1e3, "nT/m"),
+        "baseline": (0.0, 10.0, "m"),
         "T": (1e-3, 1000.0, "s"),
         "steps": (1, 20, "instants"),
     }
@@ -233,6 +234,11 @@ class Sensor(Part):
                    "Noise standard deviation per field component, nT.")
     noise_g = _num(0.01, (1e-3, 10), "Gradiometer noise (nT/m)",
                    "Noise standard deviation per tensor component, nT/m.")
+    baseline = _num(0.0, (0, 2), "Gradiometer baseline L (m)",
+                    "0: the point gradient tensor. L > 0: magnetometers ±L/2 along each axis read "
+                    "as differences (seed 003: 0.5 m). It sets the scale: one gradiometer alone "
+                    "becomes observable, its bound growing steeply with range / L; targets within "
+                    "L of a station are masked.")
     T = _num(1.0, (0.1, 10), "Sample interval T (s)", "Time between measurements, s.")
     steps = param.Integer(3, softbounds=(1, 10), label="Instants N (Fisher)",
                           doc="Number of instants for the Fisher measures.")

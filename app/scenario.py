@@ -451,7 +451,9 @@ class ScenarioValues(types.SimpleNamespace):
         common = dict(T=self.T, steps=int(self.steps), measure=measure)
         if kind != "E":
             noise = {"B": self.noise_b, "G": self.noise_g, "BG": (self.noise_b, self.noise_g)}[kind]
-            return dict(common, known=MAGNETIC_KNOWN if known else (), sensor=core.Sensor(kind, noise))
+            baseline = self.baseline if "G" in kind and self.baseline > 0 else None
+            return dict(common, known=MAGNETIC_KNOWN if known else (),
+                        sensor=core.Sensor(kind, noise, baseline=baseline))
         sea = core.Sea(self.sea_depth, self.seabed_sigma) if self.sea_model == "layered" else None
         return dict(common, sigma=self.sigma, model=MODELS[self.model], known=known,
                     noise=self.noise, sea=sea)

@@ -83,7 +83,8 @@ def magnetic_options(s):
     moments = (float(s.mx), float(s.my), float(s.mz))
     sm = max(1.0, MAGNETIC_PRIOR_SHARE * float(np.linalg.norm(moments)))
     m = max(1.0, float(np.linalg.norm(moments)))
-    return dict(sensor=core.Sensor(kind, noise), moments=moments,
+    baseline = s.baseline if "G" in kind and s.baseline > 0 else None
+    return dict(sensor=core.Sensor(kind, noise, baseline=baseline), moments=moments,
                 prior_std=(20.0, 20.0, 0.5, 0.5, 0.5, sm, sm, sm),
                 bank_strengths=(0.5 * m, m, 2.0 * m))
 

@@ -46,7 +46,7 @@ CONTEXT = {
     "Pv_b": {"comparison": "Moment split B − A (Fig. 4)"},
     "d_ref": {"comparison": "Spacing d − reference d (Fig. 6)"},
     "sea_depth": {"sea_model": "layered"}, "seabed_sigma": {"sea_model": "layered"},
-    **{n: MAGNETIC for n in ("mx", "my", "mz", "noise_b", "noise_g")},
+    **{n: MAGNETIC for n in ("mx", "my", "mz", "noise_b", "noise_g", "baseline")},
     **{n: {**MAGNETIC, "comparison": "Moment split B − A (Fig. 4)"} for n in ("mx_b", "my_b", "mz_b")},
     "threshold": {"criterion": "Area with CRLB error under threshold"},
     "cal_roll_deg": {"cal_source": "Designed manoeuvre"},

@@ -146,3 +146,31 @@ def test_a_zero_magnetic_moment_is_said_not_computed_into_a_direction():
     p = compute(Snapshot.of(Scenario(sensor=GRADIOMETER, mx=0.0, my=0.0, mz=0.0, **SMALL)))
     assert not p.a.observable.any() and not p.b.observable.any()
     assert p.note.count("the target has no magnetic field") == 2
+
+
+def test_a_gradiometer_baseline_sets_the_scale_on_maps_design_and_track():
+    """Issue 36 item 4: the gradiometer's baseline is an input of the page (Maps, Layout design,
+    Track), the same core.Sensor everywhere, and the page says its effect: one gradiometer of
+    baseline L > 0 is observable (the differences are not homogeneous in r: spec §11's scale
+    symmetry breaks at order (L/r)²), where the point tensor is rank 7 of 8 everywhere."""
+    from app import track
+    from app.dashboard import tensor_text
+    from app.design_compute import _fisher_options
+
+    s = Scenario(sensor=GRADIOMETER, baseline=0.5, **SMALL)
+    p = compute(Snapshot.of(s))
+    sensor = core.Sensor("G", 0.01, baseline=0.5)
+    want = core.evaluate_map(s.snapshot().core_plane(), core.single_station(s.stations.h),
+                             velocity=s.snapshot().velocity(), moments=(-3000.0, 1000.0, 5000.0),
+                             measure="crlb_position", T=s.sensor.T, steps=s.sensor.steps,
+                             sensor=sensor)
+    assert same(p.a.value, want.value) and same(p.a.observable, want.observable)
+    assert p.a.observable.mean() > 0.9  # one gradiometer, observable with its baseline
+    assert "baseline 0.5 m" in p.captions[0]
+    assert _fisher_options(s.snapshot())["sensor"] == sensor  # Layout design
+    assert track.case_of(s.snapshot()).sensor == sensor  # Track
+    assert all(applies("baseline", s.snapshot(), tab) for tab in (MAPS_TAB, DESIGN_TAB, TRACK_TAB))
+    assert not applies("baseline", Scenario(sensor=MAGNETOMETER).snapshot(), MAPS_TAB)
+    assert "sets the scale" in tensor_text("G", 0.5) and "point gradient tensor" in tensor_text("BG", 0.0)
+    point = compute(Snapshot.of(Scenario(sensor=GRADIOMETER, **SMALL)))
+    assert not point.a.observable.any() and "baseline" not in point.captions[0]
