@@ -14,6 +14,12 @@ per image per change, through public Bokeh only.
 
 Every layer of a map (value, veil) always covers the same rectangle as the map (issue 16, defect
 1: the veil was re-sent only when its image or x changed, and stayed where the last plane had it).
+Veils are uint8 codes, sent only when they change.
+
+Previews (issue 38, app/live.py). While a slider is dragged, each map's preview layer (over the
+map, under its veil) shows a coarser grid as uint8 levels of the colour range (:func:`quantised`),
+colour-mapped in the browser by a mapper of its own (0 … PREVIEW_TOP, PREVIEW_NAN drawn white);
+:func:`fill` with a ``prepare(p, preview=True)`` draws it, the exact maps hide it.
 
 Aspect (issue 25). A metre is as long across as up on an x–y map: the ranges are Bokeh
 ``DataRange1d`` fitted to the view box (:func:`view_box`, corners drawn invisibly) with the
