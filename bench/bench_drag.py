@@ -281,6 +281,8 @@ def multi(url, proc, sessions, seconds):
         t.start()
     for t in threads:
         t.join()
+    if not threads:  # no drags: the cheap event on the otherwise idle server, as long
+        time.sleep(seconds)
     stop.set()
     pt.join()
     time.sleep(5.0)
@@ -334,8 +336,8 @@ def multi_table(results):
              "another session's cheap event p50 / p95 (ms) | RSS before → after drags (MB) |",
              "|---|---|---|---|---|"]
     for r in results:
-        per = [p["previews_per_s"] for p in r["per_session"]]
-        rel = [p["release_s"] for p in r["per_session"]]
+        per = [p["previews_per_s"] for p in r["per_session"]] or [float("nan")]
+        rel = [p["release_s"] for p in r["per_session"]] or [float("nan")]
         rel_max = "unanswered" if any(x is None for x in rel) else f"{max(rel):.2f}"
         lines.append(f"| {r['sessions']} | {min(per):.1f} … {max(per):.1f} | {rel_max} | "
                      f"{pct(r['cheap_ms'], 50):.0f} / {pct(r['cheap_ms'], 95):.0f} | "
@@ -350,8 +352,9 @@ def main(argv=None):
     ap.add_argument("--drags", type=int, default=2, help="drags per app and run")
     ap.add_argument("--runs", type=int, default=1, help="runs (each serves the three apps in turn)")
     ap.add_argument("--apps", default=",".join(APPS))
-    ap.add_argument("--sessions", default="1,2,3,4",
-                    help="part 2: numbers of sessions dragging at once ('' to skip)")
+    ap.add_argument("--sessions", default="0,1,2,3,4",
+                    help="part 2: numbers of sessions dragging at once ('' to skip; 0: the cheap "
+                         "event with no drag)")
     ap.add_argument("--multi-seconds", type=float, default=8.0)
     ap.add_argument("--screenshot", default=None, help="a PNG of the page taken mid-drag (project)")
     ap.add_argument("--out", default=None, help="raw values and summary as JSON")
