@@ -115,8 +115,3 @@ def no_target_on_station(states, stations):
             f"{tuple(stations[s])} m: the dipole field is singular at D = 0 (closer than {ON_STATION} m counts); "
             "move the target or mask such points (core.observability.maps does)"
         )
-
-
-#: The old private name, still used by core/observability/design.py (whose split into criteria,
-#: spacing and optimiser is under way elsewhere); drop it when that module uses ``as_array``.
-_array = as_array

@@ -1,0 +1,217 @@
+"""The best N-station layout of a kind for a region criterion (:func:`optimise_layout`): the
+spacing of a centred line, triangle or square, or free station positions."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from ..model import sensors, validation
+from .crlb import _pair
+from .criteria import _check_criterion, _criterion, _region_states
+from .fisher import DEFAULT_STEPS
+from .layouts import LAYOUTS, _n_stations, station_layout
+from .spacing import _map
+
+__all__ = ["LayoutResult", "optimise_layout"]
+
+
+@dataclass(frozen=True)
+class LayoutResult:
+    """Result of :func:`optimise_layout`.
+
+    Attributes
+    ----------
+    stations : ndarray, shape (N, 3)
+        Optimised station positions (m). Scaled kinds are centred on the region (the stations'
+        mean (x, y) is the centre of the region's horizontal box).
+    value : float
+        Criterion of that layout.
+    kind : str
+    d : float or None
+        Spacing (m) for the scaled kinds; None for ``"free"``.
+    nfev : int
+        Criterion evaluations.
+    at_bound : tuple of str
+        The bounds the optimum lies on, empty when it is interior: ``"d_min"`` or ``"d_max"``
+        (the ends of ``d_range``) for the scaled kinds; for ``"free"`` the sides of the box that
+        a station touches, from ``"x_min"``, ``"x_max"``, ``"y_min"``, ``"y_max"``. A bound
+        that is hit means the optimum may lie beyond it.
+    """
+
+    stations: np.ndarray
+    value: float
+    kind: str
+    d: float | None
+    nfev: int
+    at_bound: tuple = ()
+
+
+def _default_bounds(region):
+    """Horizontal box for free station positions: the region's x–y extent (x–z band: x range,
+    and y within half the x width of the band's y)."""
+    if region.kind == "xy":
+        return tuple(map(float, region.u)), tuple(map(float, region.v))
+    half = 0.5 * (region.u[1] - region.u[0])
+    return tuple(map(float, region.u)), (region.fixed - half, region.fixed + half)
+
+
+#: Tolerance (m) of the bounded Brent search over d in :func:`optimise_layout`.
+_LAYOUT_XATOL = 0.05
+#: A free station within this fraction of the box width of a side counts as on it.
+_BOX_TOUCH = 1e-3
+
+
+def _centred_layout(kind, n, d, h, box):
+    """``station_layout(kind, n, d=d, h=h)`` shifted so that its mean (x, y) is the box centre."""
+    st = station_layout(kind, n, d=d, h=h)
+    st[:, :2] += np.mean(box, axis=1) - st[:, :2].mean(axis=0)
+    return st
+
+
+def _largest_spacing(kind, n, box):
+    """Largest d at which the centred ``kind`` layout of n stations fits in the box (m)."""
+    unit = station_layout(kind, n, d=1.0)[:, :2]
+    extent = unit.max(axis=0) - unit.min(axis=0)
+    width = np.diff(box, axis=1)[:, 0]
+    fits = [w / e for w, e in zip(width, extent) if e > 0]
+    return float(min(fits)) if fits else float(width.max())  # one station: d plays no part
+
+
+def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None):
+    """Best d of the centred layout: coarse curve over d_range, then bounded Brent on the
+    bracket of its best point (as :func:`best_spacing`). Returns (d, value, nfev, at_bound)."""
+    lo, hi = d_range
+    if isinstance(n_curve, bool) or not isinstance(n_curve, (int, np.integer)) or n_curve < 3:
+        raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
+    d = np.linspace(lo, hi, int(n_curve))
+    f = lambda v: objective(_centred_layout(kind, n, v, h, box))
+    curve = _map(f, d, client)  # the coarse curve: here, or on a Dask cluster
+    i = int(np.argmax(curve))
+    res = optimize.minimize_scalar(lambda v: -f(v), bounds=(d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]),
+                                   method="bounded", options={"xatol": _LAYOUT_XATOL})
+    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
+    tol = 2.0 * _LAYOUT_XATOL  # Brent stops within ~⅔ xatol of a minimiser on a bound
+    at_bound = (("d_min",) if best_d - lo <= tol else ()) + (("d_max",) if hi - best_d <= tol else ())
+    if n == 1:
+        at_bound = ()  # one station: d plays no part
+    return float(best_d), float(best_v), int(d.size + res.nfev), at_bound
+
+
+def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
+                    moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
+                    noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                    sea=None, known=(), d_range=None, n_curve=25, x0=None, bounds=None,
+                    maxfev=400, client=None, sensor=None):
+    """Optimise an N-station layout for a region criterion.
+
+    Parameters
+    ----------
+    kind : {"line", "triangle", "square", "free"}
+        Scaled kinds optimise their one spacing d, the layout centred on the region (its mean
+        station (x, y) at the centre of the region's horizontal box), as :func:`best_spacing`
+        does (a coarse curve of ``n_curve`` points over ``d_range``, then bounded Brent).
+        ``"free"`` optimises the (x, y) of all N stations at depth h with
+        ``scipy.optimize.minimize(method="Powell")`` within ``bounds`` (derivative-free, so it
+        copes with the piecewise-constant ``"area_crlb"``).
+    n_stations : int
+        N, 1 … :data:`MAX_STATIONS`.
+    region : core.Plane
+        Surveillance region.
+    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
+        As for :func:`spacing_curve`.
+    d_range : (float, float), optional
+        (min, max) spacing (m) of the scaled kinds, 0 < min < max, and of the default start of
+        ``"free"``. Default: from min(2 m, d_fit / 2) to d_fit, the largest spacing at which the
+        centred layout still fits in the box (``bounds``' default).
+    n_curve : int
+        Points of the coarse curve over ``d_range``, ≥ 3.
+    x0 : array_like, shape (N, 2), optional
+        ``"free"``: starting (x, y) (m). Default: the best centred ``"square"`` lattice (so the
+        free result is never worse than it), clipped into ``bounds``.
+    bounds : ((xmin, xmax), (ymin, ymax)), optional
+        Box for every station (m): ``"free"`` keeps the stations in it; it sets the scaled
+        kinds' centre and default ``d_range``. Default: the region's horizontal extent (for an
+        x–z band, y within half the band's x width of its y).
+    maxfev : int
+        ``"free"``: budget of criterion evaluations for Powell, ≥ 1.
+    client : distributed.Client, optional
+        Evaluate the coarse spacing curves on this Dask cluster (see :func:`best_spacing`);
+        Powell's steps are sequential and run here. The result is the same as without it.
+
+    Returns
+    -------
+    LayoutResult
+        ``at_bound`` names the bounds the optimum lies on (``d_min``/``d_max``, or the box sides
+        for ``"free"``; a station within 1e-3 of the box width of a side is on it).
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9)
+    >>> r = core.optimise_layout("triangle", 3, region, d_range=(5, 300), n_curve=5)
+    >>> r.stations.shape
+    (3, 3)
+    """
+    if kind not in LAYOUTS:
+        raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    common = {"h": h, "velocity": velocity, "moments": moments, "criterion": criterion,
+              "threshold": threshold, "steps": steps, "T": T, "known": known,
+              "sensor": sensor}
+    n = _n_stations(n_stations)
+    if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
+        raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
+    states = _region_states(region, velocity, moments, sensor)
+    (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
+        _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
+    if not (xlo < xhi and ylo < yhi):
+        raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
+    box = np.array([[xlo, xhi], [ylo, yhi]])
+    if kind != "free":
+        if d_range is None:
+            fit = _largest_spacing(kind, n, box)
+            d_range = (min(2.0, 0.5 * fit), fit)
+        lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
+        if not lo < hi:
+            raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
+        threshold = _check_criterion(criterion, threshold)
+        h = station_layout("line", 1, h=h)[0, 2]  # validates h
+
+        def objective(st):
+            return _criterion(states, st, criterion, threshold, steps, T, known, sensor).value
+
+        d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective,
+                                                    client)
+        return LayoutResult(_centred_layout(kind, n, d, h, box), value, kind, d, nfev, at_bound)
+    nfev = 0
+    if x0 is None:
+        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve,
+                                bounds=((xlo, xhi), (ylo, yhi)), client=client, **common)
+        xy, nfev = start.stations[:, :2], start.nfev
+    else:
+        xy = validation.as_array("x0", x0)
+        if xy.shape != (n, 2) or not np.all(np.isfinite(xy)):
+            raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
+                             f"got shape {xy.shape}")
+    xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
+    threshold = _check_criterion(criterion, threshold)
+    station_layout("line", 1, h=h)  # validates h
+
+    def objective(p):
+        st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
+        return -_criterion(states, st, criterion, threshold, steps, T, known, sensor).value
+
+    res = optimize.minimize(objective, xy.ravel(), method="Powell",
+                            bounds=[(xlo, xhi), (ylo, yhi)] * n,
+                            options={"maxfev": int(maxfev), "xtol": 1e-2, "ftol": 1e-6})
+    p = res.x if res.fun <= objective(xy.ravel()) else xy.ravel()
+    value = -objective(p)
+    st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
+    near = _BOX_TOUCH * np.diff(box, axis=1)[:, 0]
+    at_bound = tuple(name for name, hit in (
+        ("x_min", np.any(st[:, 0] - xlo <= near[0])), ("x_max", np.any(xhi - st[:, 0] <= near[0])),
+        ("y_min", np.any(st[:, 1] - ylo <= near[1])), ("y_max", np.any(yhi - st[:, 1] <= near[1]))) if hit)
+    return LayoutResult(st, float(value), kind, None, int(nfev + res.nfev + 2), at_bound)

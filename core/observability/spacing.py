@@ -1,0 +1,191 @@
+"""A scaled layout's criterion against its spacing d (:func:`spacing_curve`) and the best d
+(:func:`best_spacing`); the criteria are :mod:`.criteria`'s."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from .. import dask_backend
+from ..model import sensors, validation
+from .crlb import _pair
+from .criteria import _check_criterion, _criterion, _region_states
+from .fisher import DEFAULT_STEPS
+from .layouts import _n_stations, station_layout
+
+__all__ = ["SpacingResult", "best_spacing", "spacing_curve"]
+
+
+def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
+                             threshold, noise, steps, T, sigma, model, sea, known, sensor=None):
+    """Validate once; return f(d) -> criterion value for a scaled layout."""
+    if kind not in ("line", "triangle", "square"):
+        raise ValueError(f"a spaced layout kind must be 'line', 'triangle' or 'square'; got {kind!r}")
+    n_stations = _n_stations(n_stations)
+    threshold = _check_criterion(criterion, threshold)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
+    states = _region_states(region, velocity, moments, sensor)
+    station_layout(kind, n_stations, d=1.0, h=h)  # validates h
+
+    def value(d):
+        return _criterion(states, station_layout(kind, n_stations, d=d, h=h), criterion,
+                          threshold, steps, T, known, sensor).value
+    return value
+
+
+def _d_values(d_values):
+    d = validation.as_array("d_values", d_values)
+    if d.ndim != 1 or d.size < 1 or not np.all(np.isfinite(d)) or np.any(d <= 0):
+        raise ValueError(f"d_values must be a 1-D array of finite spacings > 0 (m); got {d_values!r}")
+    return d
+
+
+def _map(f, values, client):
+    """``[f(v) for v in values]`` as an array: here, or on a Dask cluster (core.dask_backend)."""
+    if client is None:
+        return np.array([f(v) for v in values])
+    return np.array(dask_backend.map_ordered(dask_backend.check_client(client), f, values))
+
+
+def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
+                  moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
+                  noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                  sea=None, known=(), client=None, sensor=None):
+    """Criterion against station spacing d (default: the paper's dual, a 2-station line).
+
+    Parameters
+    ----------
+    d_values : array_like, shape (K,)
+        Spacings (m), > 0.
+    region : core.Plane
+        Surveillance region (see :func:`layout_criterion`).
+    kind : {"line", "triangle", "square"}
+        Layout scaled by d (see :func:`station_layout`).
+    n_stations : int
+        N, 1 … :data:`MAX_STATIONS`.
+    h : float
+        Station depth (m).
+    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
+        As for :func:`layout_criterion`.
+    client : distributed.Client, optional
+        Evaluate the K spacings as tasks on this Dask cluster (see :mod:`core.dask_backend`);
+        the values are the same as without it.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Criterion at each d (larger is better).
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
+    >>> core.spacing_curve([10, 50], region).shape
+    (2,)
+    """
+    d = _d_values(d_values)
+    f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
+                                 threshold, noise, steps, T, sigma, model, sea, known, sensor)
+    return _map(f, d, client)
+
+
+@dataclass(frozen=True)
+class SpacingResult:
+    """Result of :func:`best_spacing`.
+
+    Attributes
+    ----------
+    d : float
+        Best spacing (m).
+    value : float
+        Criterion at ``d``.
+    d_values, curve : ndarray, shape (K,)
+        The coarse curve the bracket was taken from.
+    at_bound : bool
+        The best grid point is an end of ``d_values``: the optimum may lie outside the range.
+    nfev : int
+        Criterion evaluations, curve included.
+    """
+
+    d: float
+    value: float
+    d_values: np.ndarray
+    curve: np.ndarray
+    at_bound: bool
+    nfev: int
+
+
+def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
+                 kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
+                 criterion="mean_dopt", threshold=10.0, noise=None,
+                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=(),
+                 client=None, sensor=None):
+    """Spacing d that maximises a region criterion.
+
+    Parameters
+    ----------
+    region : core.Plane
+        Surveillance region (see :func:`layout_criterion`).
+    d_values : array_like, shape (K,), optional
+        Coarse spacings (m) for the bracketing curve; default ``n_curve`` points evenly spaced
+        over ``d_range``.
+    d_range : (float, float)
+        (min, max) spacing (m), 0 < min < max, when ``d_values`` is not given.
+    n_curve : int
+        Points of the default coarse curve, ≥ 3.
+    xatol : float
+        Absolute tolerance on d (m) of the bounded Brent search, > 0.
+    kind, n_stations, h, velocity, moments, criterion, threshold, noise, steps, T, sigma, \
+model, sea, known
+        As for :func:`spacing_curve`.
+    client : distributed.Client, optional
+        Evaluate the coarse curve on this Dask cluster (:func:`spacing_curve`); the Brent
+        refinement is sequential and runs here. The result is the same as without it.
+
+    Returns
+    -------
+    SpacingResult
+
+    Notes
+    -----
+    1. Evaluate the criterion on the coarse curve and take its best point d_i.
+    2. Refine with ``scipy.optimize.minimize_scalar(method="bounded")`` on the bracket
+       [d_{i−1}, d_{i+1}] (clipped to the curve's ends), minimising −criterion.
+    3. Keep the better of the refined and the grid point (Brent on a multimodal stretch may
+       stop at a worse local optimum).
+
+    ``"area_crlb"`` is piecewise constant in d (a count of grid points), so the refinement only
+    moves within a plateau; the coarse curve decides.
+
+    Examples
+    --------
+    >>> import core
+    >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
+    >>> r = core.best_spacing(region, d_range=(5, 300), n_curve=7)
+    >>> bool(r.d_values[0] <= r.d <= r.d_values[-1])
+    True
+    """
+    if d_values is None:
+        lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
+        if not lo < hi:
+            raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
+        if isinstance(n_curve, bool) or not isinstance(n_curve, (int, np.integer)) or n_curve < 3:
+            raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
+        d = np.linspace(lo, hi, int(n_curve))
+    else:
+        d = np.unique(_d_values(d_values))
+        if d.size < 3:
+            raise ValueError(f"d_values must hold at least 3 distinct spacings; got {d_values!r}")
+    xatol = validation.positive("xatol", xatol, "m")
+    f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
+                                 threshold, noise, steps, T, sigma, model, sea, known, sensor)
+    curve = _map(f, d, client)
+    i = int(np.argmax(curve))
+    lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
+    res = optimize.minimize_scalar(lambda v: -f(v), bounds=(lo, hi), method="bounded",
+                                   options={"xatol": xatol})
+    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
+    return SpacingResult(d=float(best_d), value=float(best_v), d_values=d, curve=curve,
+                         at_bound=i in (0, d.size - 1), nfev=int(d.size + res.nfev))
