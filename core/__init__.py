@@ -56,6 +56,7 @@ from .observability.crlb import CrlbErrors, crlb_covariance, crlb_maps, horizont
 from .observability.design import (
     CRITERIA,
     CriterionResult,
+    LayoutProblem,
     LayoutResult,
     SpacingResult,
     best_spacing,
@@ -129,7 +130,8 @@ __all__ = [
     # the measurement model (core.model.sensors)
     "KINDS", "MAGNETIC_NOISE", "Sensor",
     # sensor-layout design (core.observability.crlb, .layouts, .design)
-    "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutResult",
+    "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutProblem",
+    "LayoutResult",
     "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
     "layout_criterion", "optimise_layout", "spacing_curve", "station_layout",
     # tracking (core.tracking.motion, core.model.measurement, core.pcrlb, core.tracking.filters, core.tracking.bank)

@@ -334,3 +334,18 @@ def test_at_bound_names_the_box_sides_a_free_station_touches():
 def test_one_station_layout_reports_no_spacing_bound():
     r = core.optimise_layout("line", 1, APP_REGION, n_curve=3)
     assert r.at_bound == () and r.stations.tolist() == [[0.0, 0.0, 100.0]]  # centred
+
+
+def test_optimise_layout_takes_the_problem_as_one_object():
+    """Issue 36 item 2: a LayoutProblem (region, target, criterion, measurement) instead of the
+    keywords gives the same layout; both at once is refused."""
+    region = core.Plane("xy", (-60, 60), (-60, 60), 15.0, 7)
+    sensor = core.Sensor("BG")
+    kw = dict(h=0.0, moments=(1e3, -2e3, 5e2), criterion="worst_dopt", steps=2, sensor=sensor)
+    a = core.optimise_layout("line", 2, region, d_range=(2, 40), n_curve=4, **kw)
+    problem = core.LayoutProblem(region, **kw)
+    b = core.optimise_layout("line", 2, problem, d_range=(2, 40), n_curve=4)
+    np.testing.assert_array_equal(a.stations, b.stations)
+    assert (a.value, a.d, a.nfev, a.at_bound) == (b.value, b.d, b.nfev, b.at_bound)
+    with pytest.raises(ValueError, match="not both; got a LayoutProblem and steps"):
+        core.optimise_layout("line", 2, problem, steps=5)

@@ -20,7 +20,7 @@ from .criteria import CRITERIA, CriterionResult, layout_criterion
 from .crlb import CrlbErrors, crlb_covariance, crlb_maps, horizontal_error_ellipse
 from .crlb import magnetic_plane_states  # noqa: F401  (re-exported: importable from here)
 from .layouts import LAYOUTS, MAX_STATIONS, station_layout
-from .optimiser import LayoutResult, optimise_layout
+from .optimiser import LayoutProblem, LayoutResult, optimise_layout
 from .spacing import SpacingResult, best_spacing, spacing_curve
 
 __all__ = [
@@ -29,6 +29,7 @@ __all__ = [
     "MAX_STATIONS",
     "CriterionResult",
     "CrlbErrors",
+    "LayoutProblem",
     "LayoutResult",
     "SpacingResult",
     "best_spacing",

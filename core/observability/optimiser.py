@@ -15,7 +15,49 @@ from .fisher import DEFAULT_STEPS
 from .layouts import LAYOUTS, _n_stations, station_layout
 from .spacing import _map
 
-__all__ = ["LayoutResult", "optimise_layout"]
+__all__ = ["LayoutProblem", "LayoutResult", "optimise_layout"]
+
+
+@dataclass(frozen=True)
+class LayoutProblem:
+    """What a layout is optimised for, as one object (issue 36): the region, the target, the
+    criterion and the measurement. Pass it as :func:`optimise_layout`'s third argument instead
+    of the keywords (which remain a convenience that builds the same problem).
+
+    Parameters
+    ----------
+    region : core.Plane
+        Surveillance region (see :func:`core.layout_criterion`).
+    h : float
+        Station depth (m).
+    velocity, moments, criterion, threshold, steps, T, known
+        As for :func:`core.layout_criterion`.
+    sensor : core.Sensor or str or None
+        The measurement (kind, noise, medium, baseline); None: the electric default.
+
+    Examples
+    --------
+    >>> import core
+    >>> problem = core.LayoutProblem(core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9))
+    >>> core.optimise_layout("line", 2, problem, d_range=(5, 300), n_curve=5).stations.shape
+    (2, 3)
+    """
+
+    region: object
+    h: float = 100.0
+    velocity: tuple = (2.0, 2.0)
+    moments: tuple = (100.0, 20.0)
+    criterion: str = "mean_dopt"
+    threshold: float = 10.0
+    steps: int = DEFAULT_STEPS
+    T: float = 1.0
+    known: tuple = ()
+    sensor: object = None
+
+    def keywords(self):
+        """The problem as :func:`optimise_layout`'s keywords."""
+        return {f: getattr(self, f) for f in ("h", "velocity", "moments", "criterion",
+                                              "threshold", "steps", "T", "known", "sensor")}
 
 
 @dataclass(frozen=True)
@@ -100,6 +142,14 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None)
     return float(best_d), float(best_v), int(d.size + res.nfev), at_bound
 
 
+def _same(a, b):
+    """Whether a keyword holds its default (tuples and lists alike)."""
+    try:
+        return bool(np.array_equal(np.asarray(a, dtype=object), np.asarray(b, dtype=object)))
+    except (TypeError, ValueError):
+        return a is b
+
+
 def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                     noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
@@ -118,8 +168,9 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         copes with the piecewise-constant ``"area_crlb"``).
     n_stations : int
         N, 1 … :data:`MAX_STATIONS`.
-    region : core.Plane
-        Surveillance region.
+    region : core.Plane or LayoutProblem
+        Surveillance region; or the whole problem (:class:`LayoutProblem`: region, target,
+        criterion, measurement), the keywords below then left at their defaults.
     h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`spacing_curve`.
     d_range : (float, float), optional
@@ -155,6 +206,19 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     >>> r.stations.shape
     (3, 3)
     """
+    if isinstance(region, LayoutProblem):  # the problem as one object: no keyword beside it
+        given = dict(h=h, velocity=velocity, moments=moments, criterion=criterion,
+                     threshold=threshold, noise=noise, steps=steps, T=T, sigma=sigma, model=model,
+                     sea=sea, known=known, sensor=sensor)
+        defaults = dict(LayoutProblem(None).keywords(), noise=None, sigma=4.0, model="exact",
+                        sea=None)
+        twice = sorted(k for k, v in given.items() if not _same(v, defaults[k]))
+        if twice:
+            raise ValueError(f"pass the problem either as a core.LayoutProblem or as keywords, "
+                             f"not both; got a LayoutProblem and {', '.join(twice)}")
+        return optimise_layout(kind, n_stations, region.region, d_range=d_range, n_curve=n_curve,
+                               x0=x0, bounds=bounds, maxfev=maxfev, client=client,
+                               **region.keywords())
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
