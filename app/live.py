@@ -108,9 +108,14 @@ class Live:
         self.generation = 0  # a release starts a new one: previews of an older one are dropped
         self.drawn = 0  # previews drawn (for tests and the benchmark)
         self.preview_n = PREVIEW_N  # points per axis of the next preview (PREVIEW_BUDGET_S)
+        #: The sliders' browser-side callbacks (Panel ``Callback``s): unregistered when the session
+        #: ends. Panel's ``Callback.registry`` is keyed weakly by the slider, but its entry (through
+        #: ``drag`` and this object's scenario, whose watchers hold the slider) keeps the slider,
+        #: hence the whole page, alive: every closed session stayed (tests/test_server_memory.py).
+        self.callbacks = []
         if doc is not None and doc.session_context is not None:
             _SESSIONS[doc] = self
-            doc.on_session_destroyed(lambda _ctx: _SESSIONS.pop(doc, None))
+            doc.on_session_destroyed(lambda _ctx: self.close())
 
     def changed(self, _attr, _old, new):
         if len(new) != 4:
@@ -167,6 +172,13 @@ class Live:
         if self.pending is not None:
             self._start()
 
+    def close(self):
+        """The session ended: forget it, and unregister its sliders' callbacks."""
+        _SESSIONS.pop(self.doc, None)
+        for callback in self.callbacks:
+            callback.unwatch()
+        self.callbacks.clear()
+
     def drawn_exact(self):
         """Called by app/maps.py when it has drawn exact maps: no preview is shown, and none
         computed before them is drawn over them."""
@@ -199,7 +211,7 @@ def follow(slider, name):
     if live is None or name not in MAP_INPUTS:
         return
     args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS)
-    slider.jscallback(args=args, value=FOLLOW_JS)
+    live.callbacks.append(slider.jscallback(args=args, value=FOLLOW_JS))
 
 
 def shown_with(tabs, index):
