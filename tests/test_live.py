@@ -74,3 +74,20 @@ def test_the_preview_grid_follows_the_compute_time():
     assert live.next_n(n, 0.6) == 30  # a magnetic preview at 100² (~0.6 s): ~√(0.06 / 0.6) × 100
     assert live.next_n(30, 0.6 * 0.09 * 2) == live.PREVIEW_MIN_N  # never below the minimum
     assert live.next_n(30, 0.005) == 100  # fast again: back to PREVIEW_N
+
+
+def test_magnetic_maps_follow_the_drag_on_a_grid_their_compute_allows():
+    scenario = Scenario()
+    scenario.update(sensor="magnetometer (B, nT)")
+    t = maps.maps_tab(scenario, SHARED)
+    lv = t.live
+    drag(lv, "mx", 60.0, 1)
+    assert lv.drawn == 1 and "magnetometer" in t.figures.figures[0].title.text
+    first = t.figures.previews[0].data["pv"][0].shape[0]
+    assert first == live.PREVIEW_N
+    drag(lv, "mx", 70.0, 2)  # the next preview's grid follows the first one's compute time
+    n = t.figures.previews[0].data["pv"][0].shape[0]
+    assert lv.drawn == 2 and live.PREVIEW_MIN_N <= n <= live.PREVIEW_N
+    assert f"grid {n} × {n}" in t.figures.captions[0].text.replace("\n", " ")
+    drag(lv, "mx", 70.0, 3, released=True)
+    assert scenario.target.mx == 70.0 and not any(layer.visible for layer in t.figures.preview_layers)
