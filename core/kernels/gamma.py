@@ -140,6 +140,46 @@ def _station_point(x, dt, stations, s, kappa, model, medium, jac, w, wm):
     return True
 
 
+@nb.njit(nogil=True, **JIT)
+def _magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, lo, hi):
+    """:func:`magnetic_rows` for the points lo ≤ p < hi, one lane at a time."""
+    wm = np.empty((_POINT_ROWS, 1))
+    for p in range(lo, hi):
+        for s in range(stations.shape[0]):
+            for k in range(mk.N_STATE):
+                wm[_PX + k, 0] = states[p, k]
+            wm[_PBAD, 0] = 0.0
+            mk.rows_lanes(wm, _PX, _PJ, _PSC, _PBAD, 1, dt, stations[s, 0], stations[s, 1],
+                          stations[s, 2], model, medium)
+            on = wm[_PBAD, 0] != 0.0
+            for c in range(h_out.shape[2]):
+                r0 = _PJ + mk.LANE_ROW * c
+                h_out[p, s, c] = np.nan if on else wm[r0, 0]
+                for k in range(mk.N_STATE):
+                    j_out[p, s, c, k] = np.nan if on else wm[r0 + 1 + k, 0]
+                # the field does not depend on the velocity at one instant; Φ^i moves the position
+                j_out[p, s, c, _VX] += dt * j_out[p, s, c, 0]
+                j_out[p, s, c, _VY] += dt * j_out[p, s, c, 1]
+
+
+@nb.njit(parallel=True, nogil=True, **JIT)
+def magnetic_rows(states, stations, dt, model, medium, h_out, j_out):
+    """Magnetic measurements h (P, S, C) and rows ∂h(Φ^i x)/∂x (P, S, C, 8) at time offset
+    ``dt`` (= i·T) for states (P, 8): the map kernels' rows (:func:`core.kernels.magnetic.rows_lanes`,
+    one lane at a time; ``model`` its kind's code, ``medium`` = [near, L, weight_B, weight_G]).
+    NaN where a target is within ``near`` of a station."""
+    npts = states.shape[0]
+    for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
+        _magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, b * _BLOCK,
+                             min(npts, (b + 1) * _BLOCK))
+
+
+@nb.njit(nogil=True, **JIT)
+def magnetic_rows_serial(states, stations, dt, model, medium, h_out, j_out):
+    """:func:`magnetic_rows` on the calling thread (for at most ``_BLOCK`` points)."""
+    _magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, 0, states.shape[0])
+
+
 @nb.njit(**JIT)
 def _gamma_point(x, stations, step, kappa, model, medium, free, n_rows, jac, w, wm, g):
     """Fill ``g`` (n_rows, n_free) with the first ``n_rows`` rows of Γ at state ``x``.

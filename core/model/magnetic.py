@@ -13,6 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..kernels import gamma as gk
 from ..kernels import magnetic as mk
 from . import validation
 
@@ -196,20 +197,23 @@ def sensor_flags(sensor):
 
 
 def measurement_rows(states_value, stations_value, sensor, baseline, dt):
-    """Validated :func:`core.kernels.magnetic.measurement_rows` at time offset ``dt`` (s·T)."""
-    with_b, with_g = sensor_flags(sensor)
+    """Validated :func:`core.kernels.gamma.magnetic_rows` at time offset ``dt`` (s·T): the rows
+    of the map kernels, unwhitened."""
+    sensor_flags(sensor)
     flat, lead = states(states_value)
     stations = validation.stations(stations_value)
     baseline = baseline_value(baseline)
     moved = flat.copy()
     moved[:, 0] += dt * flat[:, 3]
     moved[:, 1] += dt * flat[:, 4]
-    check_distances(moved, stations, baseline if with_g else 0.0)
+    check_distances(moved, stations, baseline if "G" in sensor else 0.0)
     n_s, n_c = stations.shape[0], len(MAGNETIC_COMPONENTS[sensor])
     h = np.empty((flat.shape[0], n_s, n_c))
     jac = np.empty((flat.shape[0], n_s, n_c, mk.N_STATE))
-    kernel = mk.measurement_rows if flat.shape[0] > mk.BLOCK else mk.measurement_rows_serial
-    kernel(flat, stations, with_b, with_g, baseline, float(dt), h, jac)
+    code = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}[sensor]
+    params = np.array([validation.ON_STATION, baseline, 1.0, 1.0])
+    kernel = gk.magnetic_rows if flat.shape[0] > mk.BLOCK else gk.magnetic_rows_serial
+    kernel(flat, stations, float(dt), code, params, h, jac)
     return h.reshape(lead + (n_s, n_c)), jac.reshape(lead + (n_s, n_c, mk.N_STATE))
 
 
