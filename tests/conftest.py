@@ -35,10 +35,11 @@ def random_stations(rng, n_stations):
 # --------------------------------------------------------------------------- markers by file
 #: A test file gets a marker from what it imports (so a new file is marked without a list to
 #: keep): ``browser`` if it imports support.page (it drives Chromium), ``server`` if it imports
-#: support.server (it serves the dashboard in a process of its own). ``container`` is declared
+#: support.server (it serves the dashboard in a process of its own), both for support.screenshots. ``container`` is declared
 #: by the file itself (tests/test_container.py). The fast lane leaves all three out:
 #:     pytest -q -m "not browser and not server and not container"
-MARKER_OF_MODULE = {"support.page": "browser", "support.server": "server"}
+MARKERS_OF_MODULE = {"support.page": {"browser"}, "support.server": {"server"},
+                     "support.screenshots": {"browser", "server"}}
 
 
 @functools.lru_cache(maxsize=None)
@@ -47,13 +48,16 @@ def markers_of_file(path):
     tree = ast.parse(Path(path).read_text(encoding="utf-8"))
     found = set()
     for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom) and node.module in MARKER_OF_MODULE:
-            found.add(MARKER_OF_MODULE[node.module])
-        elif isinstance(node, ast.ImportFrom) and node.module == "support":
-            found |= {MARKER_OF_MODULE[f"support.{a.name}"] for a in node.names
-                      if f"support.{a.name}" in MARKER_OF_MODULE}
+        if isinstance(node, ast.ImportFrom) and node.module == "support":
+            names = [f"support.{a.name}" for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            names = [node.module]
         elif isinstance(node, ast.Import):
-            found |= {MARKER_OF_MODULE[a.name] for a in node.names if a.name in MARKER_OF_MODULE}
+            names = [a.name for a in node.names]
+        else:
+            continue
+        for name in names:
+            found |= MARKERS_OF_MODULE.get(name, set())
     return frozenset(found)
 
 

@@ -1,22 +1,24 @@
 """Issue 25, item 4, in headless Chromium: map aspect and size at 1280 × 800 and 1600 × 1000, the
 high-resolution PNG, the legend, a refused text in a number box, the Track tab's first visit, the
-best spacing's result; and the docs' screenshots of the Maps, Layout design and Track tabs at both
-sizes (docs/screenshot-*.png, *-1280.png)."""
+best spacing's result; and the command that takes the docs' screenshots (support/screenshots.py),
+run into a temporary folder."""
 
 import io
 import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 from urllib.parse import urlencode
 
 import pytest
 
+from support import ROOT, screenshots
 from support.page import CHROMIUM, chromium_browser
 from support.server import served_app
 
 pytest.importorskip("playwright.sync_api")
-DOCS = Path(__file__).resolve().parents[1] / "docs"
-SIZES = {"": {"width": 1600, "height": 1000}, "-1280": {"width": 1280, "height": 800}}
+SIZES = screenshots.SIZES
 
 pytestmark = pytest.mark.skipif(
     not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
@@ -230,27 +232,28 @@ def _title_js(text):
             f"&& m.title.text.includes({text!r}))")
 
 
-def test_screenshots_of_the_maps_design_and_track_tabs(chromium, server):
-    """docs/screenshot-{default,fig5,design,track}{,-1280}.png, at 1600 × 1000 and 1280 × 800."""
-    for size in SIZES:
-        pg = _open(chromium, server, size)
-        try:
-            time.sleep(1.0)
-            pg.screenshot(path=str(DOCS / f"screenshot-default{size}.png"))
-            pg.get_by_role("button", name="Fig. 2").click()  # elsewhere first: Fig. 5 is a change
-            pg.wait_for_function(_title_js("P = (100, 100)"), timeout=30_000)
-            pg.get_by_role("button", name="Fig. 5").click()
-            pg.wait_for_function(_title_js("B: dual, d = 15 m"), timeout=30_000)
-            time.sleep(1.5)
-            pg.screenshot(path=str(DOCS / f"screenshot-fig5{size}.png"))
-            pg.get_by_text("Layout design", exact=True).first.click()
-            pg.get_by_role("button", name="Find best spacing").wait_for(timeout=30_000)
-            time.sleep(2.0)
-            pg.screenshot(path=str(DOCS / f"screenshot-design{size}.png"))
-            pg.get_by_text("Track", exact=True).first.click()
-            pg.wait_for_function(f"() => ({TRACK_STATE_JS})()[0] && !({TRACK_STATE_JS})()[1]", timeout=60_000)
-            time.sleep(1.5)
-            pg.screenshot(path=str(DOCS / f"screenshot-track{size}.png"))
-            assert pg.errors == []
-        finally:
-            pg.close()
+def test_the_screenshots_command_takes_every_view(chromium, server, tmp_path):
+    """``python -m support.screenshots --out docs`` (the docs' pictures), run into a temporary
+    folder: every view at its screen size, each a page with content, no two alike (each view's
+    set-up changed what is shown), no page error (``take`` raises on one)."""
+    from PIL import Image
+
+    written = screenshots.take(chromium, server.removesuffix("/app"), tmp_path)
+    expected = {f"screenshot-{screenshots.file_name(n, s)}.png"
+                for n, (_, _, sizes) in screenshots.SHOTS.items() for s in sizes}
+    assert {p.name for p in written} == expected == {p.name for p in tmp_path.iterdir()}
+    for path in written:
+        img = Image.open(path).convert("RGB")
+        screen = SIZES["-1280" if path.stem.endswith("-1280") else ""]
+        assert img.size == (screen["width"], screen["height"]), path.name
+        # A blank, loading or error page has a few dozen colours (text anti-aliasing); a drawn
+        # map, plot or colour bar has thousands.
+        assert len(img.getcolors(maxcolors=1 << 20)) > 500, path.name
+    assert len({p.read_bytes() for p in written}) == len(written)
+
+
+def test_the_screenshots_command_refuses_an_unknown_name_before_serving(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "support.screenshots", "--out", str(tmp_path), "nope"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "no screenshot named nope" in done.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -6,7 +6,6 @@ import html
 import os
 import re
 import time
-from pathlib import Path
 
 import pytest
 
@@ -18,8 +17,6 @@ pytestmark = pytest.mark.skipif(
     not os.path.exists(CHROMIUM) and not os.environ.get("CI"),
     reason="Debian's chromium is not installed (CI installs it; there this test must run)",
 )
-
-DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 #: Titles and renderer counts of the plots, every axis label, and the verdict's text: read from
 #: the live Bokeh document (Panel draws in shadow DOM).
@@ -78,8 +75,6 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
         assert "This pass can size the target" in text
         bound0, cpa0 = _bound(text)
         assert cpa0 == pytest.approx(7.07, abs=0.01)
-        pg.wait_for_timeout(500)
-        pg.screenshot(path=str(DOCS / "screenshot-shape.png"), full_page=False)
         box = pg.locator(".w-shape_offset input").first
         box.fill("15")
         box.press("Enter")
@@ -108,8 +103,6 @@ def test_shape_tab_draws_and_follows_the_lateral_offset(server):
         narrow.goto(server + pg.evaluate("() => window.location.search"))
         narrow.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=120_000)
         _wait(narrow, lambda got, text: "closest approach 15.8 m" in text)
-        narrow.wait_for_timeout(1000)
-        narrow.screenshot(path=str(DOCS / "screenshot-shape-1280.png"), full_page=False)
         narrow.close()
         box.fill("500")  # refused with a message, the last good value kept
         box.press("Enter")

@@ -63,6 +63,7 @@ def test_the_loopback_port_given_is_free():
     ("def f():\n    from support import server\n", {"server"}),  # a late import counts too
     ("import support.page\n", {"browser"}),
     ("from support import ROOT, symbolic\n", set()),
+    ("from support import screenshots\n", {"browser", "server"}),
     ("import numpy\n", set()),
 ])
 def test_a_file_is_marked_by_what_it_imports(tmp_path, source, expected):
