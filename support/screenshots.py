@@ -100,7 +100,7 @@ SHOTS = {
     "track": (track, "", ("", "-1280")),
     "sensors": (sensors, "", ("",)),
     "shape": (shape, "?tab=Shape", ("",)),
-    "shape-1280": (shape, "?tab=Shape&shape_offset=15", ("-1280",)),  # the offset that cannot size
+    "shape-1280": (shape, "?tab=Shape&shape_offset=15", ("-1280",)),  # the span read cannot size it, the second moment can
     "calibration": (calibration, "?tab=Calibration", ("", "-1280")),
 }
 SIZES = {"": VIEWPORT, "-1280": SMALL_VIEWPORT}
