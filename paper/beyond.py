@@ -63,11 +63,18 @@ def refine_peak(fun, d_grid, values):
     optimum may lie beyond the scan), and the largest fall of ``fun`` at d ± FLAT_M."""
     d_grid = np.asarray(d_grid, dtype=float)
     values = np.asarray(values, dtype=float)
+    # The optimiser sees the criterion to 10 significant digits: its last bits differ between
+    # kernels compiled in the process and loaded from numba's cache (4e-14 relative on the median
+    # CRLB, a non-smooth function of d), which steered Brent to another point within its xatol and
+    # moved the reported optimum and flatness; rounded, both runs take the same path.
+    # (The values reported are the criterion's own, at the point chosen.)
+    rounded = lambda v: float(f"{v:.10g}")
     i = int(np.nanargmax(values))
     lo, hi = d_grid[max(i - 1, 0)], d_grid[min(i + 1, d_grid.size - 1)]
-    res = optimize.minimize_scalar(lambda d: -fun(d), bounds=(lo, hi), method="bounded",
+    res = optimize.minimize_scalar(lambda d: -rounded(fun(d)), bounds=(lo, hi), method="bounded",
                                    options={"xatol": PEAK_XATOL})
-    best = (float(res.x), float(-res.fun)) if -res.fun >= values[i] else (float(d_grid[i]), float(values[i]))
+    d_best = float(res.x) if -res.fun >= rounded(values[i]) else float(d_grid[i])
+    best = (d_best, float(fun(d_best)))
     drop = best[1] - min(fun(best[0] - FLAT_M), fun(best[0] + FLAT_M))
     return {"d": best[0], "value": best[1], "d_grid": float(d_grid[i]),
             "at_end": i in (0, d_grid.size - 1), "drop_flat": float(drop)}

@@ -20,6 +20,8 @@ from .symbolic import SIGMA, S, X, field_expressions
 
 #: Working precisions (significant digits) of the evidence table.
 DIGITS = (50, 100)
+#: float64's unit round-off.
+EPS = float(np.finfo(float).eps)
 #: Fig. 1 points (x, y) in m at z = 120 m.
 POINTS = ((30.0, 40.0), (0.0, 0.0), (-150.0, 100.0), (300.0, 300.0))
 
@@ -66,8 +68,9 @@ def null_vector(state, station):
 def evidence(model, points=POINTS):
     """Rows of the round-off table for one model.
 
-    For each Fig. 1 point: float64 log10|det Γ| and log10 η (core), the same at each of
-    :data:`DIGITS` (mpmath), the dual (d = 15 m) log10 η in float64 and at DIGITS[0] for
+    For each Fig. 1 point: the round-off scale log10(ε · Π‖Γ_j‖) of float64's det Γ and whether
+    core's float64 log10|det Γ| and log10 η are within round-off (≤ that scale, ≤ log10 ε), the
+    same at each of :data:`DIGITS` (mpmath), the dual (d = 15 m) log10 η in float64 and at DIGITS[0] for
     contrast, the relative null residual ‖Γ n‖ / Σ‖Γ_j‖|n_j| in float64 and at DIGITS[0],
     and |cos| between n and core.unobservable_direction.
     """
@@ -76,16 +79,20 @@ def evidence(model, points=POINTS):
     rows = []
     for x, y in points:
         state = np.array([x, y, sc.Z, *sc.VELOCITY, sc.PH, sc.PV])
-        row = {"x": x, "y": y,
-               "f64_log10_det": float(core.log10_abs_det_gamma(state, single, **kw)),
-               "f64_log10_eta": float(core.observability_index(state, single, **kw)),
+        g = core.gamma(state, single, **kw)
+        # float64's values are round-off: their digits differ between kernels compiled in the
+        # process and loaded from numba's cache, so what is kept is the verdict that they are
+        # within the round-off scale (ε · Π‖Γ_j‖ for det Γ, ε for η), by decades either way
+        scale = float(np.sum(np.log10(np.linalg.norm(g, axis=0))) + np.log10(EPS))
+        row = {"x": x, "y": y, "roundoff_log10_det": scale,
+               "f64_det_within_roundoff": bool(core.log10_abs_det_gamma(state, single, **kw) <= scale),
+               "f64_eta_within_roundoff": bool(core.observability_index(state, single, **kw) <= np.log10(EPS)),
                "dual_f64_log10_eta": float(core.observability_index(state, dual, **kw))}
         mats = {dg: gamma_mp(state, single, model, dg) for dg in DIGITS}
         for dg in DIGITS:
             row[f"mp{dg}_log10_det"], row[f"mp{dg}_log10_eta"] = _log10_det_and_eta(mats[dg], dg)
         row["dual_mp_log10_eta"] = _log10_det_and_eta(gamma_mp(state, dual, model, DIGITS[0]), DIGITS[0])[1]
         n = null_vector(state, single[0])
-        g = core.gamma(state, single, **kw)
         row["f64_null_residual"] = float(np.linalg.norm(g @ n) / np.sum(np.linalg.norm(g, axis=0) * np.abs(n)))
         with mp.workdps(DIGITS[0]):
             gm = mats[DIGITS[0]]

@@ -3,6 +3,7 @@ except the framing sentences)."""
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -19,6 +20,11 @@ STATUS_MARK = {"holds": "✅ holds", "fails": "❌ fails", "not meaningful": "�
 
 def _f(x, nd=2):
     return "−∞" if x == float("-inf") else ("+∞" if x == float("inf") else f"{x:.{nd}f}".replace("-", "−"))
+
+
+def _within(ok, scale):
+    """A float64 value of the round-off table: under its round-off scale (log10), or not."""
+    return f"round-off, ≤ {_f(scale)}" if ok else f"**above** the round-off scale {_f(scale)}"
 
 
 def _img(doc_dir, path, alt):
@@ -84,7 +90,10 @@ def section_method(ctx):
       f"paper does. (b) adds the structural rank: a point counts only where `core.observable_rank` "
       f"is 7, i.e. the column-scaled Γ has σ_min/σ_max > `core.RANK_RTOL` = {core.RANK_RTOL:g} (the "
       f"one criterion of `core`, also the `observable` flag of every map); where it does not, "
-      f"det Γ = 0 structurally and the float64 value is round-off. (c) uses the Fisher D-optimal measure "
+      f"det Γ = 0 structurally and the float64 value is round-off. Where (b) finds rank 6 at every "
+      f"point (one station), (a) is not meaningful either: its digits change with the compiled code's "
+      f"rounding (kernels compiled in the process or loaded from numba's cache), and so would a "
+      f"verdict drawn from them; the round-off maps are still drawn, hatched. (c) uses the Fisher D-optimal measure "
       f"½ log10 det(ΓᵀΓ/σ_n²) over all rows of {core.DEFAULT_STEPS} instants (σ_n = {core.DEFAULT_NOISE:g} V/m): "
       f"for one station with 7 unknowns it is −∞ (F singular), so (c) runs the dual layout "
       f"(d = {sc.DUAL_D:g} m unless the claim is about d) and the single station with the moments known "
@@ -123,7 +132,10 @@ def section_roundoff(ctx):
       f"Below, Γ of the Fig. 1 scenario is rebuilt independently (sympy Jacobian, mpmath at "
       f"{precision.DIGITS[0]} and {precision.DIGITS[1]} digits; `paper/precision.py`). A real "
       "determinant keeps its value as precision grows (the dual column); round-off shrinks with the "
-      "working precision (or comes out exactly 0, shown −∞).\n")
+      "working precision (or comes out exactly 0, shown −∞). float64's own values are round-off, below "
+      "the scale ε · Π‖Γ_j‖ (ε for η); their digits differ between kernels compiled in the process and "
+      "loaded from numba's cache (by up to two decades), so the table gives the scale they stay under, "
+      "not the digits.\n")
     for model, rows in evidence_by_model.items():
         d0, d1 = precision.DIGITS
         w(f"**`{model}` model**, log10 values (z = {sc.Z:g} m):\n")
@@ -132,8 +144,10 @@ def section_roundoff(ctx):
           "| \\|cos\\|(n, core.unobservable_direction) |")
         w("|---" * 10 + "|")
         for r in rows:
-            w(f"| ({r['x']:g}, {r['y']:g}) | {_f(r['f64_log10_det'])} | {_f(r[f'mp{d0}_log10_det'])} | "
-              f"{_f(r[f'mp{d1}_log10_det'])} | {_f(r['f64_log10_eta'])} | {_f(r[f'mp{d0}_log10_eta'])} | "
+            w(f"| ({r['x']:g}, {r['y']:g}) | {_within(r['f64_det_within_roundoff'], r['roundoff_log10_det'])} | "
+              f"{_f(r[f'mp{d0}_log10_det'])} | "
+              f"{_f(r[f'mp{d1}_log10_det'])} | {_within(r['f64_eta_within_roundoff'], math.log10(precision.EPS))} | "
+              f"{_f(r[f'mp{d0}_log10_eta'])} | "
               f"{_f(r[f'mp{d1}_log10_eta'])} | {_f(r['dual_f64_log10_eta'])} / {_f(r['dual_mp_log10_eta'])} | "
               f"{r['f64_null_residual']:.1e} / {r['mp_null_residual']:.1e} | {r['cos_core_direction']:.12f} |")
         w("")
