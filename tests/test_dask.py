@@ -89,11 +89,31 @@ def _evaluate_tasks(records):
     return [r for r in records if r["key"].startswith("_evaluate-")]
 
 
+#: Cluster against serial. The same kernel compiled in this process and loaded from numba's cache
+#: by a worker (a cold cache: this process compiles and writes it) differ in the last bits: measured
+#: up to 6e-15 relative on the sweep's log10 criteria, 3e-16 on the spacing curve, never in which
+#: entries are NaN. Bit equality holds only between processes that both load the cache; 1e-12
+#: relative is 100x the measured spread and far below any difference a wrong row, station or
+#: setting makes (those change the criteria in the third digit or earlier).
+RTOL = 1e-12
+
+
+def assert_same_numbers(actual, desired, err_msg=""):
+    """Equal NaN pattern, equal values within :data:`RTOL`."""
+    actual, desired = np.asarray(actual), np.asarray(desired)
+    np.testing.assert_array_equal(np.isnan(actual), np.isnan(desired), err_msg=err_msg)
+    np.testing.assert_allclose(actual, desired, rtol=RTOL, atol=0, err_msg=err_msg)
+
+
 def assert_same_result(a, b):
-    """Two result dataclasses field by field, exactly (NaN equals NaN)."""
+    """Two result dataclasses field by field (NaN equals NaN; floats within RTOL)."""
     assert type(a) is type(b)
     for f in dataclasses.fields(a):
-        np.testing.assert_array_equal(getattr(a, f.name), getattr(b, f.name), err_msg=f.name)
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if np.asarray(x).dtype.kind == "f":
+            assert_same_numbers(x, y, err_msg=f.name)
+        else:
+            np.testing.assert_array_equal(x, y, err_msg=f.name)
 
 
 BASE = {k: v[0] for k, v in sweep.PARAMETERS.items()}
@@ -115,7 +135,7 @@ def test_sweep_on_cluster_equals_serial(cluster, measure, xaxis, yaxis, fixed):
     serial = sweep.run(x, y, settings, base, workers=1, progress=False)
     with distributed.get_task_stream(client) as stream:
         on_cluster = sweep.run(x, y, settings, base, progress=False, client=client)
-    np.testing.assert_array_equal(on_cluster, serial)  # bit for bit, NaN where NaN
+    assert_same_numbers(on_cluster, serial)  # NaN where NaN
     if fixed:  # station 0 sits at the origin for every d: the z = 100 m row is on it
         assert np.all(np.isnan(serial[0]))
     assert np.all(np.isfinite(serial[1 if fixed else 0:]))  # a real grid elsewhere
@@ -135,8 +155,7 @@ def test_layout_search_with_client_equals_without(cluster):
     _, client = cluster
     region = core.Plane("xy", (-200, 200), (-200, 200), 120.0, 9)
     d = np.linspace(5, 300, 7)
-    np.testing.assert_array_equal(core.spacing_curve(d, region, client=client),
-                                  core.spacing_curve(d, region))
+    assert_same_numbers(core.spacing_curve(d, region, client=client), core.spacing_curve(d, region))
     with distributed.get_task_stream(client) as stream:
         remote = core.best_spacing(region, d_range=(5, 300), n_curve=7, kind="triangle",
                                    n_stations=3, client=client)
@@ -178,7 +197,7 @@ def test_cli_scheduler_end_to_end(cluster, tmp_path):
     assert header == ["d", "z", "d_optimal"] and table.shape == (9, 3)
     serial = sweep.run(sweep.parse_axis("d=5:45:3"), sweep.parse_axis("z=110,150,200"),
                        SETTINGS, BASE, workers=1, progress=False)
-    np.testing.assert_array_equal(table[:, 2], serial.ravel())  # repr() round-trips floats
+    assert_same_numbers(table[:, 2], serial.ravel())  # repr() round-trips floats
     tasks = _evaluate_tasks(client.get_task_stream(start=start))
     assert len(tasks) == 3  # its three rows ran on our cluster, not in a local pool
 
