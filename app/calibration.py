@@ -353,11 +353,35 @@ def _fix_label(kind, values):
     return "Use Be = [" + ", ".join(_fmt(values[k]) for k in ("cal_be_n", "cal_be_e", "cal_be_d")) + "] nT"
 
 
-def calibration_tab(scenario):
-    """The tab's layout for one session's ``scenario`` (its ``cal_`` parameters). A change of
+#: Bytes per piece of an upload. Bokeh's websocket takes messages of at most 20 MB: a 26 MB CSV
+#: sent whole (Panel's FileInput) closed the session without a word. Sent in pieces (Panel's
+#: FileDropper), any file up to core's :data:`core.calibration.MAX_CSV_BYTES` arrives.
+UPLOAD_CHUNK_BYTES = 4_000_000
+
+
+def upload_widget():
+    """The CSV upload: Panel's FileDropper, sending the file in pieces of
+    :data:`UPLOAD_CHUNK_BYTES`, refusing in the browser, before anything is sent and with a
+    message there, a file larger than core accepts (FilePond's sizes are in units of 1000)."""
+    return pn.widgets.FileDropper(multiple=False, chunk_size=UPLOAD_CHUNK_BYTES,
+                                  max_file_size=f"{cal.MAX_CSV_BYTES // 1000}KB", layout="compact",
+                                  css_classes=["w-cal-upload"], sizing_mode="stretch_width")
+
+
+def uploaded_bytes(upload):
+    """The uploaded file's bytes (None if none): Panel decodes a text/* file to str."""
+    files = upload.value or {}
+    if not files:
+        return None
+    data = next(iter(files.values()))
+    return data.encode("utf-8") if isinstance(data, str) else bytes(data)
+
+
+def calibration_parts(scenario):
+    """The tab's (inputs, results) for one session's ``scenario`` (its ``cal_`` parameters). A change of
     the inputs or an upload computes off the event loop (:class:`app.offloop.Task`, ~1 s for a
     50,000-reading log), a spinner over the results and plots meanwhile."""
-    upload = pn.widgets.FileInput(accept=".csv", css_classes=["w-cal-upload"])
+    upload = upload_widget()
 
     def uploaded(event):
         if event.new:
@@ -378,7 +402,7 @@ def calibration_tab(scenario):
     figures = Figures()  # built once; a result only replaces their data (app.calibration_plots)
     k_plot, bp_plot, be_plot, att_plot = (pn.pane.Bokeh(figures.figures[k], sizing_mode="stretch_width")
                                           for k in ("K", "Bp", "be", "manoeuvre"))
-    results = pn.Column(refusal(scenario, FIELDS, "w-message-cal"), error, text,
+    results = pn.Column(error, text,
                         pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"), table,
                         sizing_mode="stretch_width")
     plots = pn.Column(pn.Row(k_plot, bp_plot, sizing_mode="stretch_width"),
@@ -401,7 +425,7 @@ def calibration_tab(scenario):
     def start(*_):
         with task.lock:  # the values as they are when this decides (two watchers may race)
             values = scenario.values(READS)
-            data = upload.value
+            data = uploaded_bytes(upload)
             key = (tuple(sorted(values.items())), hashlib.sha1(data).hexdigest() if data else None)
             task.start(key, partial(views, values, data), show, failed)
 
@@ -413,16 +437,26 @@ def calibration_tab(scenario):
                           css_classes=[f"w-cal-preset-{i}"],
                           on_click=lambda e, n=name: _load(scenario, n))
         for i, name in enumerate(PRESETS)], sizing_mode="stretch_width")
+    # a refused input is said above the inputs, where the user types (they sit in the sidebar)
     controls = pn.Column(
+        refusal(scenario, FIELDS, "w-message-cal"),
         *[_input(scenario, f) for f in FIELDS],
         pn.pane.Markdown(f"**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad; at most "
-                         f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB)"), upload,
-        width=320)
-    return pn.Column(
+                         f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB: a larger "
+                         "file is refused here, before it is sent)"), upload,
+        sizing_mode="stretch_width", css_classes=["w-cal-inputs"])
+    main = pn.Column(
         pn.pane.Markdown(HELP, sizing_mode="stretch_width"),
         pn.pane.Markdown("**Seed 004's cases and instructive manoeuvres** (one click loads one)"), presets,
-        pn.Row(controls, results, sizing_mode="stretch_width"),
-        plots, sizing_mode="stretch_width")
+        results, plots, sizing_mode="stretch_width")
+    return controls, main
+
+
+def calibration_tab(scenario):
+    """The tab as one layout: its inputs beside its results (the page puts the inputs in its
+    sidebar instead: :func:`calibration_parts`)."""
+    controls, main = calibration_parts(scenario)
+    return pn.Row(pn.Column(controls, width=320), main, sizing_mode="stretch_width")
 
 
 #: Decimals shown in the tab's number boxes (app.number_box): up to 4, so that a value such as the

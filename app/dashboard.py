@@ -14,7 +14,7 @@ import panel as pn
 import param
 
 from . import export, live, maps, url
-from .calibration import calibration_tab
+from .calibration import calibration_parts
 from .compute import KIND_NAMES, MAP_INPUTS, SHARED
 from .design import design_tab
 from .inputs import number_input
@@ -30,7 +30,7 @@ from .scenario import (
     Scenario,
     parameter,
 )
-from .shape import shape_tab
+from .shape import shape_parts
 from .track import track_tab
 
 #: Sidebar sections: (title, parameters, collapsed?).
@@ -264,11 +264,13 @@ def sensor_banner(scenario, tab):
 
 
 def panel_extension():
-    """Panel's settings the page is built for: the Tabulator of the calibration tab, sliders that
+    """Panel's settings the page is built for: the Tabulator and the chunked upload (FileDropper)
+    of the calibration tab, sliders that
     report on release only (:mod:`app.inputs` keeps a box and its slider in step on that value),
     the busy spinner over a recomputing map, and no notification area (messages are shown in
     the page)."""
-    pn.extension("tabulator", throttled=True, loading_indicator=True, notifications=False)
+    pn.extension("tabulator", "filedropper", throttled=True, loading_indicator=True,
+                 notifications=False)
 
 
 def first_visit(tabs, titles, holders, makers):
@@ -318,13 +320,27 @@ def create_app():
     # Tabs detach a hidden tab's models from the document, and a change made to them there (a
     # preset) patched Panel's shared stylesheets to cdn.holoviz.org, for every model of the
     # page (issue 25, Offline).
+    # The Calibration and Shape tabs' inputs sit in the sidebar, which has nothing else for them
+    # (at 1280 × 800 a blank sidebar beside inputs in the main area cut off the coefficient table
+    # and shrank the Shape views to ~190 × 100 px): filled on the tab's first visit.
+    sides = {t: pn.Column(sizing_mode="stretch_width", margin=0, css_classes=[f"w-side-{t.lower()}"])
+             for t in (titles[3], titles[4])}
+
+    def in_sidebar(title, parts):
+        def make():
+            inputs, main = parts(scenario)
+            inputs.param.update(width=None, sizing_mode="stretch_width")
+            sides[title].objects = [inputs]
+            return main
+        return make
+
     later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
                                           design_tab(scenario, cache, _widgets()),
                                           sizing_mode="stretch_width", margin=0),
              titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
                                           sizing_mode="stretch_width", margin=0),
-             titles[3]: lambda: calibration_tab(scenario),
-             titles[4]: lambda: shape_tab(scenario)}
+             titles[3]: in_sidebar(titles[3], calibration_parts),
+             titles[4]: in_sidebar(titles[4], shape_parts)}
     # What a hidden tab says until its first visit has built it (~0.1-0.5 s)
     holders = {t: pn.Column(pn.pane.HTML(f"Opening the {t} tab…", css_classes=["w-tab-opening"],
                                          styles={"color": "#555", "font-size": "15px"}),
@@ -378,6 +394,8 @@ def create_app():
                            visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
                            sizing_mode="stretch_width", margin=0),
                  maps.refusal(scenario, None, "w-message"), *sections,
+                 *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
+                             sizing_mode="stretch_width") for t, side in sides.items()],
                  pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
                                             f"{export.WIDTH_PX} px wide; one map as shown: its save tool)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],

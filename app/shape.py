@@ -432,12 +432,17 @@ def _build(scenario):
 
     scenario.watch(start, READS)
     start()
-    return pn.Row(_inputs(scenario),
-                  pn.Column(problem, outputs, sizing_mode="stretch_width"),
-                  sizing_mode="stretch_width")
+    return _inputs(scenario), pn.Column(problem, outputs, sizing_mode="stretch_width")
+
+
+def shape_parts(scenario: Scenario):
+    """The Shape tab's (inputs, results) for a shared :class:`Scenario` (the page puts the inputs
+    in its sidebar, and builds both when the tab is first shown: app.dashboard.first_visit);
+    starts its first computation."""
+    return _build(scenario)
 
 
 def shape_tab(scenario: Scenario):
-    """The Shape tab's layout for a shared :class:`Scenario` (the page builds it when the tab
-    is first shown: app.dashboard.first_visit); starts its first computation."""
-    return _build(scenario)
+    """The Shape tab as one layout: its inputs beside its results (:func:`shape_parts`)."""
+    inputs, outputs = _build(scenario)
+    return pn.Row(inputs, outputs, sizing_mode="stretch_width")

@@ -87,7 +87,7 @@ class Tab:
         elif kind == "cal":
             self.layout = calibration.calibration_tab(s)
         elif kind == "shape":
-            self.layout = shape._build(s)
+            self.layout = shape.shape_tab(s)
 
     def _pane(self, css):
         return next(p for p in self.layout.select(pn.pane.PaneBase) if css in p.css_classes)

@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from support.page import VIEWPORT, chromium_browser, chromium_missing, wait_maps
+from support.page import SMALL_VIEWPORT, VIEWPORT, chromium_browser, chromium_missing, wait_maps
 from support.server import served_app
 
 playwright = pytest.importorskip("playwright.sync_api")
@@ -26,16 +26,21 @@ def server(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def page(server):
-    with chromium_browser() as browser:
-        pg = browser.new_page(viewport=VIEWPORT)
-        errors = []
-        pg.on("pageerror", lambda e: errors.append(str(e)))
-        pg.goto(server[0] + "/app")
-        pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
-        wait_maps(pg, lambda drawn: len(drawn) == 3)
-        yield pg
-        assert errors == []
+def browser():
+    with chromium_browser() as b:
+        yield b
+
+
+@pytest.fixture(scope="module")
+def page(server, browser):
+    pg = browser.new_page(viewport=VIEWPORT)
+    errors = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.goto(server[0] + "/app")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    wait_maps(pg, lambda drawn: len(drawn) == 3)
+    yield pg
+    assert errors == []
 
 
 def _type(pg, css, text):
@@ -75,3 +80,24 @@ def test_the_emptied_noise_box_says_so_and_raises_nothing(page, server):
     _wait_text(box, "1e-07")
     time.sleep(1.0)  # anything the server raised is in its log by now
     assert "Traceback" not in server[1].read_text(errors="replace")
+
+
+@pytest.mark.parametrize("tab, inputs, last", [
+    ("Calibration", ".w-cal_noise_nt", "(Kalman − truth)/σ"),
+    ("Shape", ".w-shape-preset", None),
+])
+def test_at_1280_by_800_the_tabs_inputs_are_in_the_sidebar_and_nothing_is_cut_off(server, browser, tab, inputs, last):
+    # issue 40 defect 12: a blank 360 px sidebar beside the tab's own inputs cut off the
+    # coefficient table ("CRLB σ" clipped, "(Kalman − truth)/σ" out of view) and shrank the
+    # Shape views to ~190 × 100 px
+    pg = browser.new_page(viewport=SMALL_VIEWPORT)
+    pg.goto(server[0] + "/app")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    pg.get_by_text(tab, exact=True).first.click()
+    box = pg.locator(f"#sidebar {inputs}").first
+    box.wait_for(timeout=60_000)
+    if last:
+        pg.wait_for_selector("text=Rank of Γ: 12 of 12", timeout=120_000)
+        header = pg.get_by_text(last, exact=True).first.bounding_box()
+        assert header["x"] + header["width"] <= SMALL_VIEWPORT["width"], header
+    pg.close()

@@ -1,0 +1,91 @@
+"""A large upload on the Calibration tab, in headless Chromium (issue 40 defect 2): a valid
+500,000-row CSV (~26 MB) closed the session's websocket without a word (Bokeh takes messages of
+at most 20 MB and Panel's FileInput sent the file whole); now it is sent in pieces and computed.
+A file larger than the tab takes is refused in the browser, before it is sent, with a message."""
+
+import time
+
+import numpy as np
+import pytest
+
+from core import calibration as cal
+from support.page import VIEWPORT, chromium_browser, chromium_missing
+from support.server import served_app
+
+playwright = pytest.importorskip("playwright.sync_api")
+
+pytestmark = pytest.mark.skipif(
+    chromium_missing(),
+    reason="Debian's chromium is not installed (CI installs it; there this test must run)",
+)
+
+#: Rows of the large upload (the issue's), and its least size: over Bokeh's 20 MB message limit.
+ROWS = 500_000
+LEAST_BYTES = 21_000_000
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    log = tmp_path_factory.mktemp("server") / "server.log"
+    with served_app(log=log) as (url, _):
+        yield url, log
+
+
+def _large_csv(path):
+    """Seed 004's simulated ship on ROWS random attitudes, 100 nT and 0.05° errors."""
+    rng = np.random.default_rng(40)
+    sim = cal.SEED004_SIMULATION
+    att = cal.random_attitudes(ROWS, rng)
+    B, rec = cal.simulate_ship_data(np.array(sim["K"]), np.array(sim["Bp"]), att, np.array(sim["be"]),
+                                    rng, noise_nt=100.0, angle_noise_deg=0.05)
+    np.savetxt(path, np.hstack([B, rec]), delimiter=",", fmt=["%.3f"] * 3 + ["%.7f"] * 3,
+               header="B1,B2,B3,psi,theta,phi", comments="")
+    assert path.stat().st_size > LEAST_BYTES
+    return path
+
+
+def _calibration_tab(pg, url):
+    pg.goto(url + "/app")
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    pg.get_by_text("Calibration", exact=True).first.click()
+    pg.wait_for_selector("text=Rank of Γ: 12 of 12", timeout=120_000)
+    # FilePond takes a file once it has set itself up (a file given before was dropped)
+    pg.locator(".w-cal-upload .filepond--root").wait_for(timeout=60_000)
+    time.sleep(1.0)
+
+
+def test_a_26_mb_upload_is_computed_and_the_session_lives_on(server, tmp_path):
+    path = _large_csv(tmp_path / "large.csv")
+    with chromium_browser() as browser:
+        pg = browser.new_page(viewport=VIEWPORT)
+        closed = []
+        pg.on("websocket", lambda ws: ws.on("close", lambda _ws: closed.append(time.time())))
+        _calibration_tab(pg, server[0])
+        pg.locator(".w-cal-upload input[type=file]").set_input_files(str(path))
+        pg.wait_for_selector(f"text=({ROWS} attitudes", timeout=600_000)
+        assert pg.locator(".w-cal_source select").input_value() == "Uploaded CSV"
+        # the session lives on: a change still answers, and the sidebar still has its inputs
+        pg.get_by_text("Maps", exact=True).first.click()
+        pg.locator(".w-Ph input").first.wait_for(timeout=30_000)
+        assert closed == [], "the page's websocket closed"
+        pg.close()
+    assert "Traceback" not in server[1].read_text(errors="replace")
+
+
+def test_a_file_over_the_limit_is_refused_in_the_browser_before_it_is_sent(server, tmp_path):
+    big = tmp_path / "too-large.csv"
+    with open(big, "wb") as fh:  # sparse: the browser reads its size, not its bytes
+        fh.write(b"B1,B2,B3,psi,theta,phi\n")
+        fh.truncate(cal.MAX_CSV_BYTES + 1)
+    with chromium_browser() as browser:
+        pg = browser.new_page(viewport=VIEWPORT)
+        sent = []
+        pg.on("websocket", lambda ws: ws.on("framesent", lambda payload: sent.append(len(payload))))
+        _calibration_tab(pg, server[0])
+        before = sum(sent)
+        pg.locator(".w-cal-upload input[type=file]").set_input_files(str(big))
+        pg.get_by_text("File is too large").first.wait_for(timeout=30_000)  # FilePond says it
+        time.sleep(2.0)
+        assert sum(sent) - before < 1_000_000  # nothing of the file went to the server
+        assert pg.locator(".w-cal_source select").input_value() != "Uploaded CSV"
+        pg.close()
