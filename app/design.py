@@ -130,7 +130,9 @@ def design_tab(scenario, cache, widgets):
         snapshot, x, y = key
         s = snapshot.scenario()
         rng = float(compute.nearest_range([x, y, s.z], s.stations)) if len(s.stations) else None
-        return views.error_ellipse(design_compute.error_at(snapshot, x, y), x, y, s.extent, rng)[1]
+        column = float(s.sea_depth) if s.sea_model == "layered" else None
+        return views.error_ellipse(design_compute.error_at(snapshot, x, y), x, y, s.extent, rng,
+                                   column)[1]
 
     def now():
         return snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
@@ -153,21 +155,33 @@ def design_tab(scenario, cache, widgets):
         css_classes=["w-station-table"],
         formatters={c: NumberFormatter(format="0.0") for c in COLUMNS})
 
+    showing = [False]  # the table's value is being set from the layout: not an edit
+
     def shown(*_):
-        table.value = frame(st.stations)  # a new frame: the edited one is changed in place
+        showing[0] = True
+        try:
+            table.value = frame(st.stations)  # a new frame: Panel sends it even amid an edit's sync
+        finally:
+            showing[0] = False
 
     st.param.watch(shown, ["stations"])
 
     def edited(event):
-        wanted = table.value.astype(float).values.tolist()
+        # On the table's value, not on_edit: Panel may run an edit's on_edit callbacks before
+        # the edited data reaches ``value`` (the z = −5 edit was read as no change, then carried
+        # into the next edit, which was refused with it: y = 130 was lost; issue 40 defect 4).
+        if showing[0]:
+            return
+        wanted = event.new.astype(float).values.tolist()
+        if wanted == st.stations:
+            return
         st.stations = wanted
         if st.stations != wanted:
             # refused (the Scenario restored the layout and said why, next to the table): the
-            # table shows the kept layout at once. It kept the refused cell, silently, and the
-            # next valid edit was then lost to the late restore (issue 40 defect 4).
+            # table shows the kept layout at once (it kept the refused cell, silently)
             shown()
 
-    table.on_edit(edited)
+    table.param.watch(edited, ["value"])
     message = refusal(scenario, OWN, "w-design-message")
     run = pn.widgets.Button(name="Find best spacing", button_type="primary")
     # The optimisers take ~1 s (best spacing) to ~10 s (free layouts): off the event loop

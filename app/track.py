@@ -307,7 +307,7 @@ def _outputs(scenario: Scenario):
     #: Said (under the spinner) until the first track is shown: the first visit computes it
     summary = pn.pane.Markdown("*Computing the track, its bound and the trackers' runs …*",
                                sizing_mode="stretch_width", css_classes=["w-track-summary"])
-    plan = pn.pane.HoloViews(None, sizing_mode="stretch_width")
+    plan = pn.pane.HoloViews(None)  # its own size: to scale (a stretched width was not)
     error = pn.pane.HoloViews(None, sizing_mode="stretch_width", height=340)
     # min_height: the spinner over it is seen before the first plots come (it was a ring ~10 px high)
     outputs = pn.Column(summary, plan, error, sizing_mode="stretch_width", min_height=400)
@@ -381,11 +381,14 @@ def track_tab(scenario: Scenario):
     # every number is typed or dragged (a box above its slider, app.inputs: a refused text is
     # said, not dropped); the choices are selectors
     fmt = {"track_alpha": "0.[0000]", "track_sigma_a": "0.[000]"}
+    numbers = [n for n in own if isinstance(scenario.track.param[n], param.Number)]
     widgets = pn.Column(*[
         number_input(scenario.track, name, fmt=fmt.get(name, "0.[00]"), css_classes=[f"w-{name}"])
-        if isinstance(scenario.track.param[name], param.Number)
-        else pn.Param(scenario.track, parameters=[name], show_name=False, sizing_mode="stretch_width")
-        for name in own], sizing_mode="stretch_width", margin=0)
+        for name in numbers],
+        # the choices in one Param (one per choice cost ~20 ms more each to build)
+        pn.Param(scenario.track, parameters=[n for n in own if n not in numbers], show_name=False,
+                 sizing_mode="stretch_width"),
+        sizing_mode="stretch_width", margin=0)
     note = pn.pane.Markdown(note_text(scenario.snapshot(NOTE_READS)), sizing_mode="stretch_width",
                             css_classes=["w-track-note"])
     scenario.watch(lambda *_: setattr(note, "object", note_text(scenario.snapshot(NOTE_READS))), NOTE_READS)

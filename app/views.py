@@ -166,10 +166,10 @@ def station_layer(stations, editable=False):
     return points.opts(active_tools=["point_draw"]) if editable else points
 
 
-def error_ellipse(errors, x, y, extent, range_m=None):
+def error_ellipse(errors, x, y, extent, range_m=None, water_depth=None):
     """The 1-σ horizontal error ellipse at (x, y), drawn ×k so that it is visible; and its text
     (saying so when the 3-D error exceeds RUNAWAY_LIMIT × ``range_m``, the range to the nearest
-    station, m)."""
+    station, m, and when the depth error exceeds ``water_depth``, the layered sea's D, m)."""
     if errors is None or not bool(errors.observable):
         return hv.Ellipse(0, 0, 0).opts(alpha=0), "Click on the map (away from a station) for the error ellipse there."
     a, b = float(errors.semi_major), float(errors.semi_minor)
@@ -179,6 +179,10 @@ def error_ellipse(errors, x, y, extent, range_m=None):
             f"at {float(errors.orientation):.0f}° from +x (drawn ×{k:.3g}); depth error "
             f"{float(errors.sigma_z):.3g} m; speed error {float(errors.sigma_speed):.3g} m/s; "
             f"3-D position error {float(errors.position):.3g} m.")
+    if water_depth is not None and float(errors.sigma_z) > water_depth:
+        # "a depth error of 1.24e+04 m in 8.4 m of water" was printed unflagged
+        text += (f" The depth error is larger than the water column ({water_depth:g} m): these "
+                 "measurements do not tell the depth; only the sea bounds it.")
     if range_m is not None and float(errors.position) > RUNAWAY_LIMIT * range_m:
         text += (f" That is over {RUNAWAY_LIMIT:.0%} of the range to the nearest station "
                  f"({range_m:.3g} m): the linearised bound does not predict a tracker's error here "

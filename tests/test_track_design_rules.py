@@ -115,3 +115,30 @@ def test_the_station_depth_h_moves_the_custom_stations_at_it():
     before = [list(st) for st in s.stations.stations]
     s.stations.h = 160.0
     assert s.stations.h != 160.0 and s.stations.stations == before and "water column" in s.message
+
+
+# building the tab: Panel's Tabulator calls pandas' deprecated reset_index(inplace=True), and
+# Panel 1.9 deprecates the buttons' button_type (as tests/test_input_extremes.py)
+@pytest.mark.filterwarnings("ignore:The inplace keyword:pandas.errors.Pandas4Warning")
+@pytest.mark.filterwarnings("ignore:.*deprecated and will be removed in version 2.0:PendingDeprecationWarning")
+def test_a_depth_error_beyond_the_water_column_is_flagged():
+    # issue 40 (low): "depth error of 1.24e+04 m" was printed, unflagged, in 8.4 m of water
+    import panel as pn
+
+    from app.compute import SHARED
+    from app.dashboard import _widgets
+    from app.design import design_tab
+    from app.scenario import Scenario
+
+    s = Scenario()
+    s.apply_preset("Seed 001 sea trial")
+    tab = design_tab(s, SHARED, _widgets())
+    readout = next(p for p in tab.select(pn.pane.Markdown) if "w-ellipse-text" in p.css_classes)
+    sigma_z = float(readout.object.split("depth error ")[1].split(" m;")[0])
+    assert sigma_z > 8.4  # at the default point (100, 100) m
+    assert "larger than the water column (8.4 m)" in readout.object
+    # a whole-space depth error is not compared with any water column
+    s.apply_preset("Fig. 5")
+    tab = design_tab(s, SHARED, _widgets())
+    readout = next(p for p in tab.select(pn.pane.Markdown) if "w-ellipse-text" in p.css_classes)
+    assert "depth error" in readout.object and "water column" not in readout.object
