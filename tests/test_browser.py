@@ -7,8 +7,8 @@ from urllib.parse import urlencode
 import numpy as np
 import pytest
 
-from support.page import (VIEWPORT, chromium_browser, chromium_missing, maps, select, type_value,
-                          value_of, wait_count, wait_maps, wait_value)
+from support.page import (MAPS_JS, VIEWPORT, chromium_browser, chromium_missing, maps, select,
+                          type_value, value_of, wait_count, wait_maps, wait_value)
 from support.server import served_app
 
 playwright = pytest.importorskip("playwright.sync_api")

@@ -110,7 +110,7 @@ LINKS = {  # query -> text the message must contain (None: no message; the value
     "measure=<script>alert(1)</script>": "measure",
     f"Ph={XSS}": "Ph",
     f"message={XSS}": None,
-    "Ph=1e99&resolution=100000&heading=nan&measure=%3Cmarquee%3Ex": "Link values refused",
+    "Ph=1e99&resolution=100000&heading=nan&measure=%3Cmarquee%3Ex": "Link refused, nothing of it applied",
 }
 
 
