@@ -51,6 +51,15 @@ def server():
         yield url
 
 
+class SentUpload(UploadEvent):
+    """Panel's upload event as the browser's FileDropper sends it. Bokeh serialises a model event's
+    ``event_values()``, which for Panel's class carry only the model (the browser's BokehJS event
+    carries the piece): the piece is added here, as the browser sends it."""
+
+    def event_values(self):
+        return dict(super().event_values(), data=self.data)
+
+
 def log_csv(seed):
     """A READINGS-row CSV as the tab accepts it (B1, B2, B3 in nT; psi, theta, phi in rad):
     seed 004's simulated ship on random attitudes, 100 nT and 0.05° errors."""
@@ -126,7 +135,7 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
                 step = UPLOAD_CHUNK_BYTES
                 pieces = [data[i:i + step] for i in range(0, len(data), step)]
                 for k, piece in enumerate(pieces, 1):
-                    uploader._send(MessageSentEvent(uploader.doc, "bokeh_event", UploadEvent(
+                    uploader._send(MessageSentEvent(uploader.doc, "bokeh_event", SentUpload(
                         upload, data=dict(name=f"log{attempt}.csv", chunk=k, total_chunks=len(pieces),
                                           type="text/csv", data=piece))))
                 ok = uploader._pump(lambda: solved(uploader.events[first:]), 180)
