@@ -108,11 +108,6 @@ class Live:
         self.generation = 0  # a release starts a new one: previews of an older one are dropped
         self.drawn = 0  # previews drawn (for tests and the benchmark)
         self.preview_n = PREVIEW_N  # points per axis of the next preview (PREVIEW_BUDGET_S)
-        #: The sliders' browser-side callbacks (Panel ``Callback``s): unregistered when the session
-        #: ends. Panel's ``Callback.registry`` is keyed weakly by the slider, but its entry (through
-        #: ``drag`` and this object's scenario, whose watchers hold the slider) keeps the slider,
-        #: hence the whole page, alive: every closed session stayed (tests/test_server_memory.py).
-        self.callbacks = []
         if doc is not None and doc.session_context is not None:
             _SESSIONS[doc] = self
             doc.on_session_destroyed(lambda _ctx: self.close())
@@ -164,6 +159,8 @@ class Live:
         else:
             self.preview_n = next_n(n, seconds)
         self.computing = False
+        if self.scenario is None:  # the session ended while the preview was computed
+            return
         if prepared is not None and generation == self.generation and self.shown:
             with pn.io.hold():  # the maps' own models in one message, as app/maps.py draws them
                 map_figures.fill(self.figs, prepared)
@@ -173,11 +170,16 @@ class Live:
             self._start()
 
     def close(self):
-        """The session ended: forget it, and unregister its sliders' callbacks."""
+        """The session ended: forget it, and cut what its sliders' browser-side callbacks keep.
+
+        Panel's ``Callback.registry`` is keyed weakly by the slider, but its entry holds the
+        callback's ``args`` (``drag``), whose ``on_change`` held this object, hence the scenario,
+        whose watchers hold the slider: every closed session stayed alive
+        (tests/test_server_memory.py). Panel < 1.9 has no ``Callback.unwatch``; removing the
+        ``on_change`` callback and this object's references cuts the cycle on every version."""
         _SESSIONS.pop(self.doc, None)
-        for callback in self.callbacks:
-            callback.unwatch()
-        self.callbacks.clear()
+        self.drag.remove_on_change("state", self.changed)
+        self.scenario = self.figs = self.doc = self.exact = None
 
     def drawn_exact(self):
         """Called by app/maps.py when it has drawn exact maps: no preview is shown, and none
@@ -211,7 +213,7 @@ def follow(slider, name):
     if live is None or name not in MAP_INPUTS:
         return
     args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS)
-    live.callbacks.append(slider.jscallback(args=args, value=FOLLOW_JS))
+    slider.jscallback(args=args, value=FOLLOW_JS)
 
 
 def shown_with(tabs, index):
