@@ -33,6 +33,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BASE_COMMIT = "ecd374c"
 KINDS = ("E", "B", "G", "BG")
+#: Issue 36: every magnetic map and criterion ≤ 1.5× the electric one, in one run.
+MAGNETIC_TARGET = 1.5
+#: The electric tasks must be no slower than before; between calls of the same code the median
+#: over the electric tasks moves by this much on the shared machine (two runs of one tree).
+ELECTRIC_SCATTER = 0.1
 MEASURES = ("crlb_position", "d_optimal")
 
 WORKER = r"""
@@ -103,6 +108,7 @@ def main(argv=None):
     base = args.base or base_checkout(BASE_COMMIT)
     tasks = [f"{m}:{k}:{n}" for n in args.n for m in MEASURES for k in KINDS]
     tasks += [f"criterion:{k}:0" for k in KINDS]
+    load0 = os.getloadavg()
     old, new = Worker(base), Worker(ROOT)
     times = {(v, t): [] for v in ("before", "now") for t in tasks}
     try:
@@ -119,9 +125,11 @@ def main(argv=None):
         old.close()
         new.close()
     med = {key: statistics.median(v) for key, v in times.items()}
+    load1 = os.getloadavg()
     print(f"dual station (d = 15 m, h = 100 m), plane ±300 m at 120 m; medians of {args.repeat} "
           f"calls per task and version, alternated call by call; {os.cpu_count()} cores, load "
-          f"{os.getloadavg()[0]:.1f}; before = {BASE_COMMIT if args.base is None else base}")
+          f"average {load0[0]:.1f} at start, {load1[0]:.1f} at end; before = "
+          f"{BASE_COMMIT if args.base is None else base}")
     print(f"{'task':26s} {'before ms':>10s} {'now ms':>9s} {'now/before':>10s} "
           f"{'before ×E':>10s} {'now ×E':>8s}")
     for task in tasks:
@@ -131,6 +139,16 @@ def main(argv=None):
         rel_b, rel_w = b / med["before", e_task], w / med["now", e_task]
         label = f"{what} {kind}" + ("" if what == "criterion" else f" {n}²")
         print(f"{label:26s} {1e3 * b:10.1f} {1e3 * w:9.1f} {w / b:10.2f} {rel_b:10.2f} {rel_w:8.2f}")
+    print()
+    worst = max(((med["now", t] / med["now", f"{t.split(':')[0]}:E:{t.split(':')[2]}"], t)
+                 for t in tasks if t.split(":")[1] != "E"))
+    print(f"{'PASS' if worst[0] <= MAGNETIC_TARGET else 'FAIL'}: every magnetic task ≤ "
+          f"{MAGNETIC_TARGET}× the electric one of this tree (worst {worst[0]:.2f}×, {worst[1]})")
+    slow = max((med["now", t] / med["before", t], t) for t in tasks if t.split(":")[1] == "E")
+    e_ratio = statistics.median(med["now", t] / med["before", t] for t in tasks if t.split(":")[1] == "E")
+    print(f"{'PASS' if e_ratio <= 1.0 + ELECTRIC_SCATTER else 'FAIL'}: electric now/before median "
+          f"{e_ratio:.2f} over its {sum(t.split(':')[1] == 'E' for t in tasks)} tasks (≤ 1 + "
+          f"{ELECTRIC_SCATTER} of scatter; slowest {slow[0]:.2f}, {slow[1]})")
 
 
 if __name__ == "__main__":
