@@ -46,8 +46,10 @@ from support.server import served_app
 TARGET_MS = 150.0
 #: The target of a slider release in a layered sea (issue 17).
 SEA_TARGET_MS = 300.0
-#: Scenario values the page and the in-process references start from (--sea sets them).
+#: Scenario values the page and the in-process references start from (--sea, --sensor set them).
 START = {}
+#: The slider dragged: the electric target's P_h, or a magnetic target's m_x (--sensor).
+SLIDER = {"name": "Ph"}
 
 
 def scenario(**values):
@@ -148,8 +150,8 @@ STATE_JS = """() => { const B = window.__bench; const ws = window.__ws;
   return {now: performance.now(), lastIn, last: Object.assign({}, B.last), ids, painted}; }"""
 
 #: The exact value of the P_h slider model (the text box shows it rounded).
-PH_VALUE_JS = """() => {
-  const col = Array.from(Bokeh.documents[0].all_models).find(m => (m.css_classes || []).includes('w-Ph'));
+PH_VALUE_JS = """(name) => {
+  const col = Array.from(Bokeh.documents[0].all_models).find(m => (m.css_classes || []).includes('w-' + name));
   const stack = [col];
   while (stack.length) {
     const m = stack.pop();
@@ -192,7 +194,7 @@ def expected_map_a_sum(ph):
     from app import map_figures
     from app.compute import Snapshot, compute
 
-    p = compute(Snapshot.of(scenario(Ph=ph)))
+    p = compute(Snapshot.of(scenario(**{SLIDER['name']: ph})))
     low, high, _ = map_figures.ranges(p)[0]
     a = map_figures.normalised(p.shown(0), low, high).astype(float)
     return float(np.nansum(np.where(np.isfinite(a), a, np.nan))), int(np.isfinite(a).sum())
@@ -211,19 +213,19 @@ def server_update_inprocess(repeat=5):
     template.server_doc(Document())
     sc = template.scenario
     sc.update(START)
-    sc.target.Ph = 111.1  # warm-up
+    setattr(sc.target, SLIDER["name"], 111.1)  # warm-up
     times = []
     for i in range(repeat):
         t0 = time.perf_counter()
-        sc.target.Ph = 123.4 + 7.3 * i
+        setattr(sc.target, SLIDER["name"], 123.4 + 7.3 * i)
         times.append(time.perf_counter() - t0)
     return statistics.median(times) * 1e3
 
 
 def drag_to(page, fraction):
     """Press the P_h handle, drag it to ``fraction`` of the track in a few moves, release."""
-    track = page.locator(".w-Ph .noUi-target").first.bounding_box()
-    handle = page.locator(".w-Ph .noUi-handle").first.bounding_box()
+    track = page.locator(f".w-{SLIDER['name']} .noUi-target").first.bounding_box()
+    handle = page.locator(f".w-{SLIDER['name']} .noUi-handle").first.bounding_box()
     cx, cy = handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2
     tx = track["x"] + fraction * track["width"]
     page.mouse.move(cx, cy)
@@ -261,7 +263,8 @@ def wait_redrawn(page, before_tags, read, before, what, quiet_ms, timeout=60.0):
 
 def wait_settled(page, before_tags, before_text, quiet_ms, timeout=60.0):
     """:func:`wait_redrawn`, the P_h text box being the value that must change."""
-    return wait_redrawn(page, before_tags, lambda pg: pg.locator(".w-Ph input").first.input_value(),
+    return wait_redrawn(page, before_tags,
+                        lambda pg: pg.locator(f".w-{SLIDER['name']} input").first.input_value(),
                         before_text, "the P_h text box", quiet_ms, timeout)
 
 
@@ -327,6 +330,11 @@ def main(argv=None):
                     help="websocket silence that ends a change (no later image can be missed)")
     ap.add_argument("--sea", default=None, metavar="D,SIGMA_B",
                     help="a layered sea: depth D (m) and seabed conductivity (S/m), e.g. 200,1")
+    ap.add_argument("--sensor", default=None, choices=["E", "B", "G", "BG"],
+                    help="the sensor kind of the maps (a magnetic kind drags m_x instead of P_h; its "
+                         "maps use the CRLB position measure)")
+    ap.add_argument("--measure", default=None, help="the maps' measure, as the page labels it "
+                    "(e.g. 'CRLB position error (m)')")
     args = ap.parse_args(argv)
     from playwright.sync_api import sync_playwright
 
@@ -337,6 +345,22 @@ def main(argv=None):
         query = f"?sea_model=layered&sea_depth={depth:g}&seabed_sigma={seabed:g}"
         target = SEA_TARGET_MS
         print(f"layered sea: D = {depth:g} m, seabed {seabed:g} S/m (stations on the seabed)")
+
+    extra = {}
+    if args.sensor:
+        from app.parts import SENSORS
+
+        extra["sensor"] = next(label for label, kind in SENSORS.items() if kind == args.sensor)
+        if args.sensor != "E":
+            SLIDER["name"] = "mx"
+    if args.measure:
+        extra["measure"] = args.measure
+    if extra:
+        from urllib.parse import urlencode
+
+        START.update(extra)
+        query += ("&" if query else "?") + urlencode(extra)
+        print(f"maps: {extra}; dragging {SLIDER['name']}")
 
     os.environ.setdefault("QUIET_SERVER", "1")
     load0 = os.getloadavg()
@@ -363,7 +387,7 @@ def main(argv=None):
             time.sleep(2.0)  # initial paints, loading spinners
             for k, frac in enumerate(positions):
                 warm = k < args.warmup
-                before_text = page.locator(".w-Ph input").first.input_value()
+                before_text = page.locator(f".w-{SLIDER['name']} input").first.input_value()
                 sum_before = page.evaluate(MAP_A_SUM_JS)[0]
                 before_tags = page.evaluate(RESET_JS)
                 drag_to(page, frac)
@@ -371,7 +395,7 @@ def main(argv=None):
                 log = page.evaluate(COLLECT_JS)
                 if log["up"] is None:
                     raise RuntimeError("no pointerup/mouseup seen by the page")
-                ph = page.evaluate(PH_VALUE_JS)
+                ph = page.evaluate(PH_VALUE_JS, SLIDER['name'])
                 drawn_sum, drawn_n, kind = page.evaluate(MAP_A_SUM_JS)
                 exp_sum, exp_n = expected_map_a_sum(ph)
                 ok = drawn_n == exp_n and abs(drawn_sum - exp_sum) <= 1e-9 * max(1.0, abs(exp_sum))
@@ -406,7 +430,7 @@ def main(argv=None):
                 f"max {max(xs):7.1f} ms")
 
     print()
-    print(f"{len(meas)} changes of P_h by mouse drag (+{args.warmup} warm-up), 200 x 200 grid, "
+    print(f"{len(meas)} changes of {SLIDER['name']} by mouse drag (+{args.warmup} warm-up), 200 x 200 grid, "
           f"image dtype in the browser: {meas[0]['dtype']}")
     print(f"release -> all 3 maps painted (paint end):      {stats(drawn)}")
     print(f"release -> next frame after that (upper bound): {stats(frame)}")
