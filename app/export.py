@@ -2,7 +2,7 @@
 
 The save tool of a Bokeh map writes its canvas as shown: ~400 × 450 px at a 1600 px screen, too
 coarse for a report (issue 25). Bokeh's own ``export_png`` needs a browser and a webdriver on the
-server; here the same numbers (:func:`app.map_figures.prepare`: values, colour ranges and palettes,
+server; here the same numbers (:func:`app.map_data.prepare`: values, colour ranges and palettes,
 veil codes, stations, titles, axis labels, captions) are drawn again with matplotlib's Agg canvas
 (no browser, no pyplot state: safe on a worker thread), at :data:`WIDTH_PX` pixels across.
 """
@@ -13,7 +13,7 @@ import io
 
 import numpy as np
 
-from . import map_figures
+from . import map_data
 
 #: Pixels across the exported PNG (three maps side by side: ~900 px each).
 WIDTH_PX = 2700
@@ -37,20 +37,20 @@ def _tick_text(log):
 
 
 def figure(p):
-    """A matplotlib Figure of the maps of ``p`` (Panels, or their :func:`map_figures.prepare`)."""
+    """A matplotlib Figure of the maps of ``p`` (Panels, or their :func:`map_data.prepare`)."""
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.ticker import FuncFormatter
 
-    d = p if isinstance(p, map_figures.Prepared) else map_figures.prepare(p)
+    d = p if isinstance(p, map_data.Prepared) else map_data.prepare(p)
     panels = d.panels
-    where = map_figures.geometry(panels.plane)
+    where = map_data.geometry(panels.plane)
     x0, y0 = where["x"][0], where["y"][0]
     extent = (x0, x0 + where["dw"][0], y0, y0 + where["dh"][0])
-    stretch = map_figures.exaggeration(panels.plane)
+    stretch = map_data.exaggeration(panels.plane)
     xname, vname = d.axes
-    u0, u1, v0, v1 = map_figures.view_box(panels)
-    veil_colours = np.array([_rgba(c) for c in map_figures.VEIL_PALETTE])
+    u0, u1, v0, v1 = map_data.view_box(panels)
+    veil_colours = np.array([_rgba(c) for c in map_data.VEIL_PALETTE])
     fig = Figure(figsize=(WIDTH_PX / DPI, 0.5 * WIDTH_PX / DPI), dpi=DPI, facecolor="white")
     axes = fig.subplots(1, 3)
     for which, (ax, (values, _obs, stations, title), (low, high, palette)) in enumerate(
@@ -82,10 +82,10 @@ def figure(p):
                            format=FuncFormatter(_tick_text(log)))
         bar.set_label(f"{label}, log scale" if log else label, fontsize=7)
         bar.ax.tick_params(labelsize=6.5)
-        bar.ax.annotate(map_figures._wrapped(panels.captions[which], 70), xy=(0, 0), xycoords="axes fraction",
+        bar.ax.annotate(map_data.wrapped(panels.captions[which], 70), xy=(0, 0), xycoords="axes fraction",
                         xytext=(0, -30), textcoords="offset points", fontsize=6, color="#555555",
                         va="top", ha="left")  # under the colour bar's label
-        said = map_figures.veiled_text(panels, which)
+        said = map_data.veiled_text(panels, which)
         if said:
             ax.text(0.03, 0.03, said, transform=ax.transAxes, fontsize=6.5, va="bottom", ha="left",
                     bbox=dict(facecolor="white", alpha=0.9, edgecolor="#888888"))

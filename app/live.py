@@ -40,7 +40,7 @@ import panel as pn
 from bokeh.core.properties import Any, List
 from bokeh.model import DataModel
 
-from . import map_figures, offloop
+from . import map_data, map_figures, offloop
 from .compute import MAP_INPUTS, Snapshot, compute
 
 #: Shortest interval (ms) between two values a dragged slider sends.
@@ -193,7 +193,7 @@ def _preview(snapshot):
     t0 = time.perf_counter()
     panels = compute(snapshot)
     seconds = time.perf_counter() - t0
-    return map_figures.prepare(panels, preview=True), seconds
+    return map_data.prepare(panels, preview=True), seconds
 
 
 def next_n(n, seconds):

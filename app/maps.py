@@ -10,7 +10,7 @@ import numpy as np
 import panel as pn
 from bokeh.layouts import row
 
-from . import export, live, map_figures, offloop, views
+from . import export, live, map_data, map_figures, offloop, views
 from .compute import MAPS, RUNAWAY_LIMIT, Snapshot
 from .scenario import defaults
 
@@ -39,7 +39,7 @@ All logarithms are base 10.
 """
 
 _SWATCH = 'display:inline-block;width:22px;height:14px;vertical-align:middle;border:1px solid #888;'
-#: The runaway marks' swatch: white dots over a map colour, as drawn (app.map_figures.runaway_dots).
+#: The runaway marks' swatch: white dots over a map colour, as drawn (app.map_data.runaway_dots).
 RUNAWAY_SWATCH = (_SWATCH + "background:radial-gradient(circle,#ffffff 0 2px,transparent 2.5px) 0 0/6px 6px,"
                   "#46327e")
 
@@ -192,7 +192,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         if snapshot == latest[0]:
             return
         latest[0] = snapshot
-        computing = _COMPUTE.submit(lambda: map_figures.prepare(cache.get(snapshot)))
+        computing = _COMPUTE.submit(lambda: map_data.prepare(cache.get(snapshot)))
         offloop.schedule(doc, partial(draw, snapshot, computing))  # app.offloop's pattern
 
     async def draw(snapshot, computing):
@@ -208,7 +208,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
     async def show_maps(snapshot, computing):
         maps = asyncio.wrap_future(computing)
-        # ``panels``: the maps and the arrays to send (map_figures.prepare), from the worker
+        # ``panels``: the maps and the arrays to send (map_data.prepare), from the worker
         try:  # the spinner only for a slow change: for a fast one it costs more than it says
             panels = await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
         except asyncio.TimeoutError:

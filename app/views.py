@@ -12,7 +12,7 @@ import xarray as xr
 
 from . import compute
 from .compute import RUNAWAY_LIMIT, Panels
-from .map_figures import runaway_dots
+from .map_data import runaway_dots
 from .scenario import ERROR_QUANTITIES
 
 hv.extension("bokeh", logo=False)

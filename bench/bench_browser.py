@@ -191,12 +191,12 @@ def compute_baseline(repeat=10):
 def expected_map_a_sum(ph):
     """Sum and count of the finite values of map A's image as the server sends it (float32,
     normalised to its colour range: app/map_figures.py), computed here in-process."""
-    from app import map_figures
+    from app import map_data
     from app.compute import Snapshot, compute
 
     p = compute(Snapshot.of(scenario(**{SLIDER['name']: ph})))
-    low, high, _ = map_figures.ranges(p)[0]
-    a = map_figures.normalised(p.shown(0), low, high).astype(float)
+    low, high, _ = map_data.ranges(p)[0]
+    a = map_data.normalised(p.shown(0), low, high).astype(float)
     return float(np.nansum(np.where(np.isfinite(a), a, np.nan))), int(np.isfinite(a).sum())
 
 

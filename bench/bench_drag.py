@@ -96,12 +96,12 @@ class Fingerprints:
         key = (value, count)
         if key not in self.cache:
             if self.name == "project":
-                from app import map_figures
+                from app import map_data
                 from app.compute import Snapshot, compute
                 from app.scenario import Scenario
 
                 snap = Snapshot.of_values(Scenario(), {"Ph": value, "resolution": math.isqrt(count)})
-                img = map_figures.prepare(compute(snap), preview=True).images[1]
+                img = map_data.prepare(compute(snap), preview=True).images[1]
                 self.cache[key] = float(img.sum(dtype=np.int64))
             else:
                 from bench.floor import maps
@@ -113,13 +113,13 @@ class Fingerprints:
 def final_expected(name, value):
     """The three final images' fingerprints at ``value`` (exact maps), in-process."""
     if name == "project":
-        from app import map_figures
+        from app import map_data
         from app.compute import Snapshot, compute
         from app.scenario import Scenario
 
         sc = Scenario()
         sc.target.Ph = value
-        images = map_figures.prepare(compute(Snapshot.of(sc))).images
+        images = map_data.prepare(compute(Snapshot.of(sc))).images
     else:
         from bench.floor import maps
 

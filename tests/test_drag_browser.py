@@ -44,13 +44,13 @@ def open_maps(chromium, server, errors):
 
 def expected(value):
     """The maps' images and texts as the server sends them for P_h = ``value``, computed here."""
-    from app import map_figures
+    from app import map_data
     from app.compute import Snapshot, compute
     from app.scenario import Scenario
 
     sc = Scenario()
     sc.target.Ph = value
-    return map_figures.prepare(compute(Snapshot.of(sc)))
+    return map_data.prepare(compute(Snapshot.of(sc)))
 
 
 def test_the_maps_follow_a_dragged_slider_and_end_exact(chromium, server, tmp_path):

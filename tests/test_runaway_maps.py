@@ -7,7 +7,7 @@ import pytest
 
 import core
 from app import compute as c
-from app import design, map_figures, views
+from app import design, map_data, map_figures, views
 from app import design_compute as dc
 from app.compute import Snapshot
 from app.scenario import Scenario
@@ -37,10 +37,10 @@ def test_crlb_maps_hatch_exactly_the_points_whose_bound_exceeds_30_percent_of_th
     assert 0 < rb.sum() < rb.size  # both cases occur: near the stations the bound is trusted
     assert not ra.any()  # one station with the moments unknown: unobservable, veiled instead
     np.testing.assert_array_equal(rd, (ra | rb) & p.a.observable & p.b.observable & np.isfinite(p.diff))
-    veils = map_figures.prepare(p).veils
-    hatched = np.isin(veils[1], (map_figures.RUNAWAY, map_figures.RUNAWAY_GAP))
+    veils = map_data.prepare(p).veils
+    hatched = np.isin(veils[1], (map_data.RUNAWAY, map_data.RUNAWAY_GAP))
     np.testing.assert_array_equal(hatched, rb)
-    assert {map_figures.RUNAWAY, map_figures.RUNAWAY_GAP} <= set(np.unique(veils[1]))  # dotted
+    assert {map_data.RUNAWAY, map_data.RUNAWAY_GAP} <= set(np.unique(veils[1]))  # dotted
     assert f"{rb.sum() / p.b.observable.sum():.0%} of the observable points" in p.far_note
     assert "not as an error to quote" in p.far_note
 
@@ -59,7 +59,7 @@ def test_maps_of_other_measures_carry_no_runaway_marks(measure):
     # the flag compares a bound in metres with a range: it has no meaning for the other measures
     p = c.compute(Snapshot.of(Scenario(resolution=21, measure=measure)))
     assert p.runaway == () and p.far_note == ""
-    assert all(v.max() <= map_figures.NO_VALUE for v in map_figures.prepare(p).veils)
+    assert all(v.max() <= map_data.NO_VALUE for v in map_data.prepare(p).veils)
 
 
 def test_the_layout_design_map_hatches_the_same_points():
@@ -123,4 +123,4 @@ def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
     assert image.vdims[0].unit == "log10 m"
     np.testing.assert_array_equal(np.flipud(hatch.data) > 0,
                                   c.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
-                                  & map_figures.runaway_dots((len(v), len(u))))
+                                  & map_data.runaway_dots((len(v), len(u))))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from app import map_figures, views
+from app import map_data, map_figures, views
 from app.compute import MAPS, SCENE, PanelCache, Snapshot, compute
 from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PARTS, PRESET_INPUTS, PRESETS, Scenario, parameter
 
@@ -187,15 +187,15 @@ def test_maps_for_every_measure_and_plane():
         for measure in parameter("measure").objects:
             s = Scenario(resolution=21, plane=plane, measure=measure)
             p = compute(Snapshot.of(s))
-            maps, (xname, vname), clim, diff_range, _ = map_figures.contents(p)
+            maps, (xname, vname), clim, diff_range, _ = map_data.contents(p)
             assert len(maps) == 3 and vname == ("y" if plane == "x–y" else "z")
             assert clim[0] < clim[1] and diff_range[0] < diff_range[1]
             map_figures.fill(figs, p)
             assert figs.figures[2].yaxis.axis_label.startswith(f"{vname} (m)")  # x–z: ", vertical ×2"
             assert figs.images[1].data["image"][0].dtype == np.float32
-            low, high, _ = map_figures.ranges(p)[1]
+            low, high, _ = map_data.ranges(p)[1]
             np.testing.assert_array_equal(figs.images[1].data["image"][0],
-                                          map_figures.normalised(p.shown(1), low, high))
+                                          map_data.normalised(p.shown(1), low, high))
 
 
 @pytest.mark.parametrize("bad,why", [
@@ -303,7 +303,7 @@ def test_every_layer_of_a_map_covers_the_maps_rectangle(first, then):
         veil = figs.veils[which].data["image"][0]
         observable = (p.a.observable, p.b.observable, p.a.observable & p.b.observable)[which]
         assert veil.shape == observable.shape
-        assert np.array_equal(np.isin(veil, (map_figures.VEIL_DARK, map_figures.VEIL_LIGHT)), ~observable)
+        assert np.array_equal(np.isin(veil, (map_data.VEIL_DARK, map_data.VEIL_LIGHT)), ~observable)
 
 
 def test_the_xz_plane_has_depth_increasing_downwards_and_shows_every_station():
@@ -346,7 +346,7 @@ def test_crlb_maps_are_coloured_by_log10_metres_and_say_why_a_value_is_missing()
     assert figs.formatters[0].args["texts"]["unobservable"].startswith("unobservable (rank 6)")
     assert "unobservable" in figs.formatters[2].args["texts"]["unobservable"]
     # the same kind of scale as the design tab: low error is the good end (reversed viridis)
-    assert map_figures.ranges(p)[0][2][0] == map_figures.Viridis256[-1]
+    assert map_data.ranges(p)[0][2][0] == map_data.Viridis256[-1]
     # the difference map's title is short enough to fit; the explanation is on its colour bar
     assert len(figs.figures[2].title.text) <= 40 and "B locates better" in figs.colorbars[2].title
 
@@ -356,7 +356,7 @@ def test_images_are_sent_normalised_to_their_colour_range():
     p = compute(Snapshot.of(s))
     figs = map_figures.build()
     map_figures.fill(figs, p)
-    for which, (low, high, _) in enumerate(map_figures.ranges(p)):
+    for which, (low, high, _) in enumerate(map_data.ranges(p)):
         sent = figs.images[which].data["image"][0].astype(float)
         back = low + sent * (high - low)  # what the hover shows, and the colour bar's scale
         np.testing.assert_allclose(back, p.shown(which), rtol=0, atol=1e-6 * (high - low) + 1e-12)
@@ -367,13 +367,13 @@ def test_images_are_sent_normalised_to_their_colour_range():
 def test_the_veil_is_striped_and_distinct_from_a_point_without_value():
     s = Scenario(resolution=41)
     p = compute(Snapshot.of(s))
-    codes = map_figures.veil_codes(p.a.observable, p.shown(0))
-    assert set(np.unique(codes)) == {map_figures.VEIL_DARK, map_figures.VEIL_LIGHT}  # all unobservable
-    codes = map_figures.veil_codes(p.b.observable, p.shown(1))
+    codes = map_data.veil_codes(p.a.observable, p.shown(0))
+    assert set(np.unique(codes)) == {map_data.VEIL_DARK, map_data.VEIL_LIGHT}  # all unobservable
+    codes = map_data.veil_codes(p.b.observable, p.shown(1))
     on_station = ~np.isfinite(p.shown(1)) & p.b.observable
-    assert np.array_equal(codes == map_figures.NO_VALUE, on_station)
-    pal = map_figures.VEIL_PALETTE
-    assert pal[map_figures.NO_VALUE].endswith("00") and not pal[map_figures.VEIL_DARK].endswith("00")
+    assert np.array_equal(codes == map_data.NO_VALUE, on_station)
+    pal = map_data.VEIL_PALETTE
+    assert pal[map_data.NO_VALUE].endswith("00") and not pal[map_data.VEIL_DARK].endswith("00")
 
 
 def test_the_paper_figure_is_identified_and_the_png_is_named_after_the_scenario():

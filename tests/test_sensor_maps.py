@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import core
-from app import map_figures
+from app import map_data, map_figures
 from app.compute import SCENE, Snapshot, compute
 from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
 from app.design_compute import design
@@ -40,13 +40,13 @@ def test_one_magnetometer_or_gradiometer_is_veiled_at_every_point_and_says_why()
         assert not p.a.observable.any(), "rank 7 of 8 at every point (spec §11)"
         assert p.b.observable.mean() > 0.9, "two stations a spacing apart are observable"
         assert p.unobservable[0].startswith("unobservable (rank 7 of 8): one " + kind)
-        said = map_figures.veiled_text(p, 0)
+        said = map_data.veiled_text(p, 0)
         assert "rank 7 of 8" in said and kind in said
-        assert map_figures.veiled_text(p, 1) == ""
+        assert map_data.veiled_text(p, 1) == ""
         assert f"one {kind}, moment unknown: rank Γ = 7 < 8" in p.note
         assert f"{power}mx, {power}my, {power}mz" in p.note
     p = compute(Snapshot.of(Scenario(sensor=BOTH, **SMALL)))  # B + G at one station: observable
-    assert p.a.observable.mean() > 0.9 and p.note == "" and map_figures.veiled_text(p, 0) == ""
+    assert p.a.observable.mean() > 0.9 and p.note == "" and map_data.veiled_text(p, 0) == ""
 
 
 def test_captions_colour_bars_and_hovers_name_the_kind_and_its_units():
@@ -93,7 +93,7 @@ def test_the_sensor_comparison_preset_puts_one_kind_against_another_at_one_stati
                              sensor=core.Sensor("BG", (s.sensor.noise_b, s.sensor.noise_g)))
     assert same(p.b.value, want.value)
     assert "sensors A magnetometer, B magnetometer + gradiometer" in p.captions[2]
-    assert map_figures.veiled_text(p, 2).startswith("no difference:\nA is unobservable")
+    assert map_data.veiled_text(p, 2).startswith("no difference:\nA is unobservable")
     s.sensor.sensor = GRADIOMETER  # the third kind, against both
     p = compute(Snapshot.of(s))
     assert p.titles[0] == "A: single, gradiometer" and not p.a.observable.any()

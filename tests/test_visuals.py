@@ -7,7 +7,7 @@ from bokeh.colors import RGB
 
 from app import compute as c
 from app import design_compute as dc
-from app import map_figures, maps, track
+from app import map_data, maps, track
 from app.compute import SHARED, Snapshot
 from app.scenario import Scenario
 
@@ -25,13 +25,13 @@ def test_runaway_marks_are_not_stripes_like_the_unobservable_veil():
     # both were diagonal stripes (one each way) and were confused; runaway points are dots now
     n = 48
     everywhere = np.ones((n, n), bool)
-    unobservable = map_figures.veil_codes(~everywhere, np.zeros((n, n)))
-    runaway = map_figures.veil_codes(everywhere, np.zeros((n, n)), runaway=everywhere)
-    assert set(np.unique(runaway)) == {map_figures.RUNAWAY, map_figures.RUNAWAY_GAP}
+    unobservable = map_data.veil_codes(~everywhere, np.zeros((n, n)))
+    runaway = map_data.veil_codes(everywhere, np.zeros((n, n)), runaway=everywhere)
+    assert set(np.unique(runaway)) == {map_data.RUNAWAY, map_data.RUNAWAY_GAP}
     assert _constant_along(unobservable, +1)  # the veil: stripes
     assert not _constant_along(runaway, +1) and not _constant_along(runaway, -1)  # no stripe either way
     # nor horizontal or vertical lines: each row and each column has both codes somewhere
-    dots = runaway == map_figures.RUNAWAY
+    dots = runaway == map_data.RUNAWAY
     assert not dots.all(axis=1).any() and not dots.all(axis=0).any()
 
 
@@ -42,7 +42,7 @@ def test_the_design_and_track_maps_dot_runaway_points_as_the_maps_tab_does():
     from app import views
 
     layer = np.flipud(views.runaway_layer(d).data) > 0
-    np.testing.assert_array_equal(layer, far & map_figures.runaway_dots(far.shape))
+    np.testing.assert_array_equal(layer, far & map_data.runaway_dots(far.shape))
 
 
 def test_the_runaway_legend_shows_only_when_a_map_has_runaway_marks():
@@ -63,8 +63,8 @@ def _blueness(hex_colour):
 def test_b_better_has_the_same_colour_on_every_difference_map(measure):
     # the CRLB difference (lower is better) showed "B better" in red, the others in blue
     p = c.compute(Snapshot.of(Scenario(resolution=31, measure=measure, difference="Signed log-ratio")))
-    low, high, palette = map_figures.ranges(p)[2]
-    assert low < 0 < high and palette is not map_figures.Viridis256
+    low, high, palette = map_data.ranges(p)[2]
+    assert low < 0 < high and palette is not map_data.Viridis256
     better_low = measure == CRLB  # log10(σB/σA) < 0: B locates better; else log10(B/A) > 0
     better, worse = (palette[0], palette[-1]) if better_low else (palette[-1], palette[0])
     assert _blueness(better) > 50 and _blueness(worse) < -50  # #053061 blue, #67001f red
@@ -174,7 +174,7 @@ def test_the_png_export_is_high_resolution_and_draws_the_pages_numbers():
     img = Image.open(io.BytesIO(export.to_png(p).getvalue()))
     assert img.size[0] >= 1600  # the save tool's PNG was 403 × 446
     fig = export.figure(p)
-    d = map_figures.prepare(p)
+    d = map_data.prepare(p)
     for which, ax in enumerate(fig.axes[:3]):
         shown = ax.images[0].get_array()
         values = d.maps[which][0]
