@@ -1,20 +1,20 @@
 """From a Scenario to the numbers on screen: two maps (A, B), their difference, and notes.
 
-Pure functions of a :class:`Snapshot` (the scenario's values, frozen and hashable), plus a small
-per-session cache so that three views of one scenario compute it once.
+Pure functions of a :class:`Snapshot` (the scenario's values, frozen and hashable), the key of
+the process's one cache of results (:mod:`app.cache`), so that three views of one scenario, and
+every session showing it, compute it once.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
 
 import core
 
+from .cache import KERNEL_LOCK
 from .scenario import (
     COMPARISONS,
     DIFFERENCES,
@@ -25,11 +25,6 @@ from .scenario import (
     ScenarioValues,
     preset_of,
 )
-
-#: Numba's fallback threading layer (workqueue) must not be entered from two threads at once,
-#: and one map already keeps both cores busy: kernels run one at a time. A map takes tens of ms,
-#: so no session waits longer than one map for another (issue: server never blocks a session).
-KERNEL_LOCK = threading.Lock()
 
 #: The parts (app.scenario.PARTS) of the scene: a target in a sea, seen by sensors on stations,
 #: over a region. The Layout design tab's error map and ellipse are computed from these.
@@ -52,7 +47,7 @@ def _frozen(value):
 @dataclass(frozen=True)
 class Snapshot:
     """The values of some of a scenario's parts as a hashable tuple of (name, value) pairs: the key
-    of every tab's computations in the one cache (:class:`PanelCache`)."""
+    of every tab's computations in the one cache (:class:`app.cache.PanelCache`)."""
 
     items: tuple
 
@@ -446,91 +441,4 @@ def compute(snapshot: Snapshot) -> Panels:
                                far_note=runaway_note(((title_a, a), (title_b, b)), (ra, rb)))
 
 
-def _arrays(value, seen=None):
-    """The numpy arrays inside a result (dataclasses, tuples, lists, dicts), each once."""
-    seen = set() if seen is None else seen
-    if id(value) in seen:
-        return
-    seen.add(id(value))
-    if isinstance(value, np.ndarray):
-        yield value
-    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
-        for f in dataclasses.fields(value):
-            yield from _arrays(getattr(value, f.name), seen)
-    elif isinstance(value, (tuple, list)):
-        for v in value:
-            yield from _arrays(v, seen)
-    elif isinstance(value, dict):
-        for v in value.values():
-            yield from _arrays(v, seen)
-
-
-class PanelCache:
-    """Recent results of the tabs' pure computations (:func:`compute`, the Layout design tab's
-    :mod:`app.design_compute`, …), keyed by (function, :class:`Snapshot`) and shared by every
-    session of the process (:data:`SHARED`): the default view and the presets are computed once
-    per process, not once per visitor (issue 29). Bounded by ``size`` entries and ``max_bytes``
-    of arrays, least recently used out first. A key being computed is computed once: a second
-    session asking for it waits for the first's result. A cached result's arrays are made
-    read-only, so that no view can change what another session sees."""
-
-    def __init__(self, size=16, max_bytes=48 * 2**20):
-        self.size, self.max_bytes = size, max_bytes
-        self._store = OrderedDict()  # key -> (result, bytes)
-        self._pending = {}  # key -> threading.Event, set when its computation ends
-        self._bytes = 0
-        self._lock = threading.Lock()
-
-    def get(self, snapshot: Snapshot, fn=None):
-        """``fn(snapshot)`` (default :func:`compute`), from the cache when it was asked before."""
-        fn = fn or compute
-        key = (fn.__module__, fn.__qualname__, snapshot)
-        while True:
-            with self._lock:
-                if key in self._store:
-                    self._store.move_to_end(key)
-                    return self._store[key][0]
-                pending = self._pending.get(key)
-                if pending is None:
-                    self._pending[key] = threading.Event()
-                    break
-            pending.wait()  # another session computes it; if that failed, try again ourselves
-        try:
-            result = fn(snapshot)
-        except BaseException:
-            with self._lock:
-                self._pending.pop(key).set()
-            raise
-        arrays = list(_arrays(result))
-        for arr in arrays:
-            arr.flags.writeable = False
-        nbytes = sum(arr.nbytes for arr in arrays)
-        with self._lock:
-            self._pending.pop(key).set()
-            if nbytes <= self.max_bytes:
-                self._store[key] = (result, nbytes)
-                self._bytes += nbytes
-                while len(self._store) > self.size or self._bytes > self.max_bytes:
-                    self._bytes -= self._store.popitem(last=False)[1][1]
-        return result
-
-    def __len__(self):
-        return len(self._store)
-
-    @property
-    def nbytes(self):
-        """Bytes of the cached results' arrays."""
-        return self._bytes
-
-    def clear(self):
-        with self._lock:
-            self._store.clear()
-            self._bytes = 0
-
-
-#: The process's one cache of computed results (every session's tabs use it).
-SHARED = PanelCache()
-
-
-__all__ = ["DESIGN", "MAP_INPUTS", "MAPS", "SCENE", "PanelCache", "Panels", "SHARED", "Snapshot",
-           "compute", "difference"]
+__all__ = ["DESIGN", "MAP_INPUTS", "MAPS", "SCENE", "Panels", "Snapshot", "compute", "difference"]

@@ -14,8 +14,9 @@ import panel as pn
 import param
 
 from . import export, live, maps, url
+from .cache import SHARED
 from .calibration import calibration_parts
-from .compute import KIND_NAMES, MAP_INPUTS, SHARED
+from .compute import KIND_NAMES, MAP_INPUTS
 from .design import design_tab
 from .inputs import number_input
 from .number_box import number_box
@@ -294,7 +295,7 @@ def first_visit(tabs, titles, holders, makers):
 
 def create_app():
     scenario = Scenario()
-    cache = SHARED  # results are shared by every session of the process (app.compute)
+    cache = SHARED  # results are shared by every session of the process (app.cache)
 
     def session_closed(ctx):
         _schedule_trim()

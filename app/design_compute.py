@@ -3,7 +3,7 @@ optimised layout, over the x–y plane at the target depth.
 
 Pure functions of a :class:`app.compute.Snapshot`, as :func:`app.compute.compute` is for the Maps
 tab; :mod:`app.design` (the tab) asks for them through the shared cache
-(:data:`app.compute.SHARED`), and :mod:`app.track` draws its CRLB map as a :class:`Design`.
+(:data:`app.cache.SHARED`), and :mod:`app.track` draws its CRLB map as a :class:`Design`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ import numpy as np
 
 import core
 
-from .compute import KERNEL_LOCK, Snapshot, _core_options
+from .cache import KERNEL_LOCK
+from .compute import Snapshot, _core_options
 from .scenario import CRITERIA, ScenarioValues
 
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.

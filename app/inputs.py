@@ -10,7 +10,7 @@ session, and the page has fewer Bokeh models.
 The box is a text box read here, not a numeric input: Bokeh's numeric input drops a keystroke it
 cannot parse in the browser (``abc`` never appeared, and nothing said why; issue 25). Here the
 text reaches the server, and what is not a number is refused through the owner's refusal
-message (:meth:`app.scenario.Part.refuse`), shown next to the input, the
+message (:meth:`app.part.Part.refuse`), shown next to the input, the
 last good value kept.
 """
 

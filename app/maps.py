@@ -11,7 +11,7 @@ import panel as pn
 from bokeh.layouts import row
 
 from . import export, live, map_data, map_figures, offloop, views
-from .compute import MAPS, RUNAWAY_LIMIT, Snapshot
+from .compute import MAPS, RUNAWAY_LIMIT, Snapshot, compute
 from .scenario import defaults
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
@@ -143,7 +143,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
     ``busy``: a LoadingSpinner shown while a slow change computes; ``after_draw``: called
     ``URL_AFTER`` s after a change's maps are sent (the URL update)."""
-    first = cache.get(Snapshot.of(scenario))
+    first = cache.get(Snapshot.of(scenario), compute)
     figs = map_figures.build()
     map_figures.fill(figs, first)
     # Written by redraw together with the maps (not bound to the scenario: a binding would compute
@@ -192,7 +192,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         if snapshot == latest[0]:
             return
         latest[0] = snapshot
-        computing = _COMPUTE.submit(lambda: map_data.prepare(cache.get(snapshot)))
+        computing = _COMPUTE.submit(lambda: map_data.prepare(cache.get(snapshot, compute)))
         offloop.schedule(doc, partial(draw, snapshot, computing))  # app.offloop's pattern
 
     async def draw(snapshot, computing):
@@ -262,12 +262,12 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
 
 def _current(scenario, cache):
-    return cache.get(Snapshot.of(scenario)), scenario.values(MAPS)
+    return cache.get(Snapshot.of(scenario), compute), scenario.values(MAPS)
 
 
 def download_name(scenario, cache, ext):
     """The file name of a download of ``scenario``'s maps (:func:`app.views.download_name`)."""
-    return views.download_name(cache.get(Snapshot.of(scenario)), ext)
+    return views.download_name(cache.get(Snapshot.of(scenario), compute), ext)
 
 
 def to_csv(scenario, cache):
@@ -283,4 +283,4 @@ def to_netcdf(scenario, cache):
 def to_png(scenario, cache):
     """The three maps of ``scenario`` as one high-resolution PNG (:mod:`app.export`; the save tool
     of a map writes its ~400 px canvas)."""
-    return export.to_png(cache.get(Snapshot.of(scenario)))
+    return export.to_png(cache.get(Snapshot.of(scenario), compute))

@@ -6,9 +6,9 @@ in the browser: a value outside their start/end or a text that is not a number i
 without a word (``-3`` in "Reading error bound", ``500`` in "Attitudes N", ``abc`` in "Be north"
 did nothing), and an emptied box sends None, which the parameter refuses with a server traceback
 (the sidebar's noise box). Here the browser holds plain text, and every text reaches the server:
-a number is set on the owner (an :class:`app.parts.Part`, whose limits refuse it with a message
+a number is set on the owner (an :class:`app.part.Part`, whose limits refuse it with a message
 next to the input, the last good value restored), anything else is refused here through the
-owner's :meth:`~app.parts.Part.refuse`. The box then shows the value the owner holds.
+owner's :meth:`~app.part.Part.refuse`. The box then shows the value the owner holds.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def parsed(text, integer=False):
 
 def number_box(owner, name, *, decimals=2, label=None, **widget):
     """A ``pn.widgets.TextInput`` for the Number or Integer parameter ``name`` of ``owner`` (an
-    :class:`app.parts.Part`), titled with the parameter's label (or ``label``). ``decimals``:
+    :class:`app.part.Part`), titled with the parameter's label (or ``label``). ``decimals``:
     the most shown (the value keeps every digit); ``widget``: further TextInput settings
     (``css_classes``, ``visible`` (may be a bound function), sizing)."""
     p = owner.param[name]

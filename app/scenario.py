@@ -9,7 +9,7 @@ own settings (:class:`Maps`, :class:`Design`, :class:`Track`, :class:`Calibratio
 preset are derived from every part. Parameter names are unique across the parts, so a link
 writes them flat (``?Ph=100&track_heading=33``) and links of earlier versions still open.
 
-Refusals: a value outside a part's hard limits (:attr:`app.parts.Part.accepted`), or one that
+Refusals: a value outside a part's hard limits (:attr:`app.part.Part.accepted`), or one that
 breaks a rule between values (the x–z range, the water column), is never kept: the last good
 value is restored and the reason is said in :attr:`Scenario.message`, naming the inputs in
 :attr:`Scenario.refused`. So a bad value never reaches the core, never raises in the server,
@@ -28,14 +28,14 @@ from param.parameterized import batch_call_watchers
 
 import core
 
-# The parts live in app/parts.py; their names are this module's too (``from app.scenario import
-# Target``), as before the split.
+# The parts live in app/parts.py (their base in app/part.py); their names are this module's too
+# (``from app.scenario import Target``), as before the split.
+from .part import DEPTHS, Part  # noqa: F401
 from .parts import (  # noqa: F401
     _COLUMN,
     ACCEPTED,
     COMPARISONS,
     CRITERIA,
-    DEPTHS,
     DIFFERENCES,
     ERROR_QUANTITIES,
     MAGNETIC_KNOWN,
@@ -52,7 +52,6 @@ from .parts import (  # noqa: F401
     Design,
     Maps,
     Medium,
-    Part,
     Region,
     Sensor,
     Shape,

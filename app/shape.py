@@ -37,7 +37,8 @@ from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
 from core.shape.model import LAG
 
 from . import offloop
-from .compute import KERNEL_LOCK, SHARED, Snapshot
+from .cache import KERNEL_LOCK, SHARED
+from .compute import Snapshot
 from .inputs import number_input
 from .maps import alert, with_refusal
 from .scenario import Scenario, Shape
@@ -201,7 +202,7 @@ def curve_cpas(target, cpa):
 
 def compute(key):
     """Everything the tab shows for the inputs ``key`` (:func:`key_of`), from the one cache
-    (app.compute.SHARED): dict with the case, the :class:`core.shape.experiment.CaseResult`, the
+    (app.cache.SHARED): dict with the case, the :class:`core.shape.experiment.CaseResult`, the
     bound at the pass and the curve."""
     return SHARED.get(key, _compute)
 
@@ -209,7 +210,7 @@ def compute(key):
 def _compute(key):
     v = dict(key.items)
     case = case_of(v)
-    with KERNEL_LOCK:  # numba's parallel kernels: one caller at a time (app.compute)
+    with KERNEL_LOCK:  # numba's parallel kernels: one caller at a time (app.cache)
         res = run_case(case, runs=int(v["shape_runs"]), seed=int(v["shape_seed"]),
                        filters=("ukf", "nhukf"))
     cpa = case.track.closest_approach(case.target.centroid)

@@ -41,7 +41,8 @@ from core.tracking import montecarlo as core_track
 # threads at once): the tab's Monte-Carlo takes it too. Private to app.compute; if app/ moves it,
 # import it from there.
 from . import offloop, views
-from .compute import KERNEL_LOCK, RUNAWAY_LIMIT, SHARED, Snapshot, nearest_range
+from .cache import KERNEL_LOCK, SHARED
+from .compute import RUNAWAY_LIMIT, Snapshot, nearest_range
 from .design_compute import Design
 from .inputs import number_input
 from .maps import refusal
@@ -129,7 +130,7 @@ def case_of(s):
 
 
 def _compute(snapshot: Snapshot):
-    """The tab's numbers for a snapshot of :data:`READS` (in the one cache, app.compute.SHARED)."""
+    """The tab's numbers for a snapshot of :data:`READS` (in the one cache, app.cache.SHARED)."""
     s = snapshot.scenario()
     case = case_of(s)
     with KERNEL_LOCK:

@@ -81,7 +81,7 @@ def query(scenario, tab=None):
 
 def link_problem(name, value):
     """None if a link's ``value`` for ``name`` is accepted on its own, else why: param's own type,
-    selector and bound checks (tried on a throw-away part) and the part's limits (:meth:`app.scenario.Part.problem`).
+    selector and bound checks (tried on a throw-away part) and the part's limits (:meth:`app.part.Part.problem`).
     Rules between values (z_min < z_max, depths in the water column) are checked on the link's
     values together, by :func:`read_link`."""
     trial = PARTS[PART_OF[name]]()  # a part on its own: no owner, no checks but param's

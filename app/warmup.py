@@ -30,7 +30,7 @@ from core.shape.bound import shape_bound
 from core.shape.experiment import Case, run_case
 from core.tracking import montecarlo as core_track
 
-from .compute import KERNEL_LOCK
+from .cache import KERNEL_LOCK
 
 _PLANE = core.Plane("xy", (-10, 10), (-10, 10), 120.0, 3)
 _STATIONS = core.dual_station(100, 15)

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from app import live, maps
-from app.compute import SHARED, Snapshot
+from app.cache import SHARED
+from app.compute import Snapshot
 from app.scenario import Scenario
 
 pytestmark = pytest.mark.filterwarnings(  # Panel 1.9 deprecates button_type (as test_calibration_tab)

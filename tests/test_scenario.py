@@ -8,7 +8,8 @@ import pytest
 import xarray as xr
 
 from app import map_data, map_figures, views
-from app.compute import MAPS, SCENE, PanelCache, Snapshot, compute
+from app.cache import PanelCache
+from app.compute import MAPS, SCENE, Snapshot, compute
 from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PARTS, PRESET_INPUTS, PRESETS, Scenario, parameter
 
 
@@ -99,10 +100,10 @@ def test_cache_computes_once_per_scenario(monkeypatch):
     cache = PanelCache(size=2)
     s = Scenario(resolution=21)
     for _ in range(3):
-        cache.get(Snapshot.of(s))
+        cache.get(Snapshot.of(s), compute)
     assert len(calls) == 1
     s.target.Ph = 50.0
-    cache.get(Snapshot.of(s))
+    cache.get(Snapshot.of(s), compute)
     assert len(calls) == 2
 
 
@@ -143,7 +144,7 @@ def test_the_cache_is_shared_computes_a_key_once_and_stays_within_its_bounds():
     small = PanelCache(size=10, max_bytes=int(2.5 * nbytes))  # room for about two results
     for ph in (10.0, 20.0, 30.0):
         first.target.Ph = ph
-        small.get(Snapshot.of(first))
+        small.get(Snapshot.of(first), compute)
     assert len(small) <= 2 and small.nbytes <= small.max_bytes
 
 

@@ -125,7 +125,7 @@ def test_a_depth_error_beyond_the_water_column_is_flagged():
     # issue 40 (low): "depth error of 1.24e+04 m" was printed, unflagged, in 8.4 m of water
     import panel as pn
 
-    from app.compute import SHARED
+    from app.cache import SHARED
     from app.dashboard import _widgets
     from app.design import design_tab
     from app.scenario import Scenario

@@ -8,7 +8,8 @@ from bokeh.colors import RGB
 from app import compute as c
 from app import design_compute as dc
 from app import map_data, maps, track
-from app.compute import SHARED, Snapshot
+from app.cache import SHARED
+from app.compute import Snapshot
 from app.scenario import Scenario
 
 CRLB = "CRLB position error (m)"
