@@ -50,9 +50,9 @@ from pathlib import Path
 import numpy as np
 
 from bench.bench_browser import INIT_JS
-from bench.bench_floor import served_floor
-from support.drag import COLLECT_JS, INSTALL_JS, MAP_TEXTS_JS, handle_track, settled
-from support.page import CHROMIUM, CHROMIUM_ARGS
+from bench.bench_floor import served_floor, started_on
+from support.drag import INSTALL_JS, MAP_TEXTS_JS, handle_track, settled
+from support.page import chromium_browser
 from support.server import served_app
 
 APPS = ("project", "bokeh", "panel")
@@ -359,36 +359,26 @@ def main(argv=None):
     ap.add_argument("--screenshot", default=None, help="a PNG of the page taken mid-drag (project)")
     ap.add_argument("--out", default=None, help="raw values and summary as JSON")
     args = ap.parse_args(argv)
-    from playwright.sync_api import sync_playwright
-
-    os.environ.setdefault("QUIET_SERVER", "1")
-    load = [os.getloadavg()]
-    print(f"machine: {os.cpu_count()} cores, load average {' '.join(f'{x:.2f}' for x in load[0])} at start")
-    apps = [a for a in APPS if a in args.apps.split(",")]
-    raw = {a: [] for a in apps}
+    load, apps, raw = started_on(APPS, args.apps)
     multi_results = []
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            for run in range(args.runs):
-                for name in apps:
-                    serve = served_app() if name == "project" else served_floor(name, stem=f"drag_{name}")
-                    with serve as (url, proc):
-                        if name == "project":
-                            url += "/app"
-                        print(f"run {run + 1}/{args.runs}: {LABELS[name]} (load {os.getloadavg()[0]:.2f})",
-                              flush=True)
-                        shot = args.screenshot if (name == "project" and run == 0) else None
-                        raw[name].append(measure_page(name, url, browser, args, screenshot=shot))
-                        if name == "project" and run == 0 and args.sessions:
-                            base = url.rsplit("/app", 1)[0]
-                            for n in (int(x) for x in args.sessions.split(",")):
-                                r = multi(base, proc, n, args.multi_seconds)
-                                multi_results.append(r)
-                                print(multi_table([r]).splitlines()[-1], flush=True)
-                load.append(os.getloadavg())
-        finally:
-            browser.close()
+    with chromium_browser() as browser:
+        for run in range(args.runs):
+            for name in apps:
+                serve = served_app() if name == "project" else served_floor(name, stem=f"drag_{name}")
+                with serve as (url, proc):
+                    if name == "project":
+                        url += "/app"
+                    print(f"run {run + 1}/{args.runs}: {LABELS[name]} (load {os.getloadavg()[0]:.2f})",
+                          flush=True)
+                    shot = args.screenshot if (name == "project" and run == 0) else None
+                    raw[name].append(measure_page(name, url, browser, args, screenshot=shot))
+                    if name == "project" and run == 0 and args.sessions:
+                        base = url.rsplit("/app", 1)[0]
+                        for n in (int(x) for x in args.sessions.split(",")):
+                            r = multi(base, proc, n, args.multi_seconds)
+                            multi_results.append(r)
+                            print(multi_table([r]).splitlines()[-1], flush=True)
+            load.append(os.getloadavg())
     summary = summarise(raw)
     print()
     print(table(summary))

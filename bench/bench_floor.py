@@ -64,7 +64,7 @@ from bench.bench_browser import (
     scenario,
     wait_redrawn,
 )
-from support.page import CHROMIUM, CHROMIUM_ARGS
+from support.page import chromium_browser
 from support.server import ROOT, SERVER_ENV, free_port, served_app, stop
 
 #: The issue's targets: ratio to the minimal Panel app, measured in the same run.
@@ -334,6 +334,18 @@ def table(summary):
     return "\n".join(lines)
 
 
+def started_on(known, chosen):
+    """A browser benchmark's start (this one's and bench/bench_drag.py's): quiet servers, the
+    machine's load average said and kept (a list, one entry per run follows), the apps of
+    ``known`` named in ``chosen`` (comma-separated) in their order, and an empty list of raw
+    values per app: (load, apps, raw)."""
+    os.environ.setdefault("QUIET_SERVER", "1")
+    load = [os.getloadavg()]
+    print(f"machine: {os.cpu_count()} cores, load average {' '.join(f'{x:.2f}' for x in load[0])} at start")
+    apps = [a for a in known if a in chosen.split(",")]
+    return load, apps, {a: [] for a in apps}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--changes", type=int, default=20, help="measured slider changes per app and run")
@@ -345,30 +357,20 @@ def main(argv=None):
     ap.add_argument("--apps", default=",".join(APPS), help="which of project,panel,bokeh (panel is the reference)")
     ap.add_argument("--out", default=None, help="write the raw values and the summary as JSON here")
     args = ap.parse_args(argv)
-    from playwright.sync_api import sync_playwright
-
-    os.environ.setdefault("QUIET_SERVER", "1")
-    load = [os.getloadavg()]
-    print(f"machine: {os.cpu_count()} cores, load average {' '.join(f'{x:.2f}' for x in load[0])} at start")
-    apps = [a for a in APPS if a in args.apps.split(",")]
-    raw = {a: [] for a in apps}
+    load, apps, raw = started_on(APPS, args.apps)
     started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            for run in range(args.runs):
-                for name in apps:
-                    serve = served_app() if name == "project" else served_floor(name)
-                    with serve as (url, proc):
-                        if name == "project":
-                            url += "/app"
-                        print(f"run {run + 1}/{args.runs}: {LABELS[name]} at {url} "
-                              f"(load {os.getloadavg()[0]:.2f})", flush=True)
-                        raw[name].append(measure_app(name, url, proc, browser, args))
-                    raw[name][-1]["compute_cpu_ms"] = compute_cpu_ms(name)  # here, the server stopped
-                load.append(os.getloadavg())
-        finally:
-            browser.close()
+    with chromium_browser() as browser:
+        for run in range(args.runs):
+            for name in apps:
+                serve = served_app() if name == "project" else served_floor(name)
+                with serve as (url, proc):
+                    if name == "project":
+                        url += "/app"
+                    print(f"run {run + 1}/{args.runs}: {LABELS[name]} at {url} "
+                          f"(load {os.getloadavg()[0]:.2f})", flush=True)
+                    raw[name].append(measure_app(name, url, proc, browser, args))
+                raw[name][-1]["compute_cpu_ms"] = compute_cpu_ms(name)  # here, the server stopped
+            load.append(os.getloadavg())
     summary = summarise(raw)
     print()
     print(table(summary))

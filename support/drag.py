@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import time
 
+from support.page import PLOTS_WALK
+
 #: Installs the log (``window.__drag``); ``css``: the css class of the dragged slider's holder.
 INSTALL_JS = """(css) => {
   const doc = Bokeh.documents[0];
@@ -25,11 +27,7 @@ INSTALL_JS = """(css) => {
   const fingerprint = (a) => { let s = 0, n = 0;
     for (let i = 0; i < a.length; i++) { const v = a[i]; if (Number.isFinite(v)) { s += v; n++; } }
     return [s, n, String(a.constructor.name), a.byteLength || 0]; };
-  const plots = [];
-  const walk = (v) => { if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) plots.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
-  for (const v of Object.values(Bokeh.index)) walk(v);
+""" + PLOTS_WALK + """
   let n = 0;
   plots.forEach((p, i) => { for (const r of p.renderers) {
     const src = r.data_source;
@@ -65,12 +63,8 @@ COLLECT_JS = """() => { const l = window.__drag;
           now: performance.now()}; }"""
 #: Per map (plot), in order: [title, caption, preview layer shown, colour bar low, high].
 MAP_TEXTS_JS = """() => {
-  const out = [];
-  const walk = (v) => { if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
-  for (const v of Object.values(Bokeh.index)) walk(v);
-  return out.map(p => {
+""" + PLOTS_WALK + """
+  return plots.map(p => {
     const below = Array.from(p.below || []);
     const caption = below.find(m => m.text !== undefined && m.color_mapper === undefined);
     const bar = [...Array.from(p.right || []), ...below].find(m => m.color_mapper);

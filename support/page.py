@@ -41,16 +41,35 @@ def chromium_browser():
             browser.close()
 
 
+def open_page(browser, url, errors, viewport=VIEWPORT, console=True, requests=False):
+    """A new page of ``browser`` at ``url``, once Bokeh has a document. Its uncaught errors are
+    appended to ``errors``, and so are its console errors (``console``) and the URLs of its
+    failed requests (``requests``): the caller asserts there are none."""
+    pg = browser.new_page(viewport=viewport)
+    if console:
+        pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    if requests:
+        pg.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
+    pg.goto(url)
+    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    return pg
+
+
+#: The start of a script that reads the maps: collects ``views``, the view of every plot on the
+#: page in page order, walked from the live Bokeh views (Panel draws in shadow DOM), and
+#: ``plots``, their models. A script is ``"() => {" + PLOTS_WALK + "return …; }"``.
+PLOTS_WALK = """
+  const views = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) views.push(v);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  const plots = views.map(v => v.model);
+"""
 #: For every plot on screen: [title, [sum of each image layer's finite values]] (map, veil):
 #: a fingerprint of what is drawn, read from the live Bokeh views.
-MAPS_JS = """() => {
-  const plots = [];
-  const walk = (v) => {
-    if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) plots.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c);
-  };
-  for (const v of Object.values(Bokeh.index)) walk(v);
+MAPS_JS = """() => {""" + PLOTS_WALK + """
   return plots.map(p => [p.title ? p.title.text : "",
     p.renderers.filter(r => r.data_source && r.data_source.data.image).map(r => {
       let s = 0; const a = r.data_source.data.image[0];

@@ -5,6 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from support.page import chromium_browser, open_page, wait_maps
+from support.server import served_app
+
 # The paper's common parameters (spec §5).
 PAPER_STATE = np.array([30.0, 40.0, 120.0, 2.0, 2.0, 100.0, 20.0])
 
@@ -40,6 +43,9 @@ def random_stations(rng, n_stations):
 #:     pytest -q -m "not browser and not server and not container"
 MARKERS_OF_MODULE = {"support.page": {"browser"}, "support.server": {"server"},
                      "support.screenshots": {"browser", "server"}}
+#: A test gets them from the fixtures below it uses, too (a file may use them without importing
+#: support.page or support.server itself).
+MARKERS_OF_FIXTURE = {"chromium": {"browser"}, "server": {"server"}, "page": {"browser", "server"}}
 
 
 @functools.lru_cache(maxsize=None)
@@ -63,5 +69,38 @@ def markers_of_file(path):
 
 def pytest_collection_modifyitems(config, items):
     for item in items:
-        for name in sorted(markers_of_file(str(item.path))):
+        used = getattr(item, "fixturenames", ())
+        by_fixture = set().union(*(MARKERS_OF_FIXTURE.get(f, set()) for f in used))
+        for name in sorted(markers_of_file(str(item.path)) | by_fixture):
             item.add_marker(name)
+
+
+# --------------------------------------------------------------------------- served and driven
+# One served dashboard and one Chromium per test file (module scope: a page per test is cheap,
+# a server's start and warm-up are not). A file that needs another server (a log, a longer
+# warm-up, its own URL) defines its own ``server``.
+
+@pytest.fixture(scope="module")
+def server():
+    """The dashboard served on a free loopback port (support.server): its base URL."""
+    with served_app() as (url, _):
+        yield url
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    """Debian's headless Chromium (support.page)."""
+    with chromium_browser() as browser:
+        yield browser
+
+
+@pytest.fixture
+def page(chromium, server):
+    """The dashboard's page with its three maps drawn; the test fails on any console error,
+    uncaught error or failed request of the page."""
+    errors = []
+    pg = open_page(chromium, server + "/app", errors, requests=True)
+    wait_maps(pg, lambda maps: len(maps) == 3)
+    yield pg
+    pg.close()
+    assert errors == [], f"browser console errors: {errors}"

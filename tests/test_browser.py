@@ -7,9 +7,19 @@ from urllib.parse import urlencode
 import numpy as np
 import pytest
 
-from support.page import (MAPS_JS, VIEWPORT, chromium_browser, chromium_missing, maps, select,
-                          type_value, value_of, wait_count, wait_maps, wait_value)
-from support.server import served_app
+from support.page import (
+    MAPS_JS,
+    PLOTS_WALK,
+    VIEWPORT,
+    chromium_missing,
+    maps,
+    select,
+    type_value,
+    value_of,
+    wait_count,
+    wait_maps,
+    wait_value,
+)
 
 playwright = pytest.importorskip("playwright.sync_api")
 
@@ -22,12 +32,8 @@ pytestmark = pytest.mark.skipif(
 #: (the sent image is normalised to the colour range: app/map_figures.py) mapped through the
 #: plot's colour bar mapper].
 COLOURS_JS = """() => {
-  const out = [];
-  const walk = (v) => { if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
-  for (const v of Object.values(Bokeh.index)) walk(v);
-  return out.map(pv => {
+""" + PLOTS_WALK + """
+  return views.map(pv => {
     const r = pv.model.renderers.find(r => r.data_source && r.data_source.data.image);
     const canvas = pv.renderer_views.get(r).glyph.image_data[0];
     const px = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
@@ -40,12 +46,8 @@ COLOURS_JS = """() => {
 }"""
 #: Per plot: how many pixels of its veil are unobservable (veil codes 1 and 2: app/map_figures.py).
 VEILED_JS = """() => {
-  const out = [];
-  const walk = (v) => { if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
-  for (const v of Object.values(Bokeh.index)) walk(v);
-  return out.map(p => { const r = p.renderers.filter(r => r.data_source && r.data_source.data.image)[1];
+""" + PLOTS_WALK + """
+  return plots.map(p => { const r = p.renderers.filter(r => r.data_source && r.data_source.data.image)[1];
     let n = 0; for (const c of r.data_source.data.image[0]) if (c == 1 || c == 2) n++; return n; });
 }"""
 AXES_JS = """() => {
@@ -54,32 +56,6 @@ AXES_JS = """() => {
     if (m.axis_label !== undefined && m.axis_label) out.push(m.axis_label);
   return out;
 }"""
-
-
-@pytest.fixture(scope="module")
-def server():
-    with served_app() as (url, _):
-        yield url
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    with chromium_browser() as browser:
-        yield browser
-
-
-@pytest.fixture
-def page(chromium, server):
-    pg = chromium.new_page(viewport=VIEWPORT)
-    errors = []
-    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.goto(server + "/app")
-    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
-    wait_maps(pg, lambda maps: len(maps) == 3)
-    yield pg
-    pg.close()
-    assert errors == [], f"browser console errors: {errors}"
 
 
 def values(drawn):
@@ -238,12 +214,8 @@ def test_a_pasted_link_reopens_the_view(chromium, server):
 #: Per plot: the rectangle (x, y, dw, dh) of each image layer (map, veil), the y range, the
 #: colour bar's title, each image's colour-bar low and high.
 LAYERS_JS = """() => {
-  const out = [];
-  const walk = (v) => { if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
-  for (const v of Object.values(Bokeh.index)) walk(v);
-  return out.map(p => {
+""" + PLOTS_WALK + """
+  return plots.map(p => {
     const bar = [...p.right, ...p.below].find(m => m.color_mapper);  // the maps': below
     return {title: p.title.text,
       layers: p.renderers.filter(r => r.data_source && r.data_source.data.image).map(r => {

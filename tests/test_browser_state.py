@@ -6,9 +6,7 @@ import time
 
 import pytest
 
-from support.page import CHROMIUM, chromium_browser
-from support.server import served_app
-from support.page import MAPS_JS, VIEWPORT, wait_count, wait_maps, wait_value
+from support.page import CHROMIUM, MAPS_JS, PLOTS_WALK, VIEWPORT, wait_count, wait_maps, wait_value
 
 playwright = pytest.importorskip("playwright.sync_api")
 
@@ -19,40 +17,9 @@ pytestmark = pytest.mark.skipif(
 
 #: Per plot: [title, caption (the Title below the map: also in its saved PNG)].
 CAPTIONS_JS = """() => {
-  const out = [];
-  const walk = (v) => { if (!v) return;
-    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
-    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
-  for (const v of Object.values(Bokeh.index)) walk(v);
-  return out.map(p => [p.title.text, p.below.filter(m => m.text !== undefined).map(m => m.text).join(' ')]);
+""" + PLOTS_WALK + """
+  return plots.map(p => [p.title.text, p.below.filter(m => m.text !== undefined).map(m => m.text).join(' ')]);
 }"""
-
-
-@pytest.fixture(scope="module")
-def server():
-    with served_app() as (url, _):
-        yield url
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    with chromium_browser() as browser:
-        yield browser
-
-
-@pytest.fixture
-def page(chromium, server):
-    pg = chromium.new_page(viewport=VIEWPORT)
-    errors = []
-    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
-    pg.goto(server + "/app")
-    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
-    wait_maps(pg, lambda maps: len(maps) == 3)
-    yield pg
-    pg.close()
-    assert errors == [], f"browser console errors: {errors}"
 
 
 def depths(rows):

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from support.drag import COLLECT_JS, INSTALL_JS, MAP_TEXTS_JS, drag, settled, sweep
-from support.page import VIEWPORT, chromium_browser, chromium_missing
-from support.server import served_app
+from support.page import chromium_missing, open_page
 
 playwright = pytest.importorskip("playwright.sync_api")
 
@@ -18,24 +17,8 @@ pytestmark = pytest.mark.skipif(
     chromium_missing(), reason="Debian's chromium is not installed (CI installs it; there this test must run)")
 
 
-@pytest.fixture(scope="module")
-def server():
-    with served_app() as (url, _):
-        yield url
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    with chromium_browser() as browser:
-        yield browser
-
-
 def open_maps(chromium, server, errors):
-    pg = chromium.new_page(viewport=VIEWPORT)
-    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.goto(server + "/app")
-    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
+    pg = open_page(chromium, server + "/app", errors)
     pg.wait_for_selector(".w-Ph .noUi-handle", timeout=60_000)
     time.sleep(1.0)  # the page's first paints and deferred updates
     assert pg.evaluate(INSTALL_JS, "w-Ph") == 9  # map, preview and veil layers of three maps

@@ -4,8 +4,7 @@ keys are said. tests/test_link_refusal.py covers the same rules without a browse
 
 import pytest
 
-from support.page import VIEWPORT, chromium_browser, chromium_missing, value_of, wait_maps, wait_value
-from support.server import served_app
+from support.page import chromium_missing, open_page, value_of, wait_maps, wait_value
 
 playwright = pytest.importorskip("playwright.sync_api")
 
@@ -15,25 +14,9 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-@pytest.fixture(scope="module")
-def server():
-    with served_app() as (url, _):
-        yield url
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    with chromium_browser() as browser:
-        yield browser
-
-
 def _open(chromium, url):
-    pg = chromium.new_page(viewport=VIEWPORT)
     errors = []
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.goto(url)
-    pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
-    return pg, errors
+    return open_page(chromium, url, errors, console=False), errors
 
 
 def _top_message(pg):
