@@ -19,22 +19,21 @@ from .scenario import (
     COMPARISONS,
     DIFFERENCES,
     PAPER_MAPS,
-    PART_OF,
     SENSORS,
     Scenario,
     ScenarioValues,
+    inputs,
     preset_of,
 )
 
-#: The parts (app.scenario.PARTS) of the scene: a target in a sea, seen by sensors on stations,
-#: over a region. The Layout design tab's error map and ellipse are computed from these.
-SCENE = ("target", "stations", "medium", "sensor", "region")
-#: The parts the comparison maps are computed from.
-MAPS = (*SCENE, "maps")
-#: The parts the design's best spacing and optimised layouts are computed from.
-DESIGN = (*SCENE, "design")
-#: Every input the maps read.
-MAP_INPUTS = frozenset(n for n, part in PART_OF.items() if part in MAPS)
+#: The inputs the comparison maps read (:func:`compute`): the scene (a target in a sea, seen by
+#: sensors on the paper's stations, over a region) and the Maps tab's own settings; not the
+#: custom stations of the Layout design and Track tabs. The key of the maps' results: a change of
+#: any other input leaves them as they are (tests/test_tab_keys.py checks this against what
+#: :func:`compute` reads).
+READS = inputs("target", "stations", "medium", "sensor", "region", "maps", but=("stations",))
+#: Every input the maps read, as a set.
+MAP_INPUTS = frozenset(READS)
 #: Largest CRLB / range at which a linearised bound still predicts a tracker's error
 #: (:func:`core.linearisation_breaks`, issue 18): beyond it the maps hatch the point.
 RUNAWAY_LIMIT = 0.3
@@ -46,30 +45,32 @@ def _frozen(value):
 
 @dataclass(frozen=True)
 class Snapshot:
-    """The values of some of a scenario's parts as a hashable tuple of (name, value) pairs: the key
-    of every tab's computations in the one cache (:class:`app.cache.PanelCache`)."""
+    """The values of the inputs a computation reads as a hashable tuple of (name, value) pairs:
+    the key of every tab's computations in the one cache (:class:`app.cache.PanelCache`)."""
 
     items: tuple
 
     @classmethod
-    def of(cls, scenario: Scenario, parts=MAPS):
-        """The values of the parts named ``parts`` (app.scenario.PARTS) of ``scenario``."""
-        return cls(tuple((name, _frozen(v)) for name, v in scenario.values(parts).items()))
+    def of(cls, scenario: Scenario, reads=READS):
+        """The values of the inputs ``reads`` (names; default the maps', :data:`READS`)."""
+        return cls(tuple((n, _frozen(scenario.value(n))) for n in reads))
 
     @classmethod
-    def of_values(cls, scenario: Scenario, values, parts=MAPS):
+    def of_values(cls, scenario: Scenario, values, reads=READS):
         """As :meth:`of`, with the inputs in ``values`` (name -> value) replaced: a dragged
         slider's value before it reaches the scenario (app/live.py)."""
-        current = scenario.values(parts)
-        unknown = set(values) - set(current)
+        unknown = set(values) - set(reads)
         if unknown:
-            raise KeyError(f"not inputs of {parts}: {sorted(unknown)}")
-        return cls(tuple((name, _frozen(values.get(name, v))) for name, v in current.items()))
+            raise KeyError(f"not inputs read: {sorted(unknown)}")
+        return cls(tuple((n, _frozen(values[n] if n in values else scenario.value(n)))
+                         for n in reads))
 
     def scenario(self):
-        """These values, with the methods that build core's inputs (not a live Scenario)."""
-        return ScenarioValues.of({k: [list(v) for v in val] if k == "stations" else val
-                                  for k, val in self.items})
+        """These values alone, with the methods that build core's inputs (not a live Scenario).
+        Reading an input the snapshot does not hold raises AttributeError: a computation keyed
+        on a snapshot cannot read a value its key leaves out."""
+        return ScenarioValues(**{k: [list(v) for v in val] if k == "stations" else val
+                                 for k, val in self.items})
 
 
 @dataclass(frozen=True)
@@ -395,24 +396,18 @@ def filename(s, preset=""):
     return "_".join(part for part in slug.lower().split("_") if part)
 
 
-def _core_options(s, kind):
-    opts = s.core_options(kind)
-    opts.pop("measure")
-    return opts
-
-
 def compute(snapshot: Snapshot) -> Panels:
     """The maps for one scenario. Pure: same snapshot, same numbers."""
     s = snapshot.scenario()
-    measure = s.core_options()["measure"]
+    measure = s.measure_key()
     plane = s.core_plane()
     (st_a, mom_a, title_a, kind_a), (st_b, mom_b, title_b, kind_b) = scenarios_ab(s)
     vel = s.velocity()
     with KERNEL_LOCK:
         a = core.evaluate_map(plane, st_a, velocity=vel, moments=mom_a, measure=measure,
-                              **_core_options(s, kind_a))
+                              **s.core_options(kind_a, measure=False))
         b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure,
-                              **_core_options(s, kind_b))
+                              **s.core_options(kind_b, measure=False))
     diff, diff_label, diff_short = difference(a, b, measure, s.difference)
     label, unit, _ = core.MEASURES[measure]
     note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b), (mom_a, mom_b),
@@ -441,4 +436,4 @@ def compute(snapshot: Snapshot) -> Panels:
                                far_note=runaway_note(((title_a, a), (title_b, b)), (ra, rb)))
 
 
-__all__ = ["DESIGN", "MAP_INPUTS", "MAPS", "SCENE", "Panels", "Snapshot", "compute", "difference"]
+__all__ = ["MAP_INPUTS", "READS", "Panels", "Snapshot", "compute", "difference"]

@@ -10,10 +10,11 @@ import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
 from . import compute, design_compute, offloop, views
-from .compute import DESIGN, RUNAWAY_LIMIT, SCENE, Snapshot
+from .compute import RUNAWAY_LIMIT, Snapshot
+from .design_compute import ERROR_MAP_READS, LAYOUT_READS, SPACING_READS
 from .inputs import number_input
 from .maps import alert, refusal
-from .scenario import MAX_STATIONS, PARTS, Design
+from .scenario import MAX_STATIONS, PART_OF, Design
 
 DESIGN_HELP = """
 **Layout design.** Click on the map to add a station (up to 8; it sits at the station depth h),
@@ -92,11 +93,14 @@ def spacing_text(sp):
 def design_tab(scenario, cache, widgets):
     """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
     widget spec of pn.Param (the sidebar's)."""
-    snap = lambda: Snapshot.of(scenario, SCENE)  # what the error map and the ellipse read
+    snap = lambda: Snapshot.of(scenario, ERROR_MAP_READS)  # what the error map and the ellipse read
     st = scenario.stations  # the Stations part
     points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True),
                            streams=[hv.streams.Params(st, ["stations"])])
-    scene = [hv.streams.Params(getattr(scenario, a), list(PARTS[a].names())) for a in SCENE]
+    read = {}  # the inputs the error map reads, by part
+    for name in ERROR_MAP_READS:
+        read.setdefault(PART_OF[name], []).append(name)
+    scene = [hv.streams.Params(getattr(scenario, a), names) for a, names in read.items()]
     # One more than allowed: a 9th click reaches the Scenario, which refuses it ("at most 8
     # stations") and restores the layout (with num_objects=8 the tool deleted the oldest silently)
     draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS + 1, empty_value=st.h)
@@ -143,7 +147,7 @@ def design_tab(scenario, cache, widgets):
             readout_task.start(key, partial(readout_of, key), partial(setattr, readout, "object"))
 
     readout = pn.pane.Markdown(readout_of(now()), sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
-    scenario.watch(refresh, SCENE)
+    scenario.watch_inputs(refresh, ERROR_MAP_READS)
     scenario.design.param.watch(refresh, ["ellipse_x", "ellipse_y"])
 
     ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
@@ -211,7 +215,7 @@ def design_tab(scenario, cache, widgets):
                                  sizing_mode="stretch_width")]
 
     def spacing(event):
-        snapshot = Snapshot.of(scenario, DESIGN)
+        snapshot = Snapshot.of(scenario, SPACING_READS)
         spacing_task.start(snapshot, partial(spacing_views, snapshot), spacing_shown, spacing_failed)
 
     run.on_click(spacing)
@@ -237,7 +241,7 @@ def design_tab(scenario, cache, widgets):
         outcome.object = f"**Not optimised**: {type(exc).__name__}: {exc}"
 
     def optimise_clicked(event):
-        snapshot, criterion = Snapshot.of(scenario, DESIGN), scenario.design.criterion
+        snapshot, criterion = Snapshot.of(scenario, LAYOUT_READS), scenario.design.criterion
         optimise_task.start(None, partial(cache.get, snapshot, design_compute.optimised_layout),
                             partial(optimised, criterion=criterion), optimise_failed)
 

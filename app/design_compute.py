@@ -15,15 +15,26 @@ import numpy as np
 import core
 
 from .cache import KERNEL_LOCK
-from .compute import Snapshot, _core_options
-from .scenario import CRITERIA, ScenarioValues
+from .compute import Snapshot
+from .scenario import CRITERIA, ScenarioValues, inputs
 
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
 SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
 
+# What each computation reads (its key in the cache; tests/test_tab_keys.py checks each against
+# what it reads). All of them: the target (its sources, motion and depth), the sea and the sensor.
+_TARGET_SEEN = inputs("target", "medium", "sensor")
+#: :func:`design` (the error map) and :func:`error_at` (the ellipse, and the readout under it):
+#: the custom stations over the x–y region at the target depth.
+ERROR_MAP_READS = (*_TARGET_SEEN, "stations", "extent", "resolution")
+#: :func:`best_spacing`: dual stations at depth h, the criterion.
+SPACING_READS = (*_TARGET_SEEN, "h", "extent", "resolution", "criterion", "threshold")
+#: :func:`optimised_layout`: N stations at depth h in a shape, the criterion.
+LAYOUT_READS = (*_TARGET_SEEN, "h", "extent", "criterion", "threshold", "layout_kind", "n_stations")
+
 
 def _fisher_options(s: ScenarioValues):
-    return _core_options(s, None)
+    return s.core_options(None, measure=False)
 
 
 def xy_region(s: ScenarioValues, n):
@@ -101,5 +112,6 @@ def optimised_layout(snapshot: Snapshot):
                                     **_fisher_options(s))  # spacing up to what fits in the region
 
 
-__all__ = ["REGION_RESOLUTION", "SPACING_POINTS", "SPACING_RANGE", "Design", "Spacing",
+__all__ = ["ERROR_MAP_READS", "LAYOUT_READS", "REGION_RESOLUTION", "SPACING_POINTS", "SPACING_RANGE",
+           "SPACING_READS", "Design", "Spacing",
            "best_spacing", "design", "error_at", "optimised_layout", "xy_region"]

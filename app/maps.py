@@ -11,7 +11,7 @@ import panel as pn
 from bokeh.layouts import row
 
 from . import export, live, map_data, map_figures, offloop, views
-from .compute import MAPS, RUNAWAY_LIMIT, Snapshot, compute
+from .compute import READS, RUNAWAY_LIMIT, Snapshot, compute
 from .scenario import defaults
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
@@ -129,7 +129,7 @@ START = ("Start here: A is one station, B two stations 15 m apart; one station c
 
 
 #: The maps' inputs as the page opens.
-OPENING = defaults(MAPS)
+OPENING = {n: v for n, v in defaults().items() if n in READS}
 
 
 def _paper_line(p):
@@ -155,7 +155,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     # Always laid out, at the height of its one-line banner: the maps no longer jump ~45 px when
     # a paper figure's banner comes and goes
     def opening():  # the page as it opens: every input of the maps at its default
-        return scenario.values(MAPS) == OPENING
+        return scenario.inputs(READS) == OPENING
 
     # under the maps (above them it would move them when it goes)
     start = pn.pane.HTML(alert(START, "info"), visible=opening(), sizing_mode="stretch_width",
@@ -251,7 +251,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
     # the maps follow a dragged slider: previews until its release (app/live.py)
     follow = live.Live(scenario, figs, doc, exact)
-    scenario.watch(redraw, MAPS)
+    scenario.watch_inputs(redraw, READS)
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
     tab = pn.Column(paper, plots, start, key, note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
@@ -262,7 +262,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
 
 def _current(scenario, cache):
-    return cache.get(Snapshot.of(scenario), compute), scenario.values(MAPS)
+    return cache.get(Snapshot.of(scenario), compute), scenario.inputs(READS)
 
 
 def download_name(scenario, cache, ext):

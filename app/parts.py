@@ -450,6 +450,15 @@ def parameter(name):
     return PARTS[PART_OF[name]].param[name]
 
 
+def inputs(*parts, but=()):
+    """The inputs of the parts named ``parts`` (keys of :data:`PARTS`), in their order, but those
+    named in ``but``: what a computation reads, the key of its results (:class:`app.compute.Snapshot`)."""
+    unknown = set(but) - {n for a in parts for n in PARTS[a].names()}
+    if unknown:
+        raise KeyError(f"not inputs of {parts}: {sorted(unknown)}")
+    return tuple(n for a in parts for n in PARTS[a].names() if n not in but)
+
+
 def defaults(parts=None):
     """Every input's default: name -> value (of the parts named ``parts``; default all)."""
     return {n: PARTS[a].param[n].default for a in (parts or PARTS) for n in PARTS[a].names()}

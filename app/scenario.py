@@ -4,8 +4,9 @@ into one Scenario; the paper's presets.
 No Panel import. The parts (:data:`PARTS`) are the shared scenario — :class:`Target`,
 :class:`Stations`, :class:`Medium`, :class:`Sensor`, :class:`Region` — and one part per tab's
 own settings (:class:`Maps`, :class:`Design`, :class:`Track`, :class:`Calibration`,
-:class:`Shape`). A tab is a function of the parts it reads (declared once, by part names:
-``app.compute.MAPS``, ``app.track.READS`` …) and recomputes when one of them changes; a link and a
+:class:`Shape`). A tab is a function of the inputs it reads (declared once, by the parts and the
+inputs it takes: ``app.compute.READS``, ``app.track.READS`` …) and recomputes when one of them
+changes; a link and a
 preset are derived from every part. Parameter names are unique across the parts, so a link
 writes them flat (``?Ph=100&track_heading=33``) and links of earlier versions still open.
 
@@ -59,6 +60,7 @@ from .parts import (  # noqa: F401
     Target,
     Track,
     defaults,
+    inputs,
     parameter,
 )
 
@@ -164,6 +166,10 @@ class Scenario(param.Parameterized):
         """Every input's value: name -> value (of the parts named ``parts``; default all)."""
         return {n: getattr(getattr(self, a), n) for a in (parts or PARTS) for n in PARTS[a].names()}
 
+    def inputs(self, names):
+        """The values of the inputs ``names``: name -> value."""
+        return {n: self.value(n) for n in names}
+
     def ref(self, name):
         """Input ``name`` as a bound parameter (for pn.bind, widgets' from_param, watching)."""
         return self.part_of(name).param[name]
@@ -173,6 +179,15 @@ class Scenario(param.Parameterized):
         for attr in parts:
             part = getattr(self, attr)
             part.param.watch(fn, list(part.names()))
+
+    def watch_inputs(self, fn, names):
+        """Call ``fn(*events)`` when any of the inputs ``names`` changes (one batch of events per
+        part)."""
+        by_part = {}
+        for n in names:
+            by_part.setdefault(PART_OF[n], []).append(n)
+        for attr, these in by_part.items():
+            getattr(self, attr).param.watch(fn, these)
 
     def update(self, values=None, as_given=False, **more):
         """Set many inputs at once (a link, a preset): every watcher sees them together, the
@@ -437,17 +452,22 @@ class ScenarioValues(types.SimpleNamespace):
         """Whether map A or B measures with a magnetic kind."""
         return _magnetic_maps(self.sensor, self.comparison, self.sensor_b)
 
-    def core_options(self, kind=None):
+    def measure_key(self):
+        """The core key of the maps' measure, as the Scenario moves it (``_all_rows``): also for
+        values that did not pass the rule."""
+        return ("crlb_position" if self.measure in SQUARE_MEASURES and self.magnetic_maps()
+                else MEASURE_LABELS[self.measure])
+
+    def core_options(self, kind=None, measure=True):
         """Keywords of core's map functions for sensor ``kind`` (a :data:`SENSORS` value; default
         the scenario's): the electric medium, or a magnetic ``core.Sensor`` (its noise in nT and
-        nT/m; a static field does not see the sea)."""
+        nT/m; a static field does not see the sea). ``measure``: with the maps' measure
+        (:meth:`measure_key`); the Layout design tab's computations read none."""
         kind = SENSORS[self.sensor] if kind is None else kind
         known = STATE_SETS[self.state_set]
-        # as the Scenario moves it (_all_rows): also for values without the rule
-        # (a design snapshot holds no measure; its default is the paper's)
-        measure = ("crlb_position" if self.measure in SQUARE_MEASURES and self.magnetic_maps()
-                   else MEASURE_LABELS[self.measure])
-        common = dict(T=self.T, steps=int(self.steps), measure=measure)
+        common = dict(T=self.T, steps=int(self.steps))
+        if measure:
+            common["measure"] = self.measure_key()
         if kind != "E":
             noise = {"B": self.noise_b, "G": self.noise_g, "BG": (self.noise_b, self.noise_g)}[kind]
             baseline = self.baseline if "G" in kind and self.baseline > 0 else None

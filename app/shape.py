@@ -41,7 +41,7 @@ from .cache import KERNEL_LOCK, SHARED
 from .compute import Snapshot
 from .inputs import number_input
 from .maps import alert, with_refusal
-from .scenario import Scenario, Shape
+from .scenario import Scenario, Shape, inputs
 from .shape_text import verdict_text
 
 hv.extension("bokeh", logo=False)
@@ -158,8 +158,8 @@ def preset_of(values):
 
 
 def key_of(scenario):
-    """The tab's inputs as a hashable key (its parts' :class:`app.compute.Snapshot`)."""
-    return Snapshot.of(scenario, READS)
+    """The tab's inputs as a hashable key (its part's inputs' :class:`app.compute.Snapshot`)."""
+    return Snapshot.of(scenario, inputs(*READS))
 
 
 def case_of(values):

@@ -46,12 +46,16 @@ from .compute import RUNAWAY_LIMIT, Snapshot, nearest_range
 from .design_compute import Design
 from .inputs import number_input
 from .maps import refusal
-from .scenario import SENSORS, Scenario
+from .scenario import SENSORS, Scenario, inputs
 
 hv.extension("bokeh", logo=False)
 
-#: The parts (app.scenario.PARTS) the track's numbers are computed from.
-READS = ("target", "stations", "medium", "sensor", "track")
+#: The inputs the track's numbers are computed from (their key in the cache): the target's
+#: sources and depth (the track sets its own motion), the custom stations (not the paper's h, d
+#: and layout), the sea, the sensor, and the tab's own settings. tests/test_tab_keys.py checks
+#: them against what :func:`_compute` reads.
+READS = (*inputs("target", "medium", "sensor", "track", but=("speed", "heading", "model", "state_set")),
+         "stations")
 #: Prior σ of the EKF/PU-EKF start for a magnetic target: position and velocity as the electric
 #: case's (x, y 20 m, z 0.5 m, v 0.5 m/s); each moment entry this share of |m| (at least 1 A·m²).
 MAGNETIC_PRIOR_SHARE = 0.2
@@ -69,7 +73,7 @@ TRUTH = "#000000"
 def sea_of(s):
     """The scenario's medium: ``core.Sea(sea_depth, seabed_sigma)`` when ``sea_model`` is
     "layered", else None (the whole space) — the same sea the maps use."""
-    if getattr(s, "sea_model", "whole space") != "layered":
+    if s.sea_model != "layered":
         return None
     return core.Sea(float(s.sea_depth), float(s.seabed_sigma))
 
@@ -345,7 +349,7 @@ def _outputs(scenario: Scenario):
                 return
             task.start(key, partial(outputs_of, key), show, failed)
 
-    scenario.watch(start, READS)
+    scenario.watch_inputs(start, READS)
     start()
     return pn.Column(problem, outputs, sizing_mode="stretch_width")
 

@@ -49,7 +49,7 @@ def test_stations_added_by_clicks_keep_the_station_depth(page):
 def expected_readout(presets, x, y, z=None):
     """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
     from app import compute, design_compute, views
-    from app.compute import SCENE, Snapshot
+    from app.compute import Snapshot
     from app.scenario import Scenario
 
     s = Scenario(resolution=21)
@@ -57,7 +57,7 @@ def expected_readout(presets, x, y, z=None):
         s.apply_preset(preset)
     if z is not None:
         s.target.z = z
-    snap = Snapshot.of(s, SCENE)
+    snap = Snapshot.of(s, design_compute.ERROR_MAP_READS)
     rng = float(compute.nearest_range([x, y, s.target.z], s.stations.stations))
     column = s.medium.sea_depth if s.medium.sea_model == "layered" else None  # the water column
     return views.error_ellipse(design_compute.error_at(snap, x, y), x, y, s.region.extent, rng,

@@ -21,7 +21,7 @@ import param
 import pytest
 
 from app import calibration, compute, design_compute, shape, track
-from app.compute import SCENE, Snapshot
+from app.compute import Snapshot
 from app.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
 
 # The tabs' widgets use ``name``, ``button_type`` and ``button_style`` (Panel 1.5.5, the lowest
@@ -99,14 +99,16 @@ class Tab:
             p = compute.compute(Snapshot.of(s))
             return f"maps {p.titles}", ""
         if kind == "design":
-            snap = Snapshot.of(s, SCENE)
+            snap = Snapshot.of(s, design_compute.ERROR_MAP_READS)
             d = design_compute.design(snap)
             ell = design_compute.error_at(snap, s.design.ellipse_x, s.design.ellipse_y)
             extra = ""
             if s.design.criterion.startswith("Area"):
-                extra = f", best d = {design_compute.best_spacing(snap).result.d:.3g} m"
+                spacing = design_compute.best_spacing(Snapshot.of(s, design_compute.SPACING_READS))
+                extra = f", best d = {spacing.result.d:.3g} m"
             if s.design.n_stations in (1, MAX_STATIONS):
-                extra += f", optimised {len(design_compute.optimised_layout(snap).stations)} stations"
+                layout = design_compute.optimised_layout(Snapshot.of(s, design_compute.LAYOUT_READS))
+                extra += f", optimised {len(layout.stations)} stations"
             return f"design {np.nanmin(d.errors.position):.3g} m, ellipse {ell is not None}{extra}", ""
         if kind == "track":
             problem, out = self.layout[0], self.layout[1]

@@ -64,7 +64,7 @@ def test_maps_of_other_measures_carry_no_runaway_marks(measure):
 
 def test_the_layout_design_map_hatches_the_same_points():
     s = Scenario(resolution=31)
-    d = dc.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, dc.ERROR_MAP_READS))
     far = _by_hand(d.plane, d.stations, d.errors.position, d.errors.observable)
     assert 0 < far.sum() < far.size
     layer = views.error_map(d, "t").get(2)  # image, veil, runaway hatching
@@ -77,7 +77,7 @@ def test_the_layout_design_map_hatches_the_same_points():
 
 def test_a_clicked_far_point_says_its_bound_does_not_predict_an_error():
     s = Scenario()
-    snap = Snapshot.of(s, c.SCENE)
+    snap = Snapshot.of(s, dc.ERROR_MAP_READS)
     stations = np.array(s.stations.stations, dtype=float)
     near, far = (10.0, 10.0), (290.0, 290.0)
     texts = {}
@@ -92,7 +92,7 @@ def test_a_clicked_far_point_says_its_bound_does_not_predict_an_error():
 def test_the_optimiser_is_not_capped_below_the_region_and_reports_a_bound_it_hits():
     # issue 16 defect 7: the app passed a 200 m cap; a square of 4 came back at 200 m, at_bound
     s = Scenario(layout_kind="square", n_stations=4)
-    r = dc.optimised_layout(Snapshot.of(s, c.DESIGN))
+    r = dc.optimised_layout(Snapshot.of(s, dc.LAYOUT_READS))
     assert 250.0 < r.d < 2 * s.region.extent and r.at_bound == ()  # free optimum: side ~298 m (issue 16)
     np.testing.assert_allclose(r.stations[:, :2].mean(axis=0), 0.0, atol=1e-9)  # centred
     assert "spacing d = " in design.optimise_text(r, s.design.criterion)

@@ -7,10 +7,21 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from app import design_compute as dc
 from app import map_data, map_figures, views
 from app.cache import PanelCache
-from app.compute import MAPS, SCENE, Snapshot, compute
-from app.scenario import ACCEPTED, DEPTHS, PAPER_MAPS, PART_OF, PARTS, PRESET_INPUTS, PRESETS, Scenario, parameter
+from app.compute import READS, Snapshot, compute
+from app.scenario import (
+    ACCEPTED,
+    DEPTHS,
+    PAPER_MAPS,
+    PART_OF,
+    PARTS,
+    PRESET_INPUTS,
+    PRESETS,
+    Scenario,
+    parameter,
+)
 
 
 def test_presets_set_what_the_paper_says():
@@ -216,17 +227,15 @@ def test_custom_layout_is_checked(bad, why):
 
 
 def test_design_maps_and_best_spacing():
-    from app import compute as c
-    from app import design_compute as dc
     s = Scenario(resolution=31, stations=[[0.0, 0.0, 100.0], [40.0, 20.0, 90.0], [-30.0, 10.0, 100.0]])
-    d = dc.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, dc.ERROR_MAP_READS))
     assert d.errors.position.shape == (31, 31) and np.isfinite(d.errors.position).mean() > 0.95
-    e = dc.error_at(Snapshot.of(s, c.SCENE), 100.0, 50.0)
+    e = dc.error_at(Snapshot.of(s, dc.ERROR_MAP_READS), 100.0, 50.0)
     assert float(e.semi_major) >= float(e.semi_minor) > 0
     s.target.z = 100.0  # target depth = station depth: (0, 0) is on station 1
-    assert dc.error_at(Snapshot.of(s, c.SCENE), 0.0, 0.0) is None
+    assert dc.error_at(Snapshot.of(s, dc.ERROR_MAP_READS), 0.0, 0.0) is None
     s.target.z = 120.0
-    sp = dc.best_spacing(Snapshot.of(s, c.DESIGN))
+    sp = dc.best_spacing(Snapshot.of(s, dc.SPACING_READS))
     r = sp.result
     assert dc.SPACING_RANGE[0] <= r.d <= dc.SPACING_RANGE[1]
     assert r.value >= np.max(r.curve) - 1e-9  # the refined optimum is at least the scanned best
@@ -234,12 +243,10 @@ def test_design_maps_and_best_spacing():
 
 
 def test_optimised_layout_and_error_quantities():
-    from app import compute as c
-    from app import design_compute as dc
     s = Scenario(resolution=21, layout_kind="triangle", n_stations=3)
-    r = dc.optimised_layout(Snapshot.of(s, c.DESIGN))
+    r = dc.optimised_layout(Snapshot.of(s, dc.LAYOUT_READS))
     assert r.stations.shape == (3, 3) and 0 < r.d <= 2 * s.region.extent  # up to what fits in the region
-    d = dc.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, dc.ERROR_MAP_READS))
     for quantity in parameter("error_quantity").objects:
         overlay = views.error_map(d, "t", quantity)
         assert overlay.get(0).vdims[0].unit in ("m", "m/s")
@@ -251,10 +258,12 @@ def test_a_snapshots_values_build_the_same_core_inputs_as_the_scenario(preset):
     s = Scenario()
     s.apply_preset(preset)
     s.update(plane="x–z", stations=[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
-    for fields in (MAPS, SCENE):
-        v = Snapshot.of(s, fields).scenario()
-        assert (v.core_plane(), v.velocity(), v.core_options()) == (s.snapshot().core_plane(), s.snapshot().velocity(), s.snapshot().core_options())
-        assert all(getattr(v, name) == value for name, value in s.values(fields).items())
+    v = Snapshot.of(s, READS).scenario()
+    assert (v.core_plane(), v.velocity(), v.core_options()) == (s.snapshot().core_plane(), s.snapshot().velocity(), s.snapshot().core_options())
+    assert all(getattr(v, name) == s.value(name) for name in READS)
+    v = Snapshot.of(s, dc.ERROR_MAP_READS).scenario()
+    assert (v.velocity(), v.core_options(measure=False)) == (s.snapshot().velocity(), s.snapshot().core_options(measure=False))
+    assert all(getattr(v, name) == s.value(name) for name in dc.ERROR_MAP_READS)
 
 
 @pytest.mark.parametrize("name", DEPTHS)
@@ -410,11 +419,9 @@ def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
     # defect 6: the server logged "Tool of type 'point_draw' could not be found" (the spacing
     # maps' stations asked for an active point-draw tool they do not have), and a station showed
     # two overlapping tooltips
-    from app import compute as c
-    from app import design_compute as dc
 
     s = Scenario(resolution=21)
-    d = dc.design(Snapshot.of(s, c.SCENE))
+    d = dc.design(Snapshot.of(s, dc.ERROR_MAP_READS))
     with caplog.at_level("WARNING"):
         fig, hovers = _design_plot(views.error_map(d, "t") * views.station_layer(d.stations))
     assert not [r for r in caplog.records if "could not be found" in r.getMessage()]
@@ -422,11 +429,9 @@ def test_design_maps_have_one_tooltip_and_no_missing_tool(caplog):
 
 
 def test_best_and_paper_maps_share_one_colour_range():
-    from app import compute as c
-    from app import design_compute as dc
 
     s = Scenario(resolution=21)
-    sp = dc.best_spacing(Snapshot.of(s, c.DESIGN))
+    sp = dc.best_spacing(Snapshot.of(s, dc.SPACING_READS))
     clim = views.common_clim(sp.best, sp.paper)
     for design in (sp.best, sp.paper):
         lo, hi = views.error_clim(design)

@@ -5,7 +5,8 @@ import pytest
 
 import core
 from app import map_data, map_figures
-from app.compute import SCENE, Snapshot, compute
+from app.compute import Snapshot, compute
+from app.design_compute import ERROR_MAP_READS
 from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
 from app.design_compute import design
 from app.scenario import PRESETS, Scenario
@@ -118,7 +119,7 @@ def test_a_magnetic_kind_moves_the_paper_measure_to_the_crlb_and_says_so():
 
 def test_the_design_tab_uses_the_sensor():
     s = Scenario(sensor=BOTH, stations=[[0.0, 0.0, 100.0]], **SMALL)
-    d = design(Snapshot.of(s, SCENE))
+    d = design(Snapshot.of(s, ERROR_MAP_READS))
     want = core.crlb_maps(d.plane, [[0.0, 0.0, 100.0]], velocity=s.snapshot().velocity(), moments=(s.target.mx, s.target.my, s.target.mz),
                           steps=s.sensor.steps, sensor=core.Sensor("BG", (s.sensor.noise_b, s.sensor.noise_g)))
     assert same(d.errors.position, want.position) and np.isfinite(d.errors.position).mean() > 0.9

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from app import shape, url
-from app.compute import DESIGN, MAPS
+from app import design_compute, track
+from app.compute import READS
 from app.scenario import Scenario, preset_values
 from core.shape.bound import shape_bound
 from core.shape.cases import CASES
@@ -81,7 +82,9 @@ def test_switching_the_type_sets_that_types_sizes_and_says_so():
 
 
 def test_shape_inputs_are_not_map_inputs_nor_reset_by_a_paper_figure():
-    assert "shape" not in MAPS + DESIGN
+    read = {*READS, *design_compute.ERROR_MAP_READS, *design_compute.SPACING_READS,
+            *design_compute.LAYOUT_READS, *track.READS}
+    assert not [n for n in read if n.startswith("shape_")]
     assert not [n for n in preset_values("Fig. 1") if n.startswith("shape_")]
     s = Scenario()
     s.shape.shape_offset = 12.0

@@ -37,7 +37,7 @@ def test_runaway_marks_are_not_stripes_like_the_unobservable_veil():
 
 
 def test_the_design_and_track_maps_dot_runaway_points_as_the_maps_tab_does():
-    d = dc.design(Snapshot.of(Scenario(resolution=41), c.DESIGN))
+    d = dc.design(Snapshot.of(Scenario(resolution=41), dc.ERROR_MAP_READS))
     far = c.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
     assert far.any()
     from app import views
