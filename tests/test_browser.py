@@ -393,11 +393,11 @@ def test_controls_that_do_not_apply_are_hidden(page):
     # defect 8: Fixed y in x–y, target depth in x–z, the maps' controls on the Layout design tab
     assert not page.locator(".w-y").first.is_visible() and page.locator(".w-z").first.is_visible()
     select(page, "plane", "x–z")
-    page.locator(".w-y").first.wait_for(state="visible", timeout=15_000)
-    page.locator(".w-z").first.wait_for(state="hidden", timeout=15_000)
+    page.locator(".w-y").first.wait_for(state="visible", timeout=60_000)
+    page.locator(".w-z").first.wait_for(state="hidden", timeout=60_000)
     page.get_by_text("Layout design", exact=True).click()
-    page.locator(".w-measure").first.wait_for(state="hidden", timeout=15_000)
-    page.locator(".w-z").first.wait_for(state="visible", timeout=15_000)  # the design maps' depth
+    page.locator(".w-measure").first.wait_for(state="hidden", timeout=60_000)
+    page.locator(".w-z").first.wait_for(state="visible", timeout=60_000)  # the design maps' depth
     assert not page.locator(".w-y").first.is_visible()
 
 
