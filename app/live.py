@@ -5,12 +5,15 @@ The page's sliders report on release only (``pn.extension(throttled=True)``: app
 and Panel delays every widget change by 50 ms before Python sees it. While a slider of the maps'
 inputs is dragged, the path here is shorter, through public Bokeh and Panel only:
 
-* in the browser, a ``CustomJS`` on the slider's ``value`` (Panel's ``jscallback``) writes
-  ``[input, value, sequence, released]`` into :class:`Drag`, a Bokeh ``DataModel`` of the session,
-  at most once per THROTTLE_MS (the latest value goes out at the end of each interval); a change
-  of the slider model's ``value_throttled`` (its release; connected through BokehJS's signal API
-  on the first drag: Panel's ``jscallback`` does not offer that property) writes the final value
-  at once, ``released`` set;
+* in the browser, a ``CustomJS`` on the slider's ``value`` (Panel's ``jscallback``) offers
+  ``[input, value, sequence, released]`` to :class:`Drag`, a Bokeh ``DataModel`` of the session,
+  through a closed loop (:data:`LOOP_JS`): a value goes out once the server has answered the
+  previous one (``Drag.ready``, set with the preview it drew, in the same message), and at most
+  one every THROTTLE_MS; meanwhile the latest value waits in the page and replaces older ones. A
+  busy server therefore gets no queue of values, only the latest one when it can take it. A
+  change of the slider model's ``value_throttled`` (its release; connected through BokehJS's
+  signal API on the first drag: Panel's ``jscallback`` does not offer that property) writes the
+  final value at once, ``released`` set;
 * on the server, Bokeh's ``on_change`` of that model runs :meth:`Live.changed` on the event loop
   as the message arrives (no debounce). A preview is computed off the loop at PREVIEW_N² points
   (fewer when that takes longer than PREVIEW_BUDGET_S: :func:`next_n`) of the handle's value,
@@ -18,7 +21,9 @@ inputs is dragged, the path here is shorter, through public Bokeh and Panel only
   into each map's preview layer: uint8 levels colour-mapped in the browser (app/map_figures.py),
   veils uint8 and sent only when they change, colour bars, titles (" — preview") and captions
   (their "grid n × n") of the value under the handle. A session computes one preview at a
-  time; values arriving meanwhile replace each other, and the latest is computed next;
+  time; values arriving meanwhile (the page sends one early only when an answer is over
+  PATIENCE_MS late) replace each other, and the latest is computed next. Every value is
+  answered (``Drag.ready``): drawn, replaced or refused;
 * on release the value is set on the scenario at once (Panel's own ``value_throttled``, 50 ms
   later, then changes nothing), which draws the exact maps through app/maps.py as any change
   does; a preview still computing is dropped. A release where the scenario does not change
@@ -37,14 +42,18 @@ import weakref
 from functools import partial
 
 import panel as pn
-from bokeh.core.properties import Any, List
+from bokeh.core.properties import Any, Int, List
+from bokeh.models import CustomJS
 from bokeh.model import DataModel
 
 from . import map_data, map_figures, offloop
 from .compute import MAP_INPUTS, Snapshot, compute
 
-#: Shortest interval (ms) between two values a dragged slider sends.
+#: Shortest interval (ms) between two values a dragged slider (or station) sends.
 THROTTLE_MS = 40
+#: How long (ms) the page waits for the server's answer to a value before it sends the next one
+#: anyway (a guard: every value is answered).
+PATIENCE_MS = 1000
 #: Points per axis of a preview (at most the scenario's resolution), and the fewest it may
 #: come down to (:data:`PREVIEW_BUDGET_S`).
 PREVIEW_N, PREVIEW_MIN_N = 100, 30
@@ -59,32 +68,78 @@ _PREVIEWS = offloop.pool("previews", 2)
 
 
 class Drag(DataModel):
-    """What the browser says about a dragged slider: ``[input name, value, sequence number,
-    released]`` (one property: one message and one server callback per value)."""
+    """What the browser says about a dragged slider or station: ``state``, ``[input name, value,
+    sequence number, released]`` (one property: one message and one server callback per
+    value); and the server's answer, ``ready``: the sequence number of the latest value it is
+    done with (drawn, replaced or refused), which lets the page send the next one."""
 
     state = List(Any, default=[])
+    ready = Int(default=0)
 
+
+#: The page's closed loop for one :class:`Drag` (``drag``; ``throttle``, ``patience``: ms), at
+#: the head of every browser-side callback that uses it: ``loop.offer(name, value)`` keeps the
+#: latest value and sends it when the server has answered the previous one (``drag.ready``) and
+#: ``throttle`` ms have passed since it (``patience`` ms when unanswered);
+#: ``loop.release(name, value)`` sends a final value at once; ``loop.pump()`` (on ``ready``)
+#: sends what waits.
+LOOP_JS = """
+const loops = window.__liveLoops || (window.__liveLoops = new WeakMap());
+let loop = loops.get(drag);
+if (loop === undefined) {
+  loop = {seq: 0, sent: 0, at: -1e9, pending: null, timer: null};
+  loop.send = (name, value, released) => {
+    loop.seq += 1; loop.sent = loop.seq; loop.at = performance.now();
+    drag.state = [name, value, loop.seq, released];
+  };
+  loop.pump = () => {
+    if (loop.timer !== null) { clearTimeout(loop.timer); loop.timer = null; }
+    if (loop.pending === null) return;
+    const answered = drag.ready >= loop.sent;
+    const wait = loop.at + (answered ? throttle : patience) - performance.now();
+    if (wait > 0) { loop.timer = setTimeout(loop.pump, wait); return; }
+    const [name, value] = loop.pending;
+    loop.pending = null;
+    loop.send(name, value, false);
+  };
+  loop.offer = (name, value) => { loop.pending = [name, value]; loop.pump(); };
+  loop.drop = () => {
+    if (loop.timer !== null) { clearTimeout(loop.timer); loop.timer = null; }
+    loop.pending = null;
+  };
+  loop.release = (name, value) => { loop.drop(); loop.send(name, value, true); };
+  loops.set(drag, loop);
+}
+"""
 
 #: In the slider's browser-side callback (``source``: the slider's model; ``drag``: the session's
-#: :class:`Drag`; ``name``: the input): the throttle, its timer and sequence per page.
-FOLLOW_JS = """
-const L = window.__liveDrag || (window.__liveDrag = {seq: 0, inputs: {}, hooked: new WeakSet()});
-const s = L.inputs[name] || (L.inputs[name] = {last: -1e9, timer: null});
-if (!L.hooked.has(source)) {  // the release: the slider's value_throttled, set when the hand lets go
-  L.hooked.add(source);
-  source.connect(source.properties.value_throttled.change, () => {
-    if (s.timer !== null) { clearTimeout(s.timer); s.timer = null; }
-    L.seq += 1;
-    drag.state = [name, source.value_throttled, L.seq, true];
-  });
+#: :class:`Drag`; ``name``: the input): the value into the loop; its release at once.
+FOLLOW_JS = LOOP_JS + """
+const hooked = window.__liveHooked || (window.__liveHooked = new WeakSet());
+if (!hooked.has(source)) {  // the release: the slider's value_throttled, set when the hand lets go
+  hooked.add(source);
+  source.connect(source.properties.value_throttled.change,
+                 () => loop.release(name, source.value_throttled));
 }
-const send = () => {
-  s.timer = null; s.last = performance.now(); L.seq += 1;
-  drag.state = [name, source.value, L.seq, false];
-};
-const wait = s.last + throttle - performance.now();
-if (wait <= 0) send(); else if (s.timer === null) s.timer = setTimeout(send, wait);
+loop.offer(name, source.value);
 """
+
+#: On a change of ``drag.ready`` (the server's answer): what waits goes out.
+READY_JS = LOOP_JS + "loop.pump();"
+
+
+def drag_model():
+    """A :class:`Drag` whose ``ready`` sends what the page's loop holds (:data:`LOOP_JS`)."""
+    drag = Drag()
+    drag.js_on_change("ready", CustomJS(args=dict(drag=drag, throttle=THROTTLE_MS, patience=PATIENCE_MS),
+                                        code=READY_JS))
+    return drag
+
+
+def answer(drag, seq):
+    """Tell the page the server is done with value ``seq`` (and every earlier one)."""
+    if seq > drag.ready:
+        drag.ready = seq
 
 #: The live part of each open session's page, by its document (dropped when the session ends).
 _SESSIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -98,7 +153,7 @@ class Live:
 
     def __init__(self, scenario, figs, doc, exact):
         self.scenario, self.figs, self.doc, self.exact = scenario, figs, doc, exact
-        self.drag = Drag()
+        self.drag = drag_model()
         self.drag.on_change("state", self.changed)
         self.shown = True  # the Maps tab is the active one
         self.dragging = None  # the input being dragged, from its first preview to its release
@@ -113,21 +168,27 @@ class Live:
             doc.on_session_destroyed(lambda _ctx: self.close())
 
     def changed(self, _attr, _old, new):
-        if len(new) != 4:
+        if len(new) != 4 or not isinstance(new[2], int):
             return
-        name, value, _seq, released = new
-        if name not in MAP_INPUTS or not isinstance(value, (int, float)):
+        name, value, seq, released = new
+        if name not in MAP_INPUTS or not isinstance(value, (int, float)) or isinstance(value, bool):
+            answer(self.drag, seq)
             return
         owner = self.scenario.part_of(name)
         if isinstance(getattr(owner, name), int):
             value = int(round(value))
         if released:
             self.release(owner, name, value)
+            answer(self.drag, seq)
         elif self.shown and (self.dragging == name or value != getattr(owner, name)):
             self.dragging = name
-            self.pending = (name, value)
+            if self.pending is not None:  # replaced by a newer value: answered with it
+                answer(self.drag, self.pending[2])
+            self.pending = (name, value, seq)
             if not self.computing:
                 self._start()
+        else:
+            answer(self.drag, seq)
 
     def release(self, owner, name, value):
         """The final value: set on the scenario now (the exact maps follow); previews dropped."""
@@ -139,7 +200,7 @@ class Live:
             self.exact()  # nothing changed, so nothing redraws: the previews must go
 
     def _start(self):
-        name, value = self.pending
+        name, value, seq = self.pending
         self.pending, self.computing = None, True
         scenario = self.scenario
         n = min(self.preview_n, int(scenario.value("resolution")))
@@ -147,11 +208,12 @@ class Live:
             snapshot = Snapshot.of_values(scenario, {name: value, "resolution": n})
         except (KeyError, ValueError):
             self.computing = False
+            answer(self.drag, seq)
             return
         future = _PREVIEWS.submit(_preview, snapshot)
-        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n))
+        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n, seq))
 
-    async def _finish(self, generation, future, n):
+    async def _finish(self, generation, future, n, seq):
         try:
             prepared, seconds = await asyncio.wrap_future(future)
         except Exception:  # noqa: BLE001 (a value the scenario would refuse: no preview)
@@ -161,13 +223,17 @@ class Live:
         self.computing = False
         if self.scenario is None:  # the session ended while the preview was computed
             return
-        if prepared is not None and generation == self.generation and self.shown:
-            with pn.io.hold():  # the maps' own models in one message, as app/maps.py draws them
+        # the maps' own models and the answer in one message; on the loop, outside a callback
+        # of the document, a Bokeh model is changed only in pn.io.hold() (else Bokeh's session
+        # raises: its writes are prepared under the document's lock)
+        with pn.io.hold():
+            if prepared is not None and generation == self.generation and self.shown:
                 map_figures.fill(self.figs, prepared)
-            self.previewed = True
-            self.drawn += 1
-        if self.pending is not None:
-            self._start()
+                self.previewed = True
+                self.drawn += 1
+            answer(self.drag, seq)
+            if self.pending is not None:
+                self._start()
 
     def close(self):
         """The session ended: forget it, and cut what its sliders' browser-side callbacks keep.
@@ -212,7 +278,7 @@ def follow(slider, name):
     live = _SESSIONS.get(pn.state.curdoc) if pn.state.curdoc is not None else None
     if live is None or name not in MAP_INPUTS:
         return
-    args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS)
+    args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS, patience=PATIENCE_MS)
     slider.jscallback(args=args, value=FOLLOW_JS)
 
 
@@ -224,11 +290,13 @@ def shown_with(tabs, index):
 
     def active(event):
         live.shown = event.new == index
-        if not live.shown:
+        if not live.shown and live.pending is not None:
+            answer(live.drag, live.pending[2])
             live.pending = None
 
     live.shown = tabs.active == index
     tabs.param.watch(active, ["active"])
 
 
-__all__ = ["Drag", "Live", "PREVIEW_N", "THROTTLE_MS", "follow", "next_n", "shown_with"]
+__all__ = ["Drag", "LOOP_JS", "Live", "PATIENCE_MS", "PREVIEW_N", "THROTTLE_MS", "answer", "drag_model",
+           "follow", "next_n", "shown_with"]

@@ -1,6 +1,7 @@
 """Maps that follow a dragged slider (issue 38): the dashboard beside two floor apps, one run.
 
-    python -m bench.bench_drag [--seconds 4] [--runs 2] [--sessions 1,2,3,4] [--out drag.json]
+    python -m bench.bench_drag [--seconds 4] [--runs 2] [--sessions 1,2,3,4] [--loops closed,open]
+                               [--out drag.json]
 
 Part 1, one analyst, in Debian's headless Chromium: the P_h slider's handle is pressed, moved to
 and fro over the track every ~16 ms (a closed loop: the next move does not wait for a redraw)
@@ -25,10 +26,13 @@ whatever else the page received meanwhile).
 
 Part 2, several analysts on one replica (the project only): ``--sessions`` lists how many
 sessions drag at once (Bokeh websocket clients, bench/load_test.py's ``Client``, each writing
-the P_h values a throttled browser sends, every 40 ms, into its page's Drag model, then the
-release); meanwhile another session's cheap event (a refused value: a message, no maps) is
-timed, and the server's RSS before the drags and after (5 s after the last release). Redraws
-per second per session are the previews the server sent it.
+P_h values into its page's Drag model, then the release), each paced as ``--loops`` says:
+``closed`` as the page does (the next value once the server answered the previous one,
+``Drag.ready``, at most one every 40 ms: app/live.py), ``open`` one every 40 ms whatever the
+server's pace (the page's former throttle); meanwhile another session's cheap event (a refused
+value: a message, no maps) is timed, and the server's RSS before the drags and after (5 s after
+the last release). Redraws per second per session are the previews the server sent it; the
+load average at the end of each case is printed beside it.
 
 Targets: ≥ 10 redraws/s of all three maps (aim 20); input → preview painted p95 ≤ 200 ms;
 release → exact maps painted ≤ 1.3× the minimal Panel app; ≤ 150 KB per preview; with 3
@@ -218,9 +222,11 @@ def mid_drag_screenshot(page, path):
 
 
 # ----------------------------------------------------------------------------- part 2
-def multi(url, proc, sessions, seconds):
+def multi(url, proc, sessions, seconds, loop="closed"):
     """``sessions`` sessions dragging at once (part 2): their previews per second, another
-    session's cheap event, the server's RSS before and after."""
+    session's cheap event, the server's RSS before and after. ``loop``: "closed", each sends
+    its next value once the previous one is answered (``Drag.ready``), as the page does
+    (app/live.py); "open", one every THROTTLE_MS whatever the server's pace."""
     import psutil
 
     from bench.load_test import Client
@@ -232,21 +238,29 @@ def multi(url, proc, sessions, seconds):
 
             super().__init__(url)
             models = list(self.doc.models)
+            # the maps' (a page opens on the Maps tab: the Layout design tab's is made on its visit)
             self.drag = next(m for m in models if type(m).__name__ == "Drag")
             self.previews = {m.id for m in models if getattr(m, "name", None) == "map-preview"}
 
         def drag_for(self, index, seconds, out):
             from bokeh.document.events import ModelChangedEvent
 
+            from app.live import PATIENCE_MS, THROTTLE_MS
+
             start = len(self.events)
             t0 = time.perf_counter()
-            seq, k = 0, 0
+            seq, k = self.drag.ready, 0
             while time.perf_counter() - t0 < seconds:
                 phase = (k * 0.02 + index * 0.37) % 2.0
                 v = round(60.0 + 800.0 * (phase if phase <= 1 else 2 - phase) + index / 100, 2)
                 seq += 1
+                sent = time.perf_counter()
                 self._send(ModelChangedEvent(self.doc, self.drag, "state", ["Ph", v, seq, False]))
-                self._pump(lambda: False, 0.04)
+                if loop == "closed":  # as the page: the next value once this one is answered
+                    self._pump(lambda: self.drag.ready >= seq, PATIENCE_MS / 1e3)
+                rest = THROTTLE_MS / 1e3 - (time.perf_counter() - sent)
+                if rest > 0:
+                    self._pump(lambda: False, rest)
                 k += 1
             dt = time.perf_counter() - t0
             got = [mid for attr, mid, _ in self.events[start:] if attr == "data" and mid in self.previews]
@@ -289,7 +303,8 @@ def multi(url, proc, sessions, seconds):
     after = rss()
     for c in [*draggers, prober]:
         on_thread(close_client, c)
-    return {"sessions": sessions, "per_session": [out[i] for i in range(sessions)],
+    return {"sessions": sessions, "loop": loop, "seconds": seconds, "load": os.getloadavg()[0],
+            "per_session": [out[i] for i in range(sessions)],
             "cheap_ms": [1e3 * x for x in cheap], "rss_before": before, "rss_after": after}
 
 
@@ -332,17 +347,20 @@ def table(s):
 
 
 def multi_table(results):
-    lines = ["| sessions dragging | previews/s per session (min … max) | release → exact maps (s, max) | "
-             "another session's cheap event p50 / p95 (ms) | RSS before → after drags (MB) |",
-             "|---|---|---|---|---|"]
+    lines = ["| sessions dragging | loop | previews/s per session (min … max) | values sent/s per session | "
+             "release → exact maps (s, max) | another session's cheap event p50 / p95 (ms) | "
+             "RSS before → after drags (MB) | load average |",
+             "|---|---|---|---|---|---|---|---|"]
     for r in results:
         per = [p["previews_per_s"] for p in r["per_session"]] or [float("nan")]
         rel = [p["release_s"] for p in r["per_session"]] or [float("nan")]
         rel_max = "unanswered" if any(x is None for x in rel) else f"{max(rel):.2f}"
-        lines.append(f"| {r['sessions']} | {min(per):.1f} … {max(per):.1f} | {rel_max} | "
+        sent = [p["values_sent"] / r["seconds"] for p in r["per_session"]] or [float("nan")]
+        lines.append(f"| {r['sessions']} | {r['loop']} | {min(per):.1f} … {max(per):.1f} | "
+                     f"{statistics.median(sent):.1f} | {rel_max} | "
                      f"{pct(r['cheap_ms'], 50):.0f} / {pct(r['cheap_ms'], 95):.0f} | "
                      f"{r['rss_before'] / 2**20:.0f} → {r['rss_after'] / 2**20:.0f} "
-                     f"({(r['rss_after'] / r['rss_before'] - 1) * 100:+.1f} %) |")
+                     f"({(r['rss_after'] / r['rss_before'] - 1) * 100:+.1f} %) | {r['load']:.1f} |")
     return "\n".join(lines)
 
 
@@ -356,6 +374,9 @@ def main(argv=None):
                     help="part 2: numbers of sessions dragging at once ('' to skip; 0: the cheap "
                          "event with no drag)")
     ap.add_argument("--multi-seconds", type=float, default=8.0)
+    ap.add_argument("--loops", default="closed,open",
+                    help="part 2: how the dragging clients pace their values (closed: as the page, "
+                         "after each answer; open: every THROTTLE_MS)")
     ap.add_argument("--screenshot", default=None, help="a PNG of the page taken mid-drag (project)")
     ap.add_argument("--out", default=None, help="raw values and summary as JSON")
     args = ap.parse_args(argv)
@@ -375,9 +396,10 @@ def main(argv=None):
                     if name == "project" and run == 0 and args.sessions:
                         base = url.rsplit("/app", 1)[0]
                         for n in (int(x) for x in args.sessions.split(",")):
-                            r = multi(base, proc, n, args.multi_seconds)
-                            multi_results.append(r)
-                            print(multi_table([r]).splitlines()[-1], flush=True)
+                            for loop in (args.loops.split(",") if n else ["closed"]):
+                                r = multi(base, proc, n, args.multi_seconds, loop)
+                                multi_results.append(r)
+                                print(multi_table([r]).splitlines()[-1], flush=True)
             load.append(os.getloadavg())
     summary = summarise(raw)
     print()

@@ -92,3 +92,24 @@ def test_magnetic_maps_follow_the_drag_on_a_grid_their_compute_allows():
     assert f"grid {n} × {n}" in t.figures.captions[0].text.replace("\n", " ")
     drag(lv, "mx", 70.0, 3, released=True)
     assert scenario.target.mx == 70.0 and not any(layer.visible for layer in t.figures.preview_layers)
+
+
+def test_the_page_is_answered_for_every_value_it_sends(tab):
+    # the page's closed loop sends its next value once Drag.ready reaches the last it sent
+    scenario, t = tab
+    lv = t.live
+    drag(lv, "Ph", 150.0, 1)
+    assert lv.drag.ready == 1  # drawn (outside a server, at once)
+    drag(lv, "Ph", 100.0, 2)  # the scenario's value while dragging Ph: still previewed
+    assert lv.drag.ready == 2 and lv.drawn == 2
+    drag(lv, "track_speed", 3.0, 3)  # not an input of the maps: answered, not drawn
+    assert lv.drag.ready == 3 and lv.drawn == 2
+    lv.shown = False
+    drag(lv, "Ph", 170.0, 4)
+    assert lv.drag.ready == 4 and lv.drawn == 2
+    drag(lv, "Ph", 170.0, 5, released=True)
+    assert lv.drag.ready == 5 and scenario.target.Ph == 170.0
+    lv.changed("state", [], ["Ph", 180.0, 4, False])  # an older answer never goes back
+    assert lv.drag.ready == 5
+    # the answer reaches the page's loop through a browser-side callback of Drag.ready
+    assert [cb.code for cb in lv.drag.js_property_callbacks["change:ready"]] == [live.READY_JS]
