@@ -20,6 +20,7 @@ from .compute import KIND_NAMES, MAP_INPUTS
 from .design import design_tab
 from .inputs import number_input
 from .number_box import number_box
+from .part import declared
 from .scenario import (
     ACCEPTED,
     COMPARISONS,
@@ -29,21 +30,16 @@ from .scenario import (
     PRESETS,
     SENSORS,
     Scenario,
+    Where,
     parameter,
+    shown,
+    sidebar,
 )
 from .shape import shape_parts
 from .track import track_tab
 
-#: Sidebar sections: (title, parameters, collapsed?).
-SECTIONS = (
-    ("View", ["sensor", "measure", "comparison", "sensor_b", "difference", "plane"], False),
-    ("Target", ["Ph", "Pv", "mx", "my", "mz", "speed", "heading", "z", "y"], False),
-    ("Stations", ["h", "d", "layout"], False),
-    ("Sea", ["sea_model", "sea_depth", "seabed_sigma"], False),
-    ("Scenario B of Figs. 3, 4, 6", ["k", "Ph_b", "Pv_b", "mx_b", "my_b", "mz_b", "d_ref"], True),
-    ("Advanced", ["model", "state_set", "T", "sigma", "noise", "noise_b", "noise_g", "baseline", "steps", "extent",
-                  "z_min", "z_max", "resolution"], True),
-)
+#: Sidebar sections: (title, parameters, collapsed?), as the inputs declare them (app.parts.sidebar).
+SECTIONS = sidebar()
 MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
 
 
@@ -88,12 +84,13 @@ def freeze_startup_objects():
 _alert = maps.alert
 
 
-#: Numbers typed or dragged (:func:`app.inputs.number_input`): every number of the sidebar but the
-#: noise, which has a box only (a slider cannot span 1e-12 … 1e-2 V/m).
+#: Numbers typed or dragged (:func:`app.inputs.number_input`): every number of the sidebar but
+#: those declared with a box only (the noise: a slider cannot span 1e-12 … 1e-2 V/m).
 NUMBERS = tuple(n for _, names, _ in SECTIONS for n in names
-                if isinstance(parameter(n), param.Number) and n != "noise")
-#: Number formats other than number_input's default (the magnetic noise is hundredths of nT).
-FORMATS = {"noise_b": "0.[0000]", "noise_g": "0.[0000]"}
+                if isinstance(parameter(n), param.Number) and declared(parameter(n)).get("slider", True))
+#: Number formats other than number_input's default, as declared (the magnetic noise is
+#: hundredths of nT).
+FORMATS = {n: declared(parameter(n))["fmt"] for n in PART_OF if "fmt" in declared(parameter(n))}
 
 
 def _widgets():
@@ -114,58 +111,56 @@ def sensor_kinds(s, tab):
     return {kind}
 
 
+def where(s, tab):
+    """What the inputs' visibility rules read (:class:`app.part.Where`) of scenario values ``s``
+    (flat: a :meth:`Scenario.snapshot`) on tab ``tab``."""
+    return Where(on_maps=tab == MAPS_TAB, on_track=tab == TRACK_TAB,
+                 kinds=frozenset(sensor_kinds(s, tab)), sensor=SENSORS[s.sensor],
+                 comparison=COMPARISONS[s.comparison], measure=MEASURE_LABELS[s.measure],
+                 plane=s.plane, layout=s.layout, sea_model=s.sea_model)
+
+
+def _read_by_where():
+    """The inputs :func:`where` reads, on every tab and for every comparison (recorded as it
+    reads them: no list to keep in step with it)."""
+    read = set()
+
+    class Values:
+        def __init__(self, **given):
+            self.given = given
+
+        def __getattr__(self, name):
+            read.add(name)
+            return self.given.get(name, parameter(name).default)
+
+    for tab in (MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB):
+        for comparison in COMPARISONS:
+            where(Values(comparison=comparison), tab)
+    return tuple(n for n in PART_OF if n in read)
+
+
+#: The inputs whose change can show or hide others: those :func:`where` reads.
+DECIDING = _read_by_where()
+
+
 def applies(name, s, tab):
     """Whether the input of parameter ``name`` applies to scenario values ``s`` (flat: a
-    :meth:`Scenario.snapshot`) on tab ``tab`` (others are hidden: Fixed y in x–y, target depth in
-    x–z, the maps' controls on the design tab)."""
+    :meth:`Scenario.snapshot`) on tab ``tab``, by its declared rule (others are hidden: Fixed y
+    in x–y, target depth in x–z, the maps' controls on the design tab)."""
     if tab in (CALIBRATION_TAB, SHAPE_TAB):  # problems with inputs of their own, in their tabs
         return False
-    kind = COMPARISONS[s.comparison]
-    on_maps = tab == MAPS_TAB
-    kinds = sensor_kinds(s, tab)
-    electric, magnetic = "E" in kinds, bool(kinds - {"E"})
-    # a static magnetic field does not see the sea: its inputs are the electric maps'
-    layered = s.sea_model == "layered" and electric
-    split = on_maps and kind == "moment_split"
-    rules = {
-        "sea_model": electric, "sea_depth": layered, "seabed_sigma": layered,
-        "Ph": electric, "Pv": electric, "mx": magnetic, "my": magnetic, "mz": magnetic,
-        "model": electric, "sigma": electric, "noise": electric,
-        "noise_b": bool(kinds & {"B", "BG"}), "noise_g": bool(kinds & {"G", "BG"}),
-        "baseline": bool(kinds & {"G", "BG"}),
-        "sensor_b": on_maps and kind == "sensor_kinds",
-        # the Track tab has a speed and heading of its own (track_speed, track_heading)
-        "speed": tab != TRACK_TAB, "heading": tab != TRACK_TAB,
-        "y": on_maps and s.plane == "x–z",
-        "z": s.plane == "x–y" or not on_maps,
-        "z_min": on_maps and s.plane == "x–z",
-        "z_max": on_maps and s.plane == "x–z",
-        "plane": on_maps, "comparison": on_maps, "measure": on_maps,
-        "difference": on_maps and MEASURE_LABELS[s.measure] in ("log10_det", "d_optimal"),
-        "d": on_maps and not (kind in ("moments_scaled", "moment_split", "sensor_kinds")
-                              and s.layout == "single"),
-        "layout": on_maps and kind in ("moments_scaled", "moment_split", "sensor_kinds"),
-        "k": on_maps and kind == "moments_scaled",
-        "Ph_b": split and SENSORS[s.sensor] == "E",
-        "Pv_b": split and SENSORS[s.sensor] == "E",
-        "mx_b": split and SENSORS[s.sensor] != "E",
-        "my_b": split and SENSORS[s.sensor] != "E",
-        "mz_b": split and SENSORS[s.sensor] != "E",
-        "d_ref": on_maps and kind == "spacing",
-    }
-    return rules.get(name, True)
+    return shown(name, where(s, tab))
 
 
 #: Selectors whose change moves other values by a rule (a layered sea puts the stations on the
-#: seabed): the note on what moved shows under them.
-MOVES = ("sea_model", "model", "sensor", "sensor_b")
+#: seabed), as declared: the note on what moved shows under them.
+MOVES = tuple(n for n in PART_OF if declared(parameter(n)).get("moves"))
 
 
 def _section(scenario, tabs, title, names, collapsed):
     """A sidebar card of ``names``' inputs; an input that does not apply is hidden, and so is the
     card when none does. A refused value's message shows under its input."""
-    watched = [*map(scenario.ref, ("plane", "comparison", "measure", "layout", "sea_model", "sensor",
-                                   "sensor_b")), tabs.param.active]
+    watched = [*map(scenario.ref, DECIDING), tabs.param.active]
     rows = {}  # name -> its row in the card, once built
 
     def widget(name):

@@ -1,17 +1,76 @@
 """The base of the dashboard's state parts (:mod:`app.parts`): a param class whose inputs are
 checked against hard limits, and whose refusals its owning :class:`app.scenario.Scenario` says.
 
+Each input is declared once, on its part, with everything the page needs: param's own (default,
+soft bounds, label with the unit, doc) and, in the parameter's ``metadata`` (:func:`declared`):
+
+- ``hard``: (lowest, highest, unit), the limits a typed value must keep (refused otherwise);
+- ``depth``: a depth below the sea surface (never negative; in the water column of a layered sea);
+- ``card``: (title, place) of the sidebar card it is shown in (:data:`CARDS`), and ``shown``: a
+  rule of a :class:`Where` saying when it applies (it is hidden otherwise);
+- ``moves``: a choice whose change moves other values by a rule (said under it); ``fmt``: its
+  slider's number format; ``slider``: False for a number with a box only.
+
+The sidebar, visibility, refusals, the URL and depth handling are derived from these.
+
 No Panel import.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import param
 
-#: Inputs that are depths below the sea surface (m): a negative value is above the surface.
-DEPTHS = ("h", "z", "z_min", "z_max")
+#: The sidebar's cards, in order: title -> collapsed when the page opens. Each input says in its
+#: declaration which card shows it, and where (its ``card``).
+CARDS = {"View": False, "Target": False, "Stations": False, "Sea": False,
+         "Scenario B of Figs. 3, 4, 6": True, "Advanced": True}
+
+
+@dataclass(frozen=True)
+class Where:
+    """What an input's visibility rule (its ``shown`` declaration) reads: the tab it would be shown
+    on and the choices that decide what applies there."""
+
+    on_maps: bool  # the Maps tab is shown
+    on_track: bool  # the Track tab is shown (it has a speed and heading of its own)
+    kinds: frozenset  # the sensor kinds (core kinds) the tab's inputs feed: A's and B's on the maps
+    sensor: str  # the scenario's sensor kind (core kind)
+    comparison: str  # the maps' comparison (core key)
+    measure: str  # the maps' measure (core key)
+    plane: str
+    layout: str
+    sea_model: str
+
+    @property
+    def electric(self):
+        return "E" in self.kinds
+
+    @property
+    def magnetic(self):
+        return bool(self.kinds - {"E"})
+
+    @property
+    def layered(self):
+        """A layered sea that matters: a static magnetic field does not see the sea."""
+        return self.sea_model == "layered" and self.electric
+
+    @property
+    def split(self):
+        """The Maps tab compares two moments (Fig. 4)."""
+        return self.on_maps and self.comparison == "moment_split"
+
+
+def declared(p):
+    """The declaration of parameter ``p`` beyond param's own (module docstring): a dict."""
+    return p.metadata or {}
+
+
+def limits(cls):
+    """The hard limits declared on the inputs of part ``cls``: name -> (lowest, highest, unit)."""
+    return {n: declared(cls.param[n])["hard"] for n in cls.names() if "hard" in declared(cls.param[n])}
 
 
 class Part(param.Parameterized):
@@ -19,8 +78,9 @@ class Part(param.Parameterized):
     overrides :meth:`problem`, any value it refuses) is reported to the owning
     :class:`Scenario`, which restores the last good value and says why."""
 
-    #: Hard limits: name -> (lowest, highest, unit). Depths (spec §7: z positive down, the sea
-    #: surface at z = 0) are never negative: there is no sea above the surface.
+    #: Hard limits: name -> (lowest, highest, unit), as declared (:func:`limits`; set on each part
+    #: class by app.parts). Depths (spec §7: z positive down, the sea surface at z = 0) are never
+    #: negative: there is no sea above the surface.
     accepted = {}
     #: Parameters checked beyond :attr:`accepted` (by an overridden :meth:`problem`).
     also_checked = ()
@@ -51,7 +111,7 @@ class Part(param.Parameterized):
         if isinstance(value, bool) or not ok_type or not math.isfinite(value):
             kind = "a whole number" if is_int else "a number"
             return f"{label} must be {kind}; got {str(value)[:40]!r}"
-        if name in DEPTHS and value < 0:
+        if declared(cls.param[name]).get("depth") and value < 0:
             return (f"{label} = {value:.10g} is above the sea surface: depths are measured down from "
                     f"the surface, {lo:g} … {hi:g} {unit}")
         if not lo <= value <= hi:

@@ -20,7 +20,7 @@ import param
 
 import core
 
-from .part import Part
+from .part import CARDS, Part, declared, limits
 
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
@@ -61,8 +61,11 @@ DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-rat
 MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
 STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
 SEA_MODELS = ("whole space", "layered")
-#: Depth parameters that must lie in the water column [0, D] in a layered sea.
-_COLUMN = ("z", "h", "z_min", "z_max")
+
+def _in(**declaration):
+    """An input's declaration beyond param's own (``hard``, ``depth``, ``card``, ``shown``, ``moves``,
+    ``fmt``, ``slider``: app.part), kept in the parameter's metadata."""
+    return declaration
 
 
 def _num(default, soft, label, doc, **kw):
@@ -73,36 +76,29 @@ class Target(Part):
     """The target: its sources (electric moments P_h, P_v; a magnetic moment vector), its motion
     and its depth."""
 
-    accepted = {
-        "Ph": (0.0, 1e5, "A·m"),
-        "Pv": (0.0, 1e5, "A·m"),
-        "mx": (-1e7, 1e7, "A·m²"),
-        "my": (-1e7, 1e7, "A·m²"),
-        "mz": (-1e7, 1e7, "A·m²"),
-        "speed": (0.01, 100.0, "m/s"),
-        "heading": (-180.0, 180.0, "°"),
-        "z": (0.0, 5000.0, "m"),
-    }
-
-    Ph = _num(100.0, (0, 1000), "P_h (A·m)", "Horizontal dipole moment of the target, A·m.")
-    Pv = _num(20.0, (0, 1000), "P_v (A·m)", "Vertical dipole moment of the target, A·m.")
-    mx = _num(-3000.0, (-20000, 20000), "m_x (A·m²)", "Magnetic moment of the target, x, A·m².")
-    my = _num(1000.0, (-20000, 20000), "m_y (A·m²)", "Magnetic moment of the target, y, A·m².")
-    mz = _num(5000.0, (-20000, 20000), "m_z (A·m²)", "Magnetic moment of the target, z (down), A·m².")
-    speed = _num(2.0 * math.sqrt(2.0), (0.1, 20), "Speed (m/s)", "Target speed, m/s (> 0).")
+    Ph = _num(100.0, (0, 1000), "P_h (A·m)", "Horizontal dipole moment of the target, A·m.",
+        metadata=_in(card=("Target", 0), hard=(0.0, 1e5, "A·m"), shown=lambda w: w.electric))
+    Pv = _num(20.0, (0, 1000), "P_v (A·m)", "Vertical dipole moment of the target, A·m.",
+        metadata=_in(card=("Target", 1), hard=(0.0, 1e5, "A·m"), shown=lambda w: w.electric))
+    mx = _num(-3000.0, (-20000, 20000), "m_x (A·m²)", "Magnetic moment of the target, x, A·m².",
+        metadata=_in(card=("Target", 2), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.magnetic))
+    my = _num(1000.0, (-20000, 20000), "m_y (A·m²)", "Magnetic moment of the target, y, A·m².",
+        metadata=_in(card=("Target", 3), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.magnetic))
+    mz = _num(5000.0, (-20000, 20000), "m_z (A·m²)", "Magnetic moment of the target, z (down), A·m².",
+        metadata=_in(card=("Target", 4), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.magnetic))
+    speed = _num(2.0 * math.sqrt(2.0), (0.1, 20), "Speed (m/s)", "Target speed, m/s (> 0).",
+        metadata=_in(card=("Target", 5), hard=(0.01, 100.0, "m/s"), shown=lambda w: not w.on_track))
     heading = _num(45.0, (-180, 180), "Heading (°)",
-                   "Course over ground, degrees from +x towards +y; the horizontal dipole points along it.")
-    z = _num(120.0, (0, 1000), "Target depth z (m)", "Target depth for the x–y plane, m (same axis as h).")
+                   "Course over ground, degrees from +x towards +y; the horizontal dipole points along it.",
+        metadata=_in(card=("Target", 6), hard=(-180.0, 180.0, "°"), shown=lambda w: not w.on_track))
+    z = _num(120.0, (0, 1000), "Target depth z (m)", "Target depth for the x–y plane, m (same axis as h).",
+        metadata=_in(card=("Target", 7), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.plane == "x–y" or not w.on_maps))
 
 
 class Stations(Part):
     """Where the sensors are: the paper's single / dual station at depth h and spacing d, and
     the custom layout of the Layout design and Track tabs."""
 
-    accepted = {
-        "h": (0.0, 5000.0, "m"),
-        "d": (0.1, 5000.0, "m"),
-    }
     also_checked = ("stations",)
 
     @classmethod
@@ -128,10 +124,13 @@ class Stations(Part):
 
     h = _num(100.0, (0, 1000), "Station depth h (m)",
              "Depth of the paper's stations, and of every custom station at it (Layout design, "
-             "Track): they move with h; one given its own depth in the table keeps it, m.")
-    d = _num(15.0, (0.5, 300), "Station spacing d (m)", "Station 2 sits at (d, 0, h); station 1 at (0, 0, h).")
+             "Track): they move with h; one given its own depth in the table keeps it, m.",
+        metadata=_in(card=("Stations", 0), hard=(0.0, 5000.0, "m"), depth=True))
+    d = _num(15.0, (0.5, 300), "Station spacing d (m)", "Station 2 sits at (d, 0, h); station 1 at (0, 0, h).",
+        metadata=_in(card=("Stations", 1), hard=(0.1, 5000.0, "m"), shown=lambda w: w.on_maps and not (w.comparison in ("moments_scaled", "moment_split", "sensor_kinds") and w.layout == "single")))
     layout = param.Selector(objects=["single", "dual"], default="dual", label="Layout for Figs. 3–4",
-                            doc="Station layout used by the moment comparisons.")
+                            doc="Station layout used by the moment comparisons.",
+        metadata=_in(card=("Stations", 2), shown=lambda w: w.on_maps and w.comparison in ("moments_scaled", "moment_split", "sensor_kinds")))
     stations = param.List([[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]], item_type=list,
                           label="Stations (x, y, z) (m)",
                           doc="Custom layout for the design tab: 1 to 8 stations anywhere, m.")
@@ -140,74 +139,70 @@ class Stations(Part):
 class Medium(Part):
     """The sea (spec §7) and the electric field model."""
 
-    accepted = {
-        "sea_depth": (0.5, 10000.0, "m"),
-        "seabed_sigma": (0.0, 1000.0, "S/m"),
-        "sigma": (1e-3, 100.0, "S/m"),
-    }
-
     sea_model = param.Selector(objects=list(SEA_MODELS), default="whole space", label="Sea",
                                doc="Whole space (the paper) or layered: insulating air above, a "
-                                   "seabed below; z and h are then depths in [0, D].")
-    sea_depth = _num(200.0, (1, 500), "Sea depth D (m)", "Water depth D of the layered sea, m.")
+                                   "seabed below; z and h are then depths in [0, D].",
+        metadata=_in(card=("Sea", 0), moves=True, shown=lambda w: w.electric))
+    sea_depth = _num(200.0, (1, 500), "Sea depth D (m)", "Water depth D of the layered sea, m.",
+        metadata=_in(card=("Sea", 1), hard=(0.5, 10000.0, "m"), shown=lambda w: w.layered))
     seabed_sigma = _num(1.0, (0, 10), "Seabed conductivity σb (S/m)",
-                        "Conductivity of the seabed half-space, S/m (0: insulating).")
-    sigma = _num(4.0, (0.1, 10), "Conductivity σ (S/m)", "Sea conductivity, S/m; shifts log10|det Γ| only.")
+                        "Conductivity of the seabed half-space, S/m (0: insulating).",
+        metadata=_in(card=("Sea", 2), hard=(0.0, 1000.0, "S/m"), shown=lambda w: w.layered))
+    sigma = _num(4.0, (0.1, 10), "Conductivity σ (S/m)", "Sea conductivity, S/m; shifts log10|det Γ| only.",
+        metadata=_in(card=("Advanced", 3), hard=(1e-3, 100.0, "S/m"), shown=lambda w: w.electric))
     model = param.Selector(objects=list(MODELS), default="exact dipole", label="Field model",
-                           doc="'paper' reproduces the printed equations, which are not a dipole field.")
+                           doc="'paper' reproduces the printed equations, which are not a dipole field.",
+        metadata=_in(card=("Advanced", 0), moves=True, shown=lambda w: w.electric))
 
 
 class Sensor(Part):
     """What every station measures, how noisy, how often, and what is unknown (spec §11)."""
 
-    accepted = {
-        "noise": (1e-12, 1e-2, "V/m"),
-        "noise_b": (1e-6, 1e3, "nT"),
-        "noise_g": (1e-6, 1e3, "nT/m"),
-        "baseline": (0.0, 10.0, "m"),
-        "T": (1e-3, 1000.0, "s"),
-        "steps": (1, 20, "instants"),
-    }
-
     sensor = param.Selector(objects=list(SENSORS), default="electric (E, V/m)", label="Sensor",
                             doc="What every station measures: the electric field (the paper), the "
-                                "magnetic field, its gradient tensor, or both (spec §11).")
-    noise = _num(1e-7, (1e-9, 1e-5), "Sensor noise (V/m)", "Noise standard deviation per component, V/m.")
+                                "magnetic field, its gradient tensor, or both (spec §11).",
+        metadata=_in(card=("View", 0), moves=True))
+    noise = _num(1e-7, (1e-9, 1e-5), "Sensor noise (V/m)", "Noise standard deviation per component, V/m.",
+        metadata=_in(card=("Advanced", 4), hard=(1e-12, 1e-2, "V/m"), slider=False, shown=lambda w: w.electric))
     noise_b = _num(0.01, (1e-3, 10), "Magnetometer noise (nT)",
-                   "Noise standard deviation per field component, nT.")
+                   "Noise standard deviation per field component, nT.",
+        metadata=_in(card=("Advanced", 5), hard=(1e-6, 1e3, "nT"), fmt='0.[0000]', shown=lambda w: bool(w.kinds & {"B", "BG"})))
     noise_g = _num(0.01, (1e-3, 10), "Gradiometer noise (nT/m)",
-                   "Noise standard deviation per tensor component, nT/m.")
+                   "Noise standard deviation per tensor component, nT/m.",
+        metadata=_in(card=("Advanced", 6), hard=(1e-6, 1e3, "nT/m"), fmt='0.[0000]', shown=lambda w: bool(w.kinds & {"G", "BG"})))
     baseline = _num(0.0, (0, 2), "Gradiometer baseline L (m)",
                     "0: the point gradient tensor. L > 0: magnetometers ±L/2 along each axis read "
                     "as differences (seed 003: 0.5 m). It sets the scale: one gradiometer alone "
                     "becomes observable, its bound growing steeply with range / L; targets within "
-                    "L of a station are masked.")
-    T = _num(1.0, (0.1, 10), "Sample interval T (s)", "Time between measurements, s.")
+                    "L of a station are masked.",
+        metadata=_in(card=("Advanced", 7), hard=(0.0, 10.0, "m"), shown=lambda w: bool(w.kinds & {"G", "BG"})))
+    T = _num(1.0, (0.1, 10), "Sample interval T (s)", "Time between measurements, s.",
+        metadata=_in(card=("Advanced", 2), hard=(1e-3, 1000.0, "s")))
     steps = param.Integer(3, softbounds=(1, 10), label="Instants N (Fisher)",
-                          doc="Number of instants for the Fisher measures.")
+                          doc="Number of instants for the Fisher measures.",
+        metadata=_in(card=("Advanced", 8), hard=(1, 20, "instants")))
     state_set = param.Selector(objects=list(STATE_SETS), default="all 7 unknown", label="Unknown states",
-                               doc="Treat the moments as known to make one station observable.")
+                               doc="Treat the moments as known to make one station observable.",
+        metadata=_in(card=("Advanced", 1)))
 
 
 class Region(Part):
     """The grid of target positions the maps and the design cover."""
 
-    accepted = {
-        "y": (-5000.0, 5000.0, "m"),
-        "extent": (1.0, 10000.0, "m"),
-        "z_min": (0.0, 5000.0, "m"),
-        "z_max": (0.0, 5000.0, "m"),
-        "resolution": (20, 400, "points per axis"),
-    }
-
     plane = param.Selector(objects=["x–y", "x–z"], default="x–y", label="Map plane",
-                           doc="x–y: horizontal plane at target depth z. x–z: vertical plane at fixed y.")
-    y = _num(50.0, (-500, 500), "Fixed y (m)", "y of the x–z plane, m.")
-    extent = _num(300.0, (10, 2000), "Half-width of x (and y) (m)", "Maps span ±extent in x (and y), m.")
-    z_min = _num(100.0, (0, 1000), "x–z plane: z from (m)", "Shallowest target depth of the x–z plane, m.")
-    z_max = _num(400.0, (0, 2000), "x–z plane: z to (m)", "Deepest target depth of the x–z plane, m.")
+                           doc="x–y: horizontal plane at target depth z. x–z: vertical plane at fixed y.",
+        metadata=_in(card=("View", 5), shown=lambda w: w.on_maps))
+    y = _num(50.0, (-500, 500), "Fixed y (m)", "y of the x–z plane, m.",
+        metadata=_in(card=("Target", 8), hard=(-5000.0, 5000.0, "m"), shown=lambda w: w.on_maps and w.plane == "x–z"))
+    extent = _num(300.0, (10, 2000), "Half-width of x (and y) (m)", "Maps span ±extent in x (and y), m.",
+        metadata=_in(card=("Advanced", 9), hard=(1.0, 10000.0, "m")))
+    z_min = _num(100.0, (0, 1000), "x–z plane: z from (m)", "Shallowest target depth of the x–z plane, m.",
+        metadata=_in(card=("Advanced", 10), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.on_maps and w.plane == "x–z"))
+    z_max = _num(400.0, (0, 2000), "x–z plane: z to (m)", "Deepest target depth of the x–z plane, m.",
+        metadata=_in(card=("Advanced", 11), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.on_maps and w.plane == "x–z"))
     resolution = param.Integer(200, softbounds=(20, 400), label="Grid points per axis",
-                               doc="Map resolution; at most 400 per axis.")
+                               doc="Map resolution; at most 400 per axis.",
+        metadata=_in(card=("Advanced", 12), hard=(20, 400, "points per axis")))
 
     def rules(self):
         if self.z_min >= self.z_max:
@@ -218,42 +213,36 @@ class Region(Part):
 class Maps(Part):
     """The Maps tab's own settings: the measure, the comparison and scenario B."""
 
-    accepted = {
-        "k": (1e-3, 1e3, ""),
-        "Ph_b": (0.0, 1e5, "A·m"),
-        "Pv_b": (0.0, 1e5, "A·m"),
-        "d_ref": (0.1, 5000.0, "m"),
-        "mx_b": (-1e7, 1e7, "A·m²"),
-        "my_b": (-1e7, 1e7, "A·m²"),
-        "mz_b": (-1e7, 1e7, "A·m²"),
-    }
-
     measure = param.Selector(objects=list(MEASURE_LABELS), default="log10|det Γ| (paper)", label="Measure",
-                             doc="What the maps show.")
+                             doc="What the maps show.",
+        metadata=_in(card=("View", 1), shown=lambda w: w.on_maps))
     comparison = param.Selector(objects=list(COMPARISONS), default="Dual − single (Fig. 5)", label="Compare",
-                                doc="Which two scenarios the maps A and B and their difference show.")
+                                doc="Which two scenarios the maps A and B and their difference show.",
+        metadata=_in(card=("View", 2), shown=lambda w: w.on_maps))
     difference = param.Selector(objects=list(DIFFERENCES), default="log10 Δ|det| (paper, Δ ≤ 0 blank)",
-                                label="Difference map", doc="How B is compared with A.")
-    k = _num(10.0, (0.1, 100), "Moment factor k", "Fig. 3: B has both moments × k.")
-    Ph_b = _num(70.7, (0, 1000), "B: P_h (A·m)", "Fig. 4: horizontal moment of scenario B, A·m.")
-    Pv_b = _num(70.7, (0, 1000), "B: P_v (A·m)", "Fig. 4: vertical moment of scenario B, A·m.")
-    d_ref = _num(10.0, (0.5, 300), "Reference spacing (m)", "Fig. 6: spacing of scenario A, m.")
+                                label="Difference map", doc="How B is compared with A.",
+        metadata=_in(card=("View", 4), shown=lambda w: w.on_maps and w.measure in ("log10_det", "d_optimal")))
+    k = _num(10.0, (0.1, 100), "Moment factor k", "Fig. 3: B has both moments × k.",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 0), hard=(1e-3, 1e3, ""), shown=lambda w: w.on_maps and w.comparison == "moments_scaled"))
+    Ph_b = _num(70.7, (0, 1000), "B: P_h (A·m)", "Fig. 4: horizontal moment of scenario B, A·m.",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 1), hard=(0.0, 1e5, "A·m"), shown=lambda w: w.split and w.sensor == "E"))
+    Pv_b = _num(70.7, (0, 1000), "B: P_v (A·m)", "Fig. 4: vertical moment of scenario B, A·m.",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 2), hard=(0.0, 1e5, "A·m"), shown=lambda w: w.split and w.sensor == "E"))
+    d_ref = _num(10.0, (0.5, 300), "Reference spacing (m)", "Fig. 6: spacing of scenario A, m.",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 6), hard=(0.1, 5000.0, "m"), shown=lambda w: w.on_maps and w.comparison == "spacing"))
     sensor_b = param.Selector(objects=list(SENSORS), default="magnetometer + gradiometer (BG)",
-                              label="B: sensor", doc="Sensor comparison: the kind of scenario B.")
-    mx_b = _num(0.0, (-20000, 20000), "B: m_x (A·m²)", "Moment split, magnetic: m_x of scenario B, A·m².")
-    my_b = _num(0.0, (-20000, 20000), "B: m_y (A·m²)", "Moment split, magnetic: m_y of scenario B, A·m².")
-    mz_b = _num(6000.0, (-20000, 20000), "B: m_z (A·m²)", "Moment split, magnetic: m_z of scenario B, A·m².")
+                              label="B: sensor", doc="Sensor comparison: the kind of scenario B.",
+        metadata=_in(card=("View", 3), moves=True, shown=lambda w: w.on_maps and w.comparison == "sensor_kinds"))
+    mx_b = _num(0.0, (-20000, 20000), "B: m_x (A·m²)", "Moment split, magnetic: m_x of scenario B, A·m².",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 3), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.split and w.sensor != "E"))
+    my_b = _num(0.0, (-20000, 20000), "B: m_y (A·m²)", "Moment split, magnetic: m_y of scenario B, A·m².",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 4), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.split and w.sensor != "E"))
+    mz_b = _num(6000.0, (-20000, 20000), "B: m_z (A·m²)", "Moment split, magnetic: m_z of scenario B, A·m².",
+        metadata=_in(card=("Scenario B of Figs. 3, 4, 6", 5), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.split and w.sensor != "E"))
 
 
 class Design(Part):
     """The Layout design tab's own settings."""
-
-    accepted = {
-        "n_stations": (1, MAX_STATIONS, "stations"),
-        "ellipse_x": (-5000.0, 5000.0, "m"),
-        "ellipse_y": (-5000.0, 5000.0, "m"),
-        "threshold": (0.01, 1e5, "m"),
-    }
 
     criterion = param.Selector(objects=list(CRITERIA), default="Mean D-optimal over the region",
                                label="Spacing criterion", doc="What the best spacing maximises.")
@@ -263,57 +252,58 @@ class Design(Part):
                                  label="Optimise: layout shape",
                                  doc="Shape of the N-station layout to optimise ('free': any positions, slow).")
     n_stations = param.Integer(4, softbounds=(1, 8), label="Optimise: stations N",
-                               doc="Number of stations of the layout to optimise, 1 to 8.")
+                               doc="Number of stations of the layout to optimise, 1 to 8.",
+        metadata=_in(hard=(1, MAX_STATIONS, "stations")))
     ellipse_x = param.Number(100.0, softbounds=(-1000.0, 1000.0),
                              label="Error ellipse at x (m)",
-                             doc="x of the target whose horizontal error ellipse is drawn, m.")
+                             doc="x of the target whose horizontal error ellipse is drawn, m.",
+        metadata=_in(hard=(-5000.0, 5000.0, "m")))
     ellipse_y = param.Number(100.0, softbounds=(-1000.0, 1000.0),
                              label="Error ellipse at y (m)",
-                             doc="y of the target whose horizontal error ellipse is drawn, m.")
+                             doc="y of the target whose horizontal error ellipse is drawn, m.",
+        metadata=_in(hard=(-5000.0, 5000.0, "m")))
     threshold = _num(10.0, (0.1, 100), "CRLB threshold (m)",
-                     "For 'area within threshold': position error (1σ, m) that counts as good.")
+                     "For 'area within threshold': position error (1σ, m) that counts as good.",
+        metadata=_in(hard=(0.01, 1e5, "m")))
 
 
 class Track(Part):
     """The Track tab's own settings (app/track.py): a straight track over the custom stations,
     at the target depth z, with the target's moments and the sensor above."""
 
-    accepted = {
-        "track_x0": (-5000.0, 5000.0, "m"),
-        "track_y0": (-5000.0, 5000.0, "m"),
-        "track_heading": (-180.0, 180.0, "°"),
-        "track_speed": (0.1, 50.0, "m/s"),
-        "track_duration": (2.0, 600.0, "s"),
-        "track_sigma_a": (0.0, 10.0, "m/s²"),
-        "track_alpha": (0.0, 100.0, "moment²/step"),
-        "track_runs": (1, 20, "runs"),
-    }
-
     track_x0 = param.Number(-250.0, softbounds=(-1000.0, 1000.0),
-                            label="Track start x (m)", doc="x of the track's start, m.")
+                            label="Track start x (m)", doc="x of the track's start, m.",
+        metadata=_in(hard=(-5000.0, 5000.0, "m")))
     track_y0 = param.Number(-120.0, softbounds=(-1000.0, 1000.0),
-                            label="Track start y (m)", doc="y of the track's start, m.")
+                            label="Track start y (m)", doc="y of the track's start, m.",
+        metadata=_in(hard=(-5000.0, 5000.0, "m")))
     track_heading = param.Number(25.0, softbounds=(-180.0, 180.0), label="Track heading (°)",
-                                 doc="Course of the straight track, degrees from +x towards +y.")
+                                 doc="Course of the straight track, degrees from +x towards +y.",
+        metadata=_in(hard=(-180.0, 180.0, "°")))
     track_speed = param.Number(2.0, softbounds=(0.1, 20.0),
-                               label="Track speed (m/s)", doc="Target speed along the track, m/s.")
+                               label="Track speed (m/s)", doc="Target speed along the track, m/s.",
+        metadata=_in(hard=(0.1, 50.0, "m/s")))
     track_duration = param.Number(250.0, softbounds=(10.0, 600.0),
                                   label="Track duration (s)",
-                                  doc="Length of the track in time, s (one measurement every T).")
+                                  doc="Length of the track in time, s (one measurement every T).",
+        metadata=_in(hard=(2.0, 600.0, "s")))
     track_axes = param.Selector(objects=[3, 2], default=3, label="Sensor axes",
                                 doc="3: every station measures Ex, Ey, Ez; 2: horizontal Ex, Ey only.")
     track_sigma_a = param.Number(0.1, softbounds=(0.0, 1.0),
                                  label="Acceleration noise σa (m/s²)",
-                                 doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).")
+                                 doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).",
+        metadata=_in(hard=(0.0, 10.0, "m/s²")))
     track_alpha = param.Number(0.001, softbounds=(0.0, 0.1),
                                label="Moment random walk α (moment²/step)",
                                doc="Variance of the moments' random walk per step: (A·m)² for the "
-                                   "electric dipole (seed 001: 0.001), (A·m²)² for a magnetic one.")
+                                   "electric dipole (seed 001: 0.001), (A·m²)² for a magnetic one.",
+        metadata=_in(hard=(0.0, 100.0, "moment²/step")))
     track_filter = param.Selector(objects=["bank", "ekf", "puekf"], default="bank", label="Tracker",
                                   doc="bank: seed 001's 12 filters, no prior, ML selection; ekf / "
                                       "puekf: one filter from a prior about the truth.")
     track_runs = param.Integer(5, softbounds=(1, 20), label="Monte-Carlo runs",
-                               doc="Noise realisations shown and averaged in the TRMSE, 1 to 20.")
+                               doc="Noise realisations shown and averaged in the TRMSE, 1 to 20.",
+        metadata=_in(hard=(1, 20, "runs")))
 
 
 class Calibration(Part):
@@ -321,20 +311,6 @@ class Calibration(Part):
     parsed, and refused, by that tab."""
 
     own_presets = True
-
-    accepted = {
-        "cal_roll_deg": (0.0, 45.0, "°"),
-        "cal_pitch_deg": (0.0, 30.0, "°"),
-        "cal_n_attitudes": (1, 120, "attitudes"),
-        "cal_noise_nt": (0.1, 5000.0, "nT"),
-        "cal_angle_noise_deg": (0.0, 2.0, "°"),
-        "cal_be_n": (-1e5, 1e5, "nT"),
-        "cal_be_e": (-1e5, 1e5, "nT"),
-        "cal_be_d": (-1e5, 1e5, "nT"),
-        "cal_iterations": (1, 5000, "iterations"),
-        "cal_p0_bp_nt": (0.01, 1e6, "nT"),
-        "cal_seed": (0, 1_000_000, ""),
-    }
 
     cal_source = param.Selector(
         objects=["Designed manoeuvre", "Seed 004 simulation", "Seed 004 Table 1", "Uploaded CSV"],
@@ -346,29 +322,40 @@ class Calibration(Part):
     cal_headings = param.String("0, 90, 180, 270", label="Headings (°)",
                                 doc="Designed manoeuvre: headings sailed in turn, degrees from north.")
     cal_roll_deg = param.Number(10.0, softbounds=(0.0, 45.0), label="Roll amplitude (°)",
-                                doc="Designed manoeuvre: roll = amplitude · cos(2πn/N), degrees.")
+                                doc="Designed manoeuvre: roll = amplitude · cos(2πn/N), degrees.",
+        metadata=_in(hard=(0.0, 45.0, "°")))
     cal_pitch_deg = param.Number(5.0, softbounds=(0.0, 30.0), label="Pitch amplitude (°)",
-                                 doc="Designed manoeuvre: pitch = amplitude · sin(2πn/N), degrees.")
+                                 doc="Designed manoeuvre: pitch = amplitude · sin(2πn/N), degrees.",
+        metadata=_in(hard=(0.0, 30.0, "°")))
     cal_n_attitudes = param.Integer(12, softbounds=(1, 120), label="Attitudes N",
-                                    doc="Number of attitudes of a designed or simulated manoeuvre.")
+                                    doc="Number of attitudes of a designed or simulated manoeuvre.",
+        metadata=_in(hard=(1, 120, "attitudes")))
     cal_noise_nt = param.Number(100.0, softbounds=(0.1, 5000.0), label="Reading error bound ± (nT)",
                                 doc="Uniform reading errors within ± this, nT; the filter and the CRLB "
-                                    "use σ = bound/√3.")
+                                    "use σ = bound/√3.",
+        metadata=_in(hard=(0.1, 5000.0, "nT")))
     cal_angle_noise_deg = param.Number(0.05, softbounds=(0.0, 2.0), label="Angle error bound ± (°)",
-                                       doc="Uniform errors of each recorded angle within ± this, degrees.")
+                                       doc="Uniform errors of each recorded angle within ± this, degrees.",
+        metadata=_in(hard=(0.0, 2.0, "°")))
     cal_be_n = param.Number(34000.0, softbounds=(-1e5, 1e5), label="Be north (nT)",
-                            doc="Geomagnetic field, north component, nT.")
+                            doc="Geomagnetic field, north component, nT.",
+        metadata=_in(hard=(-1e5, 1e5, "nT")))
     cal_be_e = param.Number(2000.0, softbounds=(-1e5, 1e5), label="Be east (nT)",
-                            doc="Geomagnetic field, east component, nT.")
+                            doc="Geomagnetic field, east component, nT.",
+        metadata=_in(hard=(-1e5, 1e5, "nT")))
     cal_be_d = param.Number(35000.0, softbounds=(-1e5, 1e5), label="Be down (nT)",
-                            doc="Geomagnetic field, down component, nT.")
+                            doc="Geomagnetic field, down component, nT.",
+        metadata=_in(hard=(-1e5, 1e5, "nT")))
     cal_iterations = param.Integer(600, softbounds=(1, 5000), label="Kalman iterations",
-                                   doc="Filter steps; the readings are reused cyclically (seed 004).")
+                                   doc="Filter steps; the readings are reused cyclically (seed 004).",
+        metadata=_in(hard=(1, 5000, "iterations")))
     cal_p0_bp_nt = param.Number(3000.0, softbounds=(0.01, 1e6), label="Prior σ of Bp in P(0) (nT)",
                                 doc="Square root of P(0)'s Bp entry, nT (K entries: 1). Small values "
-                                    "slow the filter down.")
+                                    "slow the filter down.",
+        metadata=_in(hard=(0.01, 1e6, "nT")))
     cal_seed = param.Integer(4, softbounds=(0, 1_000_000), label="Random seed",
-                             doc="Seed of the simulated attitudes and errors.")
+                             doc="Seed of the simulated attitudes and errors.",
+        metadata=_in(hard=(0, 1_000_000, "")))
 
 
 class Shape(Part):
@@ -378,51 +365,46 @@ class Shape(Part):
 
     own_presets = True
 
-    accepted = {
-        "shape_height": (0.1, 20.0, "m"),
-        "shape_radius": (0.05, 10.0, "m"),
-        "shape_inner_height": (0.0, 20.0, "m"),
-        "shape_inner_radius": (0.0, 10.0, "m"),
-        "shape_roll": (-180.0, 180.0, "°"),
-        "shape_pitch": (-180.0, 180.0, "°"),
-        "shape_yaw": (-180.0, 180.0, "°"),
-        "shape_mx": (-1000.0, 1000.0, "A·m² per cell"),
-        "shape_my": (-1000.0, 1000.0, "A·m² per cell"),
-        "shape_mz": (-1000.0, 1000.0, "A·m² per cell"),
-        "shape_offset": (-100.0, 100.0, "m"),
-        "shape_above": (-100.0, 100.0, "m"),
-        "shape_noise": (1e-5, 10.0, "nT/m"),
-        "shape_outlier_size": (0.0, 1e5, "σ"),
-        "shape_runs": (1, 20, "passes"),
-        "shape_seed": (0, 1_000_000, ""),
-    }
-
     shape_type = param.Selector(objects=["cylinder", "disc"], default="cylinder", label="Target type",
                                 doc="Seed 003: a cylinder has H > R (read as a line), a disc H ≤ R "
                                     "(read as a plane). Switching sets typical sizes if H, R disagree.")
-    shape_height = _num(3.0, (0.1, 6.0), "Height H (m)", "Target height H along its axis, m.")
-    shape_radius = _num(0.5, (0.05, 3.0), "Radius R (m)", "Target radius R, m.")
+    shape_height = _num(3.0, (0.1, 6.0), "Height H (m)", "Target height H along its axis, m.",
+        metadata=_in(hard=(0.1, 20.0, "m")))
+    shape_radius = _num(0.5, (0.05, 3.0), "Radius R (m)", "Target radius R, m.",
+        metadata=_in(hard=(0.05, 10.0, "m")))
     shape_inner_height = _num(0.0, (0.0, 6.0), "Cavity height H_in (m, 0: solid)",
-                              "Hollow target: height of the coaxial cavity, m (0 with R_in = 0: solid).")
+                              "Hollow target: height of the coaxial cavity, m (0 with R_in = 0: solid).",
+        metadata=_in(hard=(0.0, 20.0, "m")))
     shape_inner_radius = _num(0.0, (0.0, 3.0), "Cavity radius R_in (m, 0: solid)",
-                              "Hollow target: radius of the coaxial cavity, m (< R).")
-    shape_roll = _num(30.0, (-180, 180), "Roll θ (°)", "Attitude: roll about x, degrees (R = Rz·Ry·Rx).")
-    shape_pitch = _num(45.0, (-180, 180), "Pitch β (°)", "Attitude: pitch about y, degrees.")
-    shape_yaw = _num(60.0, (-180, 180), "Yaw φ (°)", "Attitude: yaw about z, degrees.")
-    shape_mx = _num(-3.0, (-10, 10), "Cell moment mx (A·m²)", "Moment of each 0.1 m cell, x (A·m²).")
-    shape_my = _num(1.0, (-10, 10), "Cell moment my (A·m²)", "Moment of each 0.1 m cell, y (A·m²).")
-    shape_mz = _num(5.0, (-10, 10), "Cell moment mz (A·m²)", "Moment of each 0.1 m cell, z (A·m²).")
+                              "Hollow target: radius of the coaxial cavity, m (< R).",
+        metadata=_in(hard=(0.0, 10.0, "m")))
+    shape_roll = _num(30.0, (-180, 180), "Roll θ (°)", "Attitude: roll about x, degrees (R = Rz·Ry·Rx).",
+        metadata=_in(hard=(-180.0, 180.0, "°")))
+    shape_pitch = _num(45.0, (-180, 180), "Pitch β (°)", "Attitude: pitch about y, degrees.",
+        metadata=_in(hard=(-180.0, 180.0, "°")))
+    shape_yaw = _num(60.0, (-180, 180), "Yaw φ (°)", "Attitude: yaw about z, degrees.",
+        metadata=_in(hard=(-180.0, 180.0, "°")))
+    shape_mx = _num(-3.0, (-10, 10), "Cell moment mx (A·m²)", "Moment of each 0.1 m cell, x (A·m²).",
+        metadata=_in(hard=(-1000.0, 1000.0, "A·m² per cell")))
+    shape_my = _num(1.0, (-10, 10), "Cell moment my (A·m²)", "Moment of each 0.1 m cell, y (A·m²).",
+        metadata=_in(hard=(-1000.0, 1000.0, "A·m² per cell")))
+    shape_mz = _num(5.0, (-10, 10), "Cell moment mz (A·m²)", "Moment of each 0.1 m cell, z (A·m²).",
+        metadata=_in(hard=(-1000.0, 1000.0, "A·m² per cell")))
     shape_offset = _num(5.0, (-30, 30), "Track lateral offset y (m)",
-                        "y of the straight track along x (the target's centre is the origin), m.")
+                        "y of the straight track along x (the target's centre is the origin), m.",
+        metadata=_in(hard=(-100.0, 100.0, "m")))
     shape_above = _num(5.0, (-30, 30), "Track height above the target (m)",
-                       "Height of the track above the target's centre, m (z = −height: z is down).")
+                       "Height of the track above the target's centre, m (z = −height: z is down).",
+        metadata=_in(hard=(-100.0, 100.0, "m")))
     shape_noise = param.Number(0.01, softbounds=(1e-3, 1.0), label="Noise σ (nT/m)",
-                               doc="Gaussian noise of each tensor component, nT/m (seed 003: 0.01).")
+                               doc="Gaussian noise of each tensor component, nT/m (seed 003: 0.01).",
+        metadata=_in(hard=(1e-5, 10.0, "nT/m")))
     shape_outliers = param.String("", label="Outliers at platform x (m)",
                                   doc="Comma-separated x positions (m) of the samples that get an "
                                       "outlier on all five components (Fig. 5: −20, −10, 0); empty: none.")
     shape_outlier_size = _num(500.0, (0, 2000), "Outlier size (σ)",
-                              "Added to each hit component, in units of the noise σ (Fig. 5: 500).")
+                              "Added to each hit component, in units of the noise σ (Fig. 5: 500).",
+        metadata=_in(hard=(0.0, 1e5, "σ")))
     shape_window = param.Selector(objects=["seed 003 window (lag 5)", "one sample"],
                                   default="seed 003 window (lag 5)", label="Filter update",
                                   doc="Seed 003's window of three lagged readings (eq. 15, the paper's "
@@ -430,8 +412,10 @@ class Shape(Part):
                                       "optimistic). One sample: the honest update, shown for "
                                       "comparison (it misreads the axis in about half of the passes).")
     shape_runs = param.Integer(1, softbounds=(1, 20), label="Monte-Carlo passes",
-                               doc="Noise realisations: errors and shape are their medians, 1 to 20.")
-    shape_seed = param.Integer(0, softbounds=(0, 100), label="Random seed", doc="Seed of the noise.")
+                               doc="Noise realisations: errors and shape are their medians, 1 to 20.",
+        metadata=_in(hard=(1, 20, "passes")))
+    shape_seed = param.Integer(0, softbounds=(0, 100), label="Random seed", doc="Seed of the noise.",
+        metadata=_in(hard=(0, 1_000_000, "")))
 
 
 #: The parts of a scenario: attribute -> class. Their parameter names are unique across them.
@@ -441,13 +425,40 @@ PARTS = {"target": Target, "stations": Stations, "medium": Medium, "sensor": Sen
 #: Each parameter's part: name -> attribute of :data:`PARTS`.
 PART_OF = {n: attr for attr, cls in PARTS.items() for n in cls.names()}
 assert len(PART_OF) == sum(len(cls.names()) for cls in PARTS.values()), "parameter names must be unique"
+for _cls in PARTS.values():  # each part's limits, as its inputs declare them
+    _cls.accepted = limits(_cls)
 #: Every part's hard limits: name -> (lowest, highest, unit).
 ACCEPTED = {n: lim for cls in PARTS.values() for n, lim in cls.accepted.items()}
+#: Inputs that are depths below the sea surface (m; never negative), as declared: in a layered
+#: sea they lie in the water column [0, D].
+DEPTHS = tuple(n for n, a in PART_OF.items() if declared(PARTS[a].param[n]).get("depth"))
 
 
 def parameter(name):
     """The class-level param.Parameter of input ``name`` (its label, default, type)."""
     return PARTS[PART_OF[name]].param[name]
+
+
+def sidebar():
+    """The sidebar as the inputs declare it: ((card title, [input names in their places],
+    collapsed), …) in :data:`CARDS`' order."""
+    placed = {}
+    for name in PART_OF:
+        card = declared(parameter(name)).get("card")
+        if card is not None:
+            placed.setdefault(card[0], []).append((card[1], name))
+    unknown = set(placed) - set(CARDS)
+    if unknown:
+        raise KeyError(f"inputs declared on cards that do not exist: {sorted(unknown)}")
+    return tuple((title, [n for _, n in sorted(placed.get(title, []))], collapsed)
+                 for title, collapsed in CARDS.items())
+
+
+def shown(name, where):
+    """Whether input ``name`` applies where ``where`` (:class:`Where`) says, by its declared rule
+    (an input with no rule always applies)."""
+    rule = declared(parameter(name)).get("shown")
+    return True if rule is None else bool(rule(where))
 
 
 def inputs(*parts, but=()):

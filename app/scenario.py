@@ -31,12 +31,12 @@ import core
 
 # The parts live in app/parts.py (their base in app/part.py); their names are this module's too
 # (``from app.scenario import Target``), as before the split.
-from .part import DEPTHS, Part  # noqa: F401
+from .part import CARDS, Part, Where  # noqa: F401
 from .parts import (  # noqa: F401
-    _COLUMN,
     ACCEPTED,
     COMPARISONS,
     CRITERIA,
+    DEPTHS,
     DIFFERENCES,
     ERROR_QUANTITIES,
     MAGNETIC_KNOWN,
@@ -62,6 +62,8 @@ from .parts import (  # noqa: F401
     defaults,
     inputs,
     parameter,
+    shown,
+    sidebar,
 )
 
 _COMMON = dict(Ph=100.0, Pv=20.0, h=100.0, z=120.0, speed=2.0 * math.sqrt(2.0), heading=45.0,
@@ -293,7 +295,7 @@ class Scenario(param.Parameterized):
         self.param.update(message="; ".join(notes) + f". Kept the last good {kept}.",
                           refused=[ev.name for ev in events])
 
-    def column_problems(self, stations=None, names=_COLUMN):
+    def column_problems(self, stations=None, names=DEPTHS):
         """In a layered sea, why depths (and custom stations) are outside [0, D]; else []."""
         if self.medium.sea_model != "layered":
             return []
