@@ -398,7 +398,11 @@ def main(argv=None):
                 ph = page.evaluate(PH_VALUE_JS, SLIDER['name'])
                 drawn_sum, drawn_n, kind = page.evaluate(MAP_A_SUM_JS)
                 exp_sum, exp_n = expected_map_a_sum(ph)
-                ok = drawn_n == exp_n and abs(drawn_sum - exp_sum) <= 1e-9 * max(1.0, abs(exp_sum))
+                # the image travels as float32 normalised to its colour range (6e-8 relative), and
+                # the server's kernels (loaded from numba's cache) and these (compiled here) differ
+                # in the last bits: 9e-8 relative seen on a magnetic map A; a stale image is the
+                # map of another value, ≥ 5 % of the slider's range away, which moves it far more
+                ok = drawn_n == exp_n and abs(drawn_sum - exp_sum) <= 1e-6 * max(1.0, abs(exp_sum))
                 if not ok:
                     raise AssertionError(f"drawn map A (sum {drawn_sum}, n {drawn_n}) is not P_h = {ph} "
                                          f"(expected sum {exp_sum}, n {exp_n}): a stale image?")
@@ -411,7 +415,7 @@ def main(argv=None):
                 r.update(ph=ph, text=text, warm=warm, dtype=kind)
                 rows.append(r)
                 tag = "warm-up" if warm else f"{k - args.warmup + 1:3d}"
-                print(f"{tag:>7}  P_h {before_text:>7} -> {text:>7}  drawn {r['drawn']:7.1f} ms  frame "
+                print(f"{tag:>7}  {SLIDER['name']} {before_text:>7} -> {text:>7}  drawn {r['drawn']:7.1f} ms  frame "
                       f"{r['frame']:7.1f}  sent {r['sent'] or float('nan'):5.1f}  1st map patch "
                       f"{r['first_patch'] or float('nan'):7.1f}  last patch in {r['last_patch_end'] or float('nan'):7.1f}"
                       f"  per plot {', '.join(f'{x:.0f}' for x in r['per_plot'])}  stale {r['stale']}"
