@@ -182,7 +182,7 @@ def unobservable_text(s, stations, kind="E"):
     point, spec §4 and §11), else only that Γ is rank-deficient."""
     options = s.core_options(kind)
     if kind == "E":
-        if len(stations) == 1 and not options["known"] and options["sea"] is None:
+        if len(stations) == 1 and not options["known"] and options["sensor"].sea is None:
             return "unobservable (rank 6): colours are round-off"
         n = 7 - len(options["known"])
     else:
@@ -224,8 +224,7 @@ def unobservable_note(s: ScenarioValues, results, stations, moments, kinds=("E",
         options = s.core_options(kind)
         if kind == "E" and len(st) == 1 and not options["known"]:
             probe = _probe(s, st, mom)
-            n = core.unobservable_direction(probe, st, T=s.T, sigma=s.sigma,
-                                            model=options["model"], sea=options["sea"])
+            n = core.unobservable_direction(probe, st, T=s.T, sensor=options["sensor"])
             nice = ", ".join(f"{v:+.3f}" for v in n)
             lines.append(
                 f"{name}: one station, source strength unknown: rank Γ = 6 < 7 at every point "

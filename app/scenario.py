@@ -462,9 +462,10 @@ class ScenarioValues(types.SimpleNamespace):
 
     def core_options(self, kind=None, measure=True):
         """Keywords of core's map functions for sensor ``kind`` (a :data:`SENSORS` value; default
-        the scenario's): the electric medium, or a magnetic ``core.Sensor`` (its noise in nT and
-        nT/m; a static field does not see the sea). ``measure``: with the maps' measure
-        (:meth:`measure_key`); the Layout design tab's computations read none."""
+        the scenario's): the measurement as one ``core.Sensor``, electric (its noise in V/m, the
+        medium) or magnetic (its noise in nT and nT/m; a static field does not see the sea).
+        ``measure``: with the maps' measure (:meth:`measure_key`); the Layout design tab's
+        computations read none."""
         kind = SENSORS[self.sensor] if kind is None else kind
         known = STATE_SETS[self.state_set]
         common = dict(T=self.T, steps=int(self.steps))
@@ -476,8 +477,8 @@ class ScenarioValues(types.SimpleNamespace):
             return dict(common, known=MAGNETIC_KNOWN if known else (),
                         sensor=core.Sensor(kind, noise, baseline=baseline))
         sea = core.Sea(self.sea_depth, self.seabed_sigma) if self.sea_model == "layered" else None
-        return dict(common, sigma=self.sigma, model=MODELS[self.model], known=known,
-                    noise=self.noise, sea=sea)
+        return dict(common, known=known,
+                    sensor=core.Sensor("E", self.noise, self.sigma, sea, MODELS[self.model]))
 
     def moments(self, kind=None):
         """The target's moments for sensor ``kind``: (P_h, P_v) A·m, or (m_x, m_y, m_z) A·m²."""

@@ -146,8 +146,8 @@ def _compute(snapshot: Snapshot):
     breaks = core.linearisation_breaks(res.pcrlb_m, rng, limit=RUNAWAY_LIMIT)
     window = view_window(truth)
     plane = core.Plane("xy", window[0], window[1], float(s.z), MAP_POINTS)
-    medium = (dict(moments=case.moments, sensor=case.sensor) if case.sensor is not None else
-              dict(moments=(case.Ph, case.Pv), sigma=case.sigma, noise=case.noise, sea=sea_of(s)))
+    medium = dict(moments=case.moments if case.sensor is not None else (case.Ph, case.Pv),
+                  sensor=case.sensors().sensor)  # the case's one measurement (sea_of(s) electric)
     with KERNEL_LOCK:  # the snapshot bound beneath the track: N instants at the track's velocity
         errors = core.crlb_maps(plane, stations, velocity=tuple(truth[0, 3:5]), T=case.T,
                                 steps=int(s.steps), **medium)

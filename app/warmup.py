@@ -48,20 +48,22 @@ def _whole_space_maps():
     for model in core.MODELS:
         for measure in core.MEASURES:
             with KERNEL_LOCK:
-                core.evaluate_map(_PLANE, _STATIONS, measure=measure, model=model, **_MOTION)
+                core.evaluate_map(_PLANE, _STATIONS, measure=measure,
+                                  sensor=core.Sensor("E", model=model), **_MOTION)
 
 
 def _layered_maps():
     for measure in core.MEASURES:
         with KERNEL_LOCK:
-            core.evaluate_map(_PLANE, _STATIONS, measure=measure, sea=_SEA, **_MOTION)
+            core.evaluate_map(_PLANE, _STATIONS, measure=measure, sensor=core.Sensor("E", sea=_SEA),
+                              **_MOTION)
     core.dipole_field([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100]], sea=_SEA)
 
 
 def _crlb_maps():
     for sea in (None, _SEA):
         with KERNEL_LOCK:
-            core.crlb_maps(_PLANE, _STATIONS, sea=sea, **_MOTION)
+            core.crlb_maps(_PLANE, _STATIONS, sensor=core.Sensor("E", sea=sea), **_MOTION)
 
 
 def _tracking():

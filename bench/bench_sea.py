@@ -76,19 +76,21 @@ def main(argv=None):
           f"targets at 120 m; median of {args.repeat} (noisy shared machine)")
 
     def whole():
-        return core.evaluate_map(plane, STATIONS, velocity=VELOCITY, moments=MOMENTS, sigma=SIGMA)
+        return core.evaluate_map(plane, STATIONS, velocity=VELOCITY, moments=MOMENTS,
+                                 sensor=core.Sensor("E", sigma=SIGMA))
 
     rng = np.random.default_rng(0)
     sample = states[rng.choice(states.shape[0], args.empymod_points, replace=False)]
     for sea in SEAS:
         def layered(sea=sea):
             return core.evaluate_map(plane, STATIONS, velocity=VELOCITY, moments=MOMENTS,
-                                     sigma=SIGMA, sea=sea)
+                                     sensor=core.Sensor("E", sigma=SIGMA, sea=sea))
         t_whole, t_sea = interleaved_medians((whole, layered), args.repeat)
         small = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 200)
         # a dashboard slider release draws two maps (A: one station, B: two) at 200 × 200
         t_small_whole, t_small = interleaved_medians([lambda s=s: [core.evaluate_map(
-            small, st, velocity=VELOCITY, moments=MOMENTS, sigma=SIGMA, sea=s)
+            small, st, velocity=VELOCITY, moments=MOMENTS,
+            sensor=core.Sensor("E", sigma=SIGMA, sea=s))
             for st in (STATIONS[:1], STATIONS)] for s in (None, sea)], args.repeat)
         # images at instant 0 (the other two instants move the target by 2–4 m): each pair
         # summed alone, and as the map kernels sum them, LANES points in lockstep

@@ -34,14 +34,15 @@ def _fisher_means(plane, d, model, known, near):
     plane for spacing d: one :func:`core.fisher_measures` call (the kernel of evaluate_map's
     ``d_optimal`` and ``crlb_position`` maps, which would compute it twice)."""
     m = core.fisher_measures(plane.states(sc.VELOCITY, (sc.PH, sc.PV)), sc.stations(d), T=sc.T,
-                             sigma=sc.SIGMA, model=model, known=known)
+                             sensor=core.Sensor("E", sigma=sc.SIGMA, model=model), known=known)
     v = m.d_optimal
     return float(np.nanmean(v)), float(np.nanmean(v[near])), float(np.nanmedian(m.position_std))
 
 
 def _det_mean(plane, d, model):
     det = core.evaluate_map(plane, sc.stations(d), velocity=sc.VELOCITY, moments=(sc.PH, sc.PV),
-                            measure="log10_det", T=sc.T, sigma=sc.SIGMA, model=model)
+                            measure="log10_det", T=sc.T,
+                            sensor=core.Sensor("E", sigma=sc.SIGMA, model=model))
     return float(np.nanmean(np.where(det.observable, det.value, np.nan)))
 
 
@@ -130,7 +131,7 @@ def known_moments_summary(model, n):
     plane = sc.xy_plane(n)
     dopt = sc.field_map(plane, None, (sc.PH, sc.PV), "d_optimal", model, sc.KNOWN)
     crlb = sc.field_map(plane, None, (sc.PH, sc.PV), "crlb_position", model, sc.KNOWN).value
-    kw = dict(T=sc.T, sigma=sc.SIGMA, model=model, known=sc.KNOWN)
+    kw = dict(T=sc.T, sensor=core.Sensor("E", sigma=sc.SIGMA, model=model), known=sc.KNOWN)
     probes = {"above station (0, 0)": (0.0, 0.0), "(100, 0)": (100.0, 0.0), "(0, 100)": (0.0, 100.0),
               "(-100, -100)": (-100.0, -100.0), "(100, 100)": (100.0, 100.0),
               "corner (300, 300)": (300.0, 300.0), "corner (300, -300)": (300.0, -300.0)}

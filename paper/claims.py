@@ -189,8 +189,8 @@ def fig2_decays(model, moments, method):
         v = core.log10_abs_det_gamma(pts, sc.stations(), T=sc.T, sigma=sc.SIGMA, model=model)
     else:
         d, known = (sc.DUAL_D, ()) if method == "c_dual" else (None, sc.KNOWN)
-        v = core.fisher_measures(pts, sc.stations(d), T=sc.T, sigma=sc.SIGMA, model=model,
-                                 known=known).d_optimal
+        v = core.fisher_measures(pts, sc.stations(d), T=sc.T, known=known,
+                                 sensor=core.Sensor("E", sigma=sc.SIGMA, model=model)).d_optimal
     return float(v[0] - v[1]), float(v[0] - v[2])
 
 
@@ -360,7 +360,7 @@ def claim_conclusions(model, n, scan):
     k1.checks["a"] = Check(_status(finite == 1.0), {"fraction_det_nonzero": _r(finite, 4)},
                            f"float64 det Γ ≠ 0 at {100 * finite:.1f} % of the Fig. 1 grid, so the paper's "
                            "test |det Γ| ≠ 0 says observable")
-    kw = dict(T=sc.T, sigma=sc.SIGMA, model=model)
+    kw = dict(T=sc.T, sensor=core.Sensor("E", sigma=sc.SIGMA, model=model))
     rank = core.observable_rank(pts, sc.stations(), **kw)
     k1.checks["b"] = Check(_status(np.all(rank == 7)), {"rank_counts": {str(k): int(v) for k, v in zip(*np.unique(rank, return_counts=True))}},
                            f"structural rank {', '.join(f'{k}: {v} points' for k, v in zip(*np.unique(rank, return_counts=True)))}")

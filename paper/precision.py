@@ -75,7 +75,7 @@ def evidence(model, points=POINTS):
     and |cos| between n and core.unobservable_direction.
     """
     single, dual = sc.stations(), sc.stations(sc.DUAL_D)
-    kw = dict(T=sc.T, sigma=sc.SIGMA, model=model)
+    kw = dict(T=sc.T, sensor=core.Sensor("E", sigma=sc.SIGMA, model=model))
     rows = []
     for x, y in points:
         state = np.array([x, y, sc.Z, *sc.VELOCITY, sc.PH, sc.PV])

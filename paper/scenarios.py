@@ -73,7 +73,8 @@ def field_map(plane, d=None, moments=(PH, PV), measure="log10_det", model="exact
         ``value`` and ``observable`` of shape (n, n), rows along the plane's second axis.
     """
     res = core.evaluate_map(plane, stations(d), velocity=VELOCITY, moments=tuple(moments),
-                            measure=measure, T=T, sigma=SIGMA, model=model, known=tuple(known))
+                            measure=measure, T=T, sensor=core.Sensor("E", sigma=SIGMA, model=model),
+                            known=tuple(known))
     res.value.setflags(write=False)
     res.observable.setflags(write=False)
     return res

@@ -41,12 +41,12 @@ ROUNDOFF = 1e-15
 def point_measures(state, stations, sea, steps=STEPS):
     """Rank, log10 η, column-scaled smallest singular value (σ_min/σ_max), CRLB position error
     and horizontal semi-major axis (m) of the all-rows Γ at one state."""
-    opts = dict(sigma=SIGMA, sea=sea, steps=steps)
+    opts = dict(sensor=core.Sensor("E", NOISE, SIGMA, sea), steps=steps)
     g = core.gamma(state, stations, **opts)
     gs = g / np.linalg.norm(g, axis=0)
     s = np.linalg.svd(gs, compute_uv=False)
-    m = core.fisher_measures(state, stations, noise=NOISE, **opts)
-    e = core.horizontal_error_ellipse(state, stations, noise=NOISE, **opts)
+    m = core.fisher_measures(state, stations, **opts)
+    e = core.horizontal_error_ellipse(state, stations, **opts)
     return {"rank": int(core.observable_rank(state, stations, **opts)),
             "log10_eta": float(m.log10_eta), "smin": float(s[-1] / s[0]),
             "crlb": float(m.position_std), "horizontal": float(e.semi_major)}
@@ -57,9 +57,9 @@ def ratio_map(n=61, half_width=300.0):
     x, y ∈ [−half_width, half_width] m, the two seabed sensors. Returns the plane and, for the
     3-D position error and the horizontal semi-major axis (m, 1σ), (whole, layered) maps."""
     plane = core.Plane("xy", (-half_width, half_width), (-half_width, half_width), 0.2, n)
-    common = dict(velocity=TRIAL_VELOCITY, moments=TRIAL_MOMENTS, sigma=SIGMA, noise=NOISE,
-                  steps=STEPS)
-    maps = [core.crlb_maps(plane, TRIAL_STATIONS, sea=sea, **common) for sea in (None, TRIAL_SEA)]
+    common = dict(velocity=TRIAL_VELOCITY, moments=TRIAL_MOMENTS, steps=STEPS)
+    maps = [core.crlb_maps(plane, TRIAL_STATIONS, sensor=core.Sensor("E", NOISE, SIGMA, sea), **common)
+            for sea in (None, TRIAL_SEA)]
     return plane, {"position": tuple(m.position for m in maps),
                    "horizontal": tuple(m.semi_major for m in maps)}
 

@@ -14,8 +14,9 @@ DUAL15 = core.dual_station(100, 15)
 def test_measures_match_dense_linear_algebra(rng, model, known):
     states = random_states(rng, 30, DUAL15)
     noise = 3e-8
-    m = core.fisher_measures(states, DUAL15, noise=noise, steps=4, model=model, known=known)
-    fisher = core.fisher_information(states, DUAL15, noise=noise, steps=4, model=model, known=known)
+    sensor = core.Sensor("E", noise, model=model)
+    m = core.fisher_measures(states, DUAL15, steps=4, known=known, sensor=sensor)
+    fisher = core.fisher_information(states, DUAL15, steps=4, known=known, sensor=sensor)
     _, logdet = np.linalg.slogdet(fisher)
     np.testing.assert_allclose(m.d_optimal, 0.5 * logdet / np.log(10), atol=1e-8)
     cov = np.linalg.inv(fisher)

@@ -149,3 +149,13 @@ def test_cli_libraries_only_in_the_cli(lib):
     assert users, f"no module imports {lib}: the check would pass whatever the layout"
     stray = {n for n in users if not any(n == c or n.startswith(c + ".") for c in CLI)}
     assert stray == set()
+
+
+#: Issue 39: no module of core/ longer than this (a longer one is split by role).
+MAX_MODULE_LINES = 500
+
+
+def test_no_core_module_over_500_lines():
+    long = {name: n for name, path in MODULES.items()
+            if (n := len(path.read_text().splitlines())) > MAX_MODULE_LINES}
+    assert long == {}

@@ -44,7 +44,8 @@ def test_log10_det_matches_60_digit_reference(case):
     # float64 LU: relative error of det ~ eps·κ(Γ_s) ≲ 1e-16 / η; with η ≥ 1e-9 here the
     # log10 error is below 1e-7 / ln 10. Measured: < 1e-9.
     assert abs(got - case["log10_abs_det"]) < 1e-7
-    eta = core.observability_index(case["state"], case["stations"], model=case["model"])
+    eta = core.observability_index(case["state"], case["stations"],
+                                   sensor=core.Sensor(model=case["model"]))
     assert abs(eta - case["log10_hadamard"]) < 1e-7
 
 
@@ -52,7 +53,8 @@ def test_log10_det_matches_60_digit_reference(case):
                          ids=lambda c: c["model"])
 def test_single_station_det_is_exactly_zero_and_float64_is_round_off(case):
     # 60-digit arithmetic: det Γ = 0. float64 returns round-off: η ~ 1e-20, rank 6.
-    eta = core.observability_index(case["state"], case["stations"], model=case["model"])
+    eta = core.observability_index(case["state"], case["stations"],
+                                   sensor=core.Sensor(model=case["model"]))
     assert eta < -16
     assert core.observable_rank(case["state"], case["stations"], model=case["model"]) == 6
 
@@ -70,7 +72,8 @@ def test_single_station_null_direction(rng, model, steps):
     size = np.einsum("...ij,...j->...i", np.abs(g), np.abs(n))
     assert np.max(residual / size) < 1e-12
     assert np.all(core.observable_rank(states, station, model=model, steps=steps) == 6)
-    direction = core.unobservable_direction(states, station, model=model, steps=steps)
+    direction = core.unobservable_direction(states, station, sensor=core.Sensor(model=model),
+                                            steps=steps)
     n_unit = n / np.linalg.norm(n, axis=1, keepdims=True)
     cosine = np.abs(np.sum(direction * n_unit, axis=1))
     assert np.min(cosine) > 1 - 1e-8
@@ -150,7 +153,7 @@ def test_tolerances_separate_round_off_from_observability():
         assert ratio(single).max() < core.RANK_RTOL * 1e-4
         assert ratio(dual).min() > core.RANK_RTOL * 100
         assert ratio(dual_all).min() > core.RANK_RTOL * 1e5
-        eta = core.observability_index(states, SINGLE, model=model)
+        eta = core.observability_index(states, SINGLE, sensor=core.Sensor(model=model))
         assert eta.max() < -16  # round-off (Πσ_i with σ_min ≤ 3e-16)
 
 
@@ -222,10 +225,12 @@ def _mp_scaled_singular_values(state, stations, steps, model="exact"):
 def _flag(state, stations, steps, model="exact"):
     """The observable flag of the map (paper rule) or of fisher_measures (all rows) at state."""
     if steps is not None:
-        return bool(core.fisher_measures(state, stations, steps=steps, model=model).observable)
+        return bool(core.fisher_measures(state, stations, steps=steps,
+                                         sensor=core.Sensor(model=model)).observable)
     # a 2 × 2 map whose first grid point is the state
     plane = core.Plane("xy", (state[0], state[0] + 1.0), (state[1], state[1] + 1.0), state[2], 2)
-    res = core.evaluate_map(plane, stations, velocity=state[3:5], moments=state[5:7], model=model)
+    res = core.evaluate_map(plane, stations, velocity=state[3:5], moments=state[5:7],
+                            sensor=core.Sensor(model=model))
     return bool(res.observable[0, 0])
 
 
@@ -282,7 +287,7 @@ GRID_CASES = [
 def test_map_flag_never_disagrees_with_observable_rank(stations, known, model, measure, extent):
     plane = core.Plane("xy", (-extent, extent), (-extent, extent), 120.0, 41)
     res = core.evaluate_map(plane, stations, velocity=(2, 2), moments=(100, 20), measure=measure,
-                            model=model, known=known)
+                            sensor=core.Sensor(model=model), known=known)
     states = plane.states((2, 2), (100, 20)).reshape(-1, 7)
     off = ~np.isnan(res.value.reshape(-1))
     steps = None if measure == "log10_det" else core.DEFAULT_STEPS

@@ -107,7 +107,7 @@ def test_doc_embeds_existing_pngs_and_states_each_verdict(run):
 def test_single_station_is_round_off_everywhere(run, model):
     # (b) of C1a: recompute η and the structural rank over the grid directly
     s = grid()
-    eta = core.observability_index(s, core.single_station(100), model=model)
+    eta = core.observability_index(s, core.single_station(100), sensor=core.Sensor(model=model))
     assert np.max(eta) < -16  # round-off: Πσ_i with σ_min ~ 1e-16
     b = check(run, model, "C1a", "b")
     assert b["status"] == "not meaningful"
@@ -130,7 +130,7 @@ def test_single_station_is_round_off_everywhere(run, model):
 def test_fig2_decays_match_core(run, model):
     pts = np.array([[0, 50, 100, 2, 2, 100, 20], [300, 50, 100, 2, 2, 100, 20], [0, 50, 400, 2, 2, 100, 20]],
                    dtype=float)
-    v = core.fisher_measures(pts, core.dual_station(100, cl.DUAL_D), model=model).d_optimal
+    v = core.fisher_measures(pts, core.dual_station(100, cl.DUAL_D), sensor=core.Sensor(model=model)).d_optimal
     dx, dz = v[0] - v[1], v[0] - v[2]
     c = check(run, model, "C2a", "c_dual")
     assert c["numbers"]["dx"] == pytest.approx(dx, abs=2e-3)
@@ -141,7 +141,7 @@ def test_fig2_decays_match_core(run, model):
 @pytest.mark.parametrize("model", ["exact", "paper"])
 def test_fig3_scaling_identity(run, model):
     # Fisher D-optimal with moments known: 5 columns linear in the moments, so ×10 gives +5 exactly
-    kw = dict(model=model, known=("Ph", "Pv"))
+    kw = dict(sensor=core.Sensor(model=model), known=("Ph", "Pv"))
     one = core.fisher_measures(grid(), core.single_station(100), **kw).d_optimal
     ten = core.fisher_measures(grid((1000.0, 200.0)), core.single_station(100), **kw).d_optimal
     np.testing.assert_allclose(ten - one, 5.0, atol=1e-9)
@@ -168,8 +168,8 @@ def test_fig5_and_fig6_blank_fractions_match_core(run, model):
     np.testing.assert_allclose(c6["numbers"]["blank_fraction"], tot, atol=1e-4)
     assert c6["status"] == ("holds" if np.all(np.diff(tot) > 0) else "fails")
     # (c) with the dual Fisher measure: one station's F is singular, so no dual point is blank
-    dual = core.fisher_measures(s, core.dual_station(100, 2), model=model).d_optimal
-    lone = core.fisher_measures(s, core.single_station(100), model=model).d_optimal
+    dual = core.fisher_measures(s, core.dual_station(100, 2), sensor=core.Sensor(model=model)).d_optimal
+    lone = core.fisher_measures(s, core.single_station(100), sensor=core.Sensor(model=model)).d_optimal
     assert np.all(np.isneginf(lone))
     assert check(run, model, "C5a", "c_dual")["numbers"]["blank_fraction_d2"] == blank(dual, lone) == 0.0
 
@@ -196,7 +196,7 @@ def test_round_off_evidence(run, model):
     scale = np.sum(np.log10(np.linalg.norm(g, axis=-2)), axis=-1) + eps
     np.testing.assert_allclose([r["roundoff_log10_det"] for r in rows], scale)
     assert np.all(core.log10_abs_det_gamma(states, core.single_station(100), model=model) <= scale)
-    assert np.all(core.observability_index(states, core.single_station(100), model=model) <= eps)
+    assert np.all(core.observability_index(states, core.single_station(100), sensor=core.Sensor(model=model)) <= eps)
 
 
 def _plane_criterion(model, key, d, n=N):
@@ -206,7 +206,7 @@ def _plane_criterion(model, key, d, n=N):
     known = ("Ph", "Pv") if key == "d_optimal_known" else ()
     measure = "crlb_position" if key == "crlb_median" else "d_optimal"
     v = core.evaluate_map(plane, core.dual_station(100, d), velocity=(2, 2), moments=(100, 20),
-                          measure=measure, model=model, known=known).value
+                          measure=measure, sensor=core.Sensor(model=model), known=known).value
     return float(np.nanmedian(v)) if key == "crlb_median" else float(np.nanmean(v))
 
 
@@ -236,7 +236,7 @@ def test_weak_verdicts_are_marked(run):
     for model in ("exact", "paper"):
         c2a = check(run, model, "C2a", "c_dual")
         pts = np.array([[0, 50, 100, *BASE[1:]], [300, 50, 100, *BASE[1:]], [0, 50, 400, *BASE[1:]]])
-        v = core.fisher_measures(pts, core.dual_station(100, cl.DUAL_D), model=model).d_optimal
+        v = core.fisher_measures(pts, core.dual_station(100, cl.DUAL_D), sensor=core.Sensor(model=model)).d_optimal
         dx, dz = v[0] - v[1], v[0] - v[2]
         assert c2a["margin"] == pytest.approx(abs(dz - dx) / max(abs(dx), abs(dz)), abs=1e-4)
         section = run["text"].split(f"## Verdicts, `{model}` field model")[1].split("\n## ")[0]

@@ -116,7 +116,7 @@ def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
     state = [u[j], v[i], s.target.z, *out["truth"][0, 3:5], s.target.Ph, s.target.Pv]
     one = core.crlb_maps(core.Plane("xy", (u[j], u[j] + 1), (v[i], v[i] + 1), s.target.z, 2),
                            d.stations, velocity=tuple(state[3:5]), moments=(s.target.Ph, s.target.Pv), T=s.sensor.T,
-                           sigma=s.medium.sigma, noise=s.sensor.noise, steps=s.sensor.steps)
+                           sensor=core.Sensor("E", s.sensor.noise, s.medium.sigma), steps=s.sensor.steps)
     assert d.errors.position[i, j] == pytest.approx(one.position[0, 0], rel=1e-9)
     layers = track.plan_view(out)
     image, hatch = layers.get(0), layers.get(1)

@@ -519,7 +519,7 @@ def test_map_bs_unobservable_direction_is_bs_own(name, moments_b):
         probe = [float(v) for v in m.groups()[:3]]
         shown = np.array([float(v) for v in m.group(4).split(", ")])
         n = core.unobservable_direction([*probe, *s.snapshot().velocity(), *moments], [[0.0, 0.0, s.stations.h]],
-                                        T=s.sensor.T, sigma=s.medium.sigma)
+                                        T=s.sensor.T, sensor=core.Sensor("E", sigma=s.medium.sigma))
         assert np.allclose(np.abs(shown), np.abs(n), atol=5e-4)  # printed to 3 decimals; sign free
         vectors[which] = shown
     assert not np.allclose(np.abs(vectors["A"]), np.abs(vectors["B"]), atol=5e-3)

@@ -10,11 +10,11 @@ from app.scenario import PRESETS, Scenario
 
 def test_default_is_the_whole_space_and_fig_presets_stay_there():
     s = Scenario()
-    assert s.snapshot().core_options()["sea"] is None
+    assert s.snapshot().core_options()["sensor"].sea is None
     s.update(sea_model="layered")
     for name in (n for n in PRESETS if n.startswith("Fig.")):
         s.apply_preset(name)
-        assert s.snapshot().core_options()["sea"] is None
+        assert s.snapshot().core_options()["sensor"].sea is None
 
 
 def test_layered_puts_the_stations_on_the_seabed():
@@ -22,7 +22,7 @@ def test_layered_puts_the_stations_on_the_seabed():
     s.medium.sea_model = "layered"
     assert s.stations.h == 150.0 and s.target.z == 120.0 and (s.region.z_min, s.region.z_max) == (0.0, 150.0)
     assert all(st[2] == 150.0 for st in s.stations.stations)
-    assert s.snapshot().core_options()["sea"] == core.Sea(150.0, 1.0)
+    assert s.snapshot().core_options()["sensor"].sea == core.Sea(150.0, 1.0)
     s.medium.sea_depth = 130.0  # the stations stay on the seabed
     assert s.stations.h == 130.0 and all(st[2] == 130.0 for st in s.stations.stations) and s.message == ""
 
@@ -52,7 +52,7 @@ def test_seed_001_preset_maps_in_the_layered_sea():
     s = Scenario()
     s.apply_preset("Seed 001 sea trial")
     assert s.message == ""
-    assert s.snapshot().core_options()["sea"] == core.Sea(8.4, 0.4)
+    assert s.snapshot().core_options()["sensor"].sea == core.Sea(8.4, 0.4)
     assert (s.stations.h, s.stations.d, s.target.z, s.target.Ph, s.target.Pv) == (8.4, 10.0, 0.2, 100.0, 0.0)
     s.region.resolution = 20
     panels = c.compute(c.Snapshot.of(s))

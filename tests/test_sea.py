@@ -198,13 +198,14 @@ def test_map_kernels_use_the_layered_field():
                                np.log10(np.abs(np.linalg.det(g))), atol=1e-6)
     jac = core.field_jacobian(states, stations, sea=sea)
     np.testing.assert_allclose(g[:, :6], jac.reshape(-1, 6, 7), rtol=1e-13, atol=0)  # eq. (16)
-    m = core.evaluate_map(plane, stations, velocity=(2, 2), moments=(100, 20), sea=sea)
+    m = core.evaluate_map(plane, stations, velocity=(2, 2), moments=(100, 20),
+                          sensor=core.Sensor("E", sea=sea))
     np.testing.assert_allclose(m.value.ravel(), core.log10_abs_det_gamma(states, stations, sea=sea),
                                atol=1e-12)
     whole = core.evaluate_map(plane, stations, velocity=(2, 2), moments=(100, 20))
     assert np.min(np.abs(m.value - whole.value)) > 1e-3  # the sea changes every point
     gs = core.gamma(states, stations, sea=sea, steps=3)
-    fm = core.fisher_measures(states, stations, sea=sea)
+    fm = core.fisher_measures(states, stations, sensor=core.Sensor("E", sea=sea))
     norms = np.linalg.norm(gs, axis=1)  # column scaling keeps slogdet accurate
     _, logdet = np.linalg.slogdet(np.einsum("pri,prj->pij", gs / norms[:, None], gs / norms[:, None]))
     expected = 0.5 * logdet / np.log(10) + np.log10(norms / core.DEFAULT_NOISE).sum(axis=1)
@@ -291,6 +292,14 @@ def test_resistivity():
 
 
 SEA = Sea(100.0, 1.0)
+E_SEA = core.Sensor("E", sea=SEA)
+
+
+def E(**medium):
+    """The electric core.Sensor of a medium (sigma=, sea=, model=)."""
+    return core.Sensor("E", **medium)
+
+
 GOOD_STATE = [30.0, 40.0, 80.0, 2.0, 2.0, 100.0, 20.0]
 GOOD_STATIONS = [[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]]
 CALLS = {
@@ -299,12 +308,13 @@ CALLS = {
     "gamma": lambda x, s, **k: core.gamma(x, s, **k),
     "log10_abs_det_gamma": lambda x, s, **k: core.log10_abs_det_gamma(x, s, **k),
     "observable_rank": lambda x, s, **k: core.observable_rank(x, s, **k),
-    "observability_index": lambda x, s, **k: core.observability_index(x, s, steps=3, **k),
-    "unobservable_direction": lambda x, s, **k: core.unobservable_direction(x, s, **k),
-    "fisher_measures": lambda x, s, **k: core.fisher_measures(x, s, **k),
-    "fisher_information": lambda x, s, **k: core.fisher_information(x, s, **k),
-    "crlb_covariance": lambda x, s, **k: core.crlb_covariance(x, s, **k),
-    "horizontal_error_ellipse": lambda x, s, **k: core.horizontal_error_ellipse(x, s, **k),
+    # the medium as one core.Sensor (the spec's trio and the fields above take it as keywords)
+    "observability_index": lambda x, s, **k: core.observability_index(x, s, steps=3, sensor=E(**k)),
+    "unobservable_direction": lambda x, s, **k: core.unobservable_direction(x, s, sensor=E(**k)),
+    "fisher_measures": lambda x, s, **k: core.fisher_measures(x, s, sensor=E(**k)),
+    "fisher_information": lambda x, s, **k: core.fisher_information(x, s, sensor=E(**k)),
+    "crlb_covariance": lambda x, s, **k: core.crlb_covariance(x, s, sensor=E(**k)),
+    "horizontal_error_ellipse": lambda x, s, **k: core.horizontal_error_ellipse(x, s, sensor=E(**k)),
 }
 
 
@@ -334,7 +344,7 @@ def test_sea_must_be_a_sea():
 
 def test_maps_and_design_refuse_planes_outside_the_column():
     stations = GOOD_STATIONS
-    common = dict(velocity=(2, 2), moments=(100, 20), sea=SEA)
+    common = dict(velocity=(2, 2), moments=(100, 20), sensor=E_SEA)
     with pytest.raises(ValueError, match="target depth z 120"):
         core.evaluate_map(core.Plane("xy", (-50, 50), (-50, 50), 120.0, 4), stations, **common)
     with pytest.raises(ValueError, match="target depth z -10"):
@@ -343,10 +353,10 @@ def test_maps_and_design_refuse_planes_outside_the_column():
         core.crlb_maps(core.Plane("xy", (-50, 50), (-50, 50), 120.0, 4), stations, **common)
     region = core.Plane("xy", (-50, 50), (-50, 50), 50.0, 4)
     with pytest.raises(ValueError, match="station depth 120"):
-        core.layout_criterion(core.dual_station(120.0, 10.0), region, sea=SEA)
+        core.layout_criterion(core.dual_station(120.0, 10.0), region, sensor=E_SEA)
     with pytest.raises(ValueError, match="station depth 150"):
-        core.spacing_curve([10.0], region, h=150.0, sea=SEA)
-    assert np.isfinite(core.layout_criterion(core.dual_station(100.0, 10.0), region, sea=SEA).value)
+        core.spacing_curve([10.0], region, h=150.0, sensor=E_SEA)
+    assert np.isfinite(core.layout_criterion(core.dual_station(100.0, 10.0), region, sensor=E_SEA).value)
 
 
 @pytest.mark.parametrize("sb, rho_over_d, z, sz", [(1.0, 0.3, 3.0, 20.0), (1.0, 1.0, 12.0, 18.0),
@@ -370,7 +380,8 @@ def test_sweep_takes_the_sea(tmp_path):
                        "--workers", "1", "--no-progress"]) == 0
     rows = np.loadtxt(out / "sweep.csv", delimiter=",", skiprows=1)
     state = [30.0, 40.0, 6.0, *core.velocity_from_heading(2 * np.sqrt(2), 45.0), 100.0, 20.0]
-    want = core.fisher_measures(state, core.dual_station(8.4, 20.0), sea=Sea(8.4, 0.4)).d_optimal
+    want = core.fisher_measures(state, core.dual_station(8.4, 20.0),
+                                sensor=core.Sensor("E", sea=Sea(8.4, 0.4))).d_optimal
     got = rows[(rows[:, 0] == 20.0) & (rows[:, 1] == 6.0), 2]
     np.testing.assert_allclose(got, want, rtol=1e-12)
     with pytest.raises(SystemExit):  # the default h = 100 m is below an 8.4 m seabed

@@ -9,6 +9,9 @@ apart are observable too.
 
 from __future__ import annotations
 
+import warnings
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -89,12 +92,72 @@ def test_electric_sensor_object_equals_old_keywords():
     sensor = core.Sensor("E", sigma=3.0, sea=sea)
     np.testing.assert_array_equal(core.gamma(x, st, sensor=sensor), core.gamma(x, st, sigma=3.0, sea=sea))
     a = core.fisher_measures(x, st, sensor=core.Sensor("E", noise=2e-7, sigma=3.0))
-    b = core.fisher_measures(x, st, noise=2e-7, sigma=3.0)
+    b = core.fisher_measures(x, st, noise=2e-7, sensor=core.Sensor("E", sigma=3.0))
     np.testing.assert_array_equal(a.std, b.std)
     with pytest.raises(ValueError, match="not both"):
         core.gamma(x, st, sensor=sensor, sigma=2.0)
     with pytest.raises(ValueError, match="sensor kind"):
         core.Sensor("X")
+
+
+SEA = core.Sea(depth=200.0, seabed_sigma=1.0)
+_X = [[30.0, 40.0, 120.0, 2.0, 2.0, 100.0, 20.0], [-50.0, 10.0, 150.0, 1.0, -2.0, 60.0, 30.0]]
+_PLANE = core.Plane("xy", (-60, 60), (-60, 60), 120.0, 5)
+_REGION = core.Plane("xy", (-100, 100), (-100, 100), 120.0, 5)
+_MOTION = dict(velocity=(2.0, 2.0), moments=(100.0, 20.0))
+#: Every public function whose medium keywords are deprecated beside sensor=, called on its
+#: own inputs with keywords ``kw``; the result as a tuple of arrays.
+DEPRECATED = {
+    "observability_index": lambda **kw: core.observability_index(_X, core.dual_station(100, 15), **kw),
+    "unobservable_direction": lambda **kw: core.unobservable_direction(_X, [[0, 0, 100]], **kw),
+    "fisher_information": lambda **kw: core.fisher_information(_X, core.dual_station(100, 15), **kw),
+    "fisher_measures": lambda **kw: (lambda m: (m.d_optimal, m.std, m.observable))(
+        core.fisher_measures(_X, core.dual_station(100, 15), **kw)),
+    "crlb_covariance": lambda **kw: core.crlb_covariance(_X, core.dual_station(100, 15), **kw),
+    "horizontal_error_ellipse": lambda **kw: tuple(vars(core.horizontal_error_ellipse(
+        _X, core.dual_station(100, 15), **kw)).values()),
+    "evaluate_map": lambda **kw: (lambda r: (r.value, r.observable))(core.evaluate_map(
+        _PLANE, core.dual_station(100, 15), measure="d_optimal", **_MOTION, **kw)),
+    "crlb_maps": lambda **kw: tuple(vars(core.crlb_maps(
+        _PLANE, core.dual_station(100, 15), **_MOTION, **kw)).values()),
+    "layout_criterion": lambda **kw: tuple(vars(core.layout_criterion(
+        core.dual_station(100, 15), _REGION, **kw)).values()),
+    "spacing_curve": lambda **kw: core.spacing_curve([10.0, 40.0], _REGION, **kw),
+    "best_spacing": lambda **kw: (lambda r: (r.d, r.value, r.curve))(core.best_spacing(
+        _REGION, d_range=(5.0, 100.0), n_curve=3, **kw)),
+    "optimise_layout": lambda **kw: (lambda r: (r.stations, r.value))(core.optimise_layout(
+        "line", 2, _REGION, d_range=(5.0, 100.0), n_curve=3, **kw)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(DEPRECATED))
+@pytest.mark.parametrize("medium", [dict(sigma=3.0, sea=SEA), dict(model="paper")],
+                         ids=["sigma-sea", "model"])
+def test_old_medium_keywords_warn_and_build_the_same_sensor(name, medium):
+    """Issue 36 item 2: the measurement is described once, as sensor=. The old keywords sigma=,
+    model=, sea= remain a deprecated convenience: a DeprecationWarning that points at the
+    caller's line (here, this file), and the same results, bit for bit, as the Sensor they
+    build."""
+    with pytest.warns(DeprecationWarning, match="deprecated: describe the measurement once") as rec:
+        old = DEPRECATED[name](**medium)
+    assert {Path(w.filename).resolve() for w in rec} == {Path(__file__).resolve()}
+    new = DEPRECATED[name](sensor=core.Sensor("E", **medium))
+    old, new = ((r if isinstance(r, tuple) else (r,)) for r in (old, new))
+    assert len(old) == len(new)
+    for a, b in zip(old, new):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_the_spec_trio_keeps_its_medium_keywords():
+    """core.gamma, log10_abs_det_gamma and observable_rank take sigma=, model=, sea= without a
+    warning (spec §6, their stable form), and give what the Sensor gives."""
+    st = core.dual_station(100, 15)
+    for f in (core.gamma, core.log10_abs_det_gamma, core.observable_rank):
+        for medium in (dict(sigma=3.0, sea=SEA), dict(model="paper")):
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                old = f(_X, st, **medium)
+            np.testing.assert_array_equal(old, f(_X, st, sensor=core.Sensor("E", **medium)))
 
 
 def test_fisher_is_whitened_gamma_and_crlb_its_inverse():

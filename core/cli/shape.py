@@ -60,6 +60,7 @@ from ..shape.cases import CASES, case_rows, describe
 from ..shape.experiment import run_case
 from ..shape.targets import CLEARANCE, Pass, clearance
 from . import ArgumentParser
+from .shape_plots import plot_errors, plot_shape, plot_sweep
 
 PROG = "python -m core.shape"
 #: Largest ``--runs``: each run keeps ~0.3 MB (the two filters' 81 covariances of 15 × 15, the
@@ -224,61 +225,6 @@ def _json_safe(v):
     return v
 
 
-def _plot_errors(res, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for name, style in (("euler", ":"), ("ukf", "-"), ("nhukf", "--")):
-        if name in res.errors:
-            ax.semilogy(res.platform_x, res.errors[name][0], style, label=name.upper())
-    for k in res.outlier_samples:
-        ax.axvline(res.platform_x[k], color="r", alpha=0.4, lw=1)
-    if res.outlier_samples:
-        ax.plot([], [], color="r", alpha=0.4, label="outlier")
-    ax.set_xlabel("platform x (m)")
-    ax.set_ylabel("position error (m)")
-    ax.set_title(f"{res.case.name}: error along the pass (run 0)")
-    ax.legend()
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-
-
-def _plot_shape(res, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4.2))
-    t = res.case.target
-    for ax, (i, j, lab) in zip(axes, ((0, 1, "plan: x–y"), (0, 2, "side: x–z"))):
-        for ln in t.outline():
-            ax.plot(ln[:, i], ln[:, j], color="0.6", lw=1)
-        for name, mk in (("ukf", "o"), ("nhukf", "^"), ("fit", "s")):
-            if name not in res.dipoles:
-                continue
-            d = res.dipoles[name][0]
-            ax.plot(d[:, i], d[:, j], mk, label=f"{name.upper()} dipoles")
-            c, V, w = res.final[name]["centroid"][0], res.final[name]["axes"][0], res.final[name]["eigenvalues"][0]
-            for q in range(2):
-                half = np.sqrt(max(w[q], 0.0)) * 2 * V[:, q]
-                ax.plot([c[i] - half[i], c[i] + half[i]], [c[j] - half[j], c[j] + half[j]],
-                        "-" if q == 0 else "--", lw=1.5)
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("xyz"[i] + " (m)")
-        ax.set_ylabel("xyz"[j] + " (m)" + (" (down)" if j == 2 else ""))
-        ax.set_title(lab)
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
-    fig.suptitle(f"{res.case.name}: dipoles and PCA axes (±2√λ) over the outline")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-
-
 def _row_summary(r, bound):
     return {"label": r.case.name, "comparison": r.case.comparison, "truth": r.summary["case"],
             "filters": r.summary["filters"], "outlier_samples": r.outlier_samples,
@@ -305,8 +251,8 @@ def run(case, runs=1, seed=0, lag=None, out=None, plots=True, **geo):
             json.dump(summary, fh, indent=1, allow_nan=False)
         if plots:
             for i, r in enumerate(results):
-                _plot_errors(r, os.path.join(out, f"errors_row{i}.png"))
-                _plot_shape(r, os.path.join(out, f"shape_row{i}.png"))
+                plot_errors(r, os.path.join(out, f"errors_row{i}.png"))
+                plot_shape(r, os.path.join(out, f"shape_row{i}.png"))
     return summary
 
 
@@ -414,7 +360,7 @@ def cpa_sweep(case, lo, hi, n, runs=1, seed=0, lag=None, out=None, size_to=None,
             for rec in records:
                 w.writerow({k: (str(v).lower() if isinstance(v, bool) else f"{v:.6g}") for k, v in rec.items()})
         if plots:
-            _plot_sweep(result, row, os.path.join(out, "cpa_sweep.png"))
+            plot_sweep(result, row, os.path.join(out, "cpa_sweep.png"))
     return result
 
 
@@ -433,38 +379,6 @@ def sweep_answer(sw):
           f"in the Monte-Carlo ({sw['runs']} passes each) an estimator sized it to {x:.3g} m (axis "
           f"within {SIZED_AXIS_DEG:g}°) up to {m:.3g} m")
     return f"To size this target ({sw['main_scale_m']:g} m) to {x:.3g} m: {bound}; {mc}."
-
-
-def _plot_sweep(sw, row, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    rec = sw["records"]
-    c = [r["closest_approach_m"] for r in rec]
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    ax.loglog(c, [r["bound_span_m"] for r in rec], "-", color="#9467bd", label="bound: span read")
-    ax.loglog(c, [r["bound_second_moment_m"] for r in rec], "-", lw=2.5, color="#17becf",
-              label="bound: second-moment read")
-    ax.loglog(c, [r["bound_rigid_line_m"] for r in rec], "--", color="#9467bd", label="bound: rigid line")
-    for e, mk, col in (("ukf", "o", "#1f77b4"), ("nhukf", "^", "#d62728"), ("fit", "s", "#2ca02c")):
-        ax.loglog(c, [max(r[f"{e}_second_moment_error_m"], 1e-6) for r in rec], mk, color=col,
-                  label=f"{e.upper()}: Monte-Carlo error, second-moment read")
-    ax.axhline(sw["size_to_m"], color="k", ls=":", lw=1, label=f"size to {sw['size_to_m']:.3g} m")
-    ax.axhline(sw["main_scale_m"], color="0.5", ls="-.", lw=1, label=f"main scale {sw['main_scale_m']:g} m")
-    if sw["bound_cpa_m"] is not None and math.isfinite(sw["bound_cpa_m"]):
-        ax.axvline(sw["bound_cpa_m"], color="k", lw=1, alpha=0.5)
-    from matplotlib.ticker import FormatStrFormatter
-    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
-    ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
-    ax.set_xlabel("closest approach (m)")
-    ax.set_ylabel("main scale: 1σ bound or median |error| (m)")
-    ax.set_title(f"{row.name}: how close must the pass be? ({sw['runs']} passes per point)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
 
 
 def _fmt(v, spec):

@@ -2,9 +2,9 @@
 
 ``python -m core.track --case seed001-sim|seed001-trial [--sensor E|B|G|BG]
 [--filter ekf|puekf|bank] [--runs N] [--seed S] [--n-pu N] [--workers W] [--scheduler ADDR]
-[--truth-noise] --out DIR`` runs :func:`core.tracking.montecarlo.monte_carlo` (the cases and the
-method are in its module notes; ``--sensor`` other than E measures the case with a magnetic
-sensor, :func:`core.tracking.montecarlo.case_for_sensor`) and writes
+[--truth-noise] --out DIR`` runs :func:`core.tracking.montecarlo.monte_carlo` (the method is in its
+module notes, the cases in :mod:`core.tracking.cases`; ``--sensor`` other than E measures the
+case with a magnetic sensor, :func:`core.tracking.cases.case_for_sensor`) and writes
 
 - ``DIR/trmse.csv``: ``step, time_s, trmse_m, pcrlb_m`` (TRMSE_k of seed 001 eq. (18): the RMS
   over runs of the 3-D position error of the reported estimate at step k);
@@ -26,7 +26,8 @@ import numpy as np
 from tqdm import tqdm
 
 from ..model.sensors import KINDS
-from ..tracking.montecarlo import CASES, DEFAULT_N_PU, FILTERS, case_for_sensor, monte_carlo
+from ..tracking.cases import CASES, case_for_sensor
+from ..tracking.montecarlo import DEFAULT_N_PU, FILTERS, monte_carlo
 from . import ArgumentParser
 
 __all__ = ["main", "write_outputs"]
@@ -114,7 +115,7 @@ def main(argv=None):
     ap.add_argument("--sensor", default="E", choices=list(KINDS),
                     help="what the stations measure: E electric (seed 001), B magnetometer, "
                          "G gradiometer, BG both (the case's target then carries a magnetic "
-                         "moment, core.tracking.montecarlo.case_for_sensor)")
+                         "moment, core.tracking.cases.case_for_sensor)")
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-pu", type=int, default=None, help=f"progressive sub-updates (default {DEFAULT_N_PU} for puekf, 1 otherwise)")

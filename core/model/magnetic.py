@@ -50,15 +50,7 @@ def states(value):
 
 def baseline_value(baseline):
     """None or 0 (the point tensor), or a gradiometer baseline L > 0 (m); returns a float."""
-    if baseline is None:
-        return 0.0
-    try:
-        value = float(baseline)
-    except (TypeError, ValueError):
-        raise ValueError(f"baseline must be None or a number ≥ 0 (m); got {baseline!r}") from None
-    if not np.isfinite(value) or value < 0.0:
-        raise ValueError(f"baseline must be None or a finite number ≥ 0 (m); got {baseline!r}")
-    return value
+    return 0.0 if baseline is None else validation.positive("baseline", baseline, "m", zero=True)
 
 
 def check_distances(flat, stations, baseline):

@@ -5,7 +5,10 @@ One object, :class:`Sensor`, describes what a station measures: the kind (``"E"`
 electric field formula (``exact`` / ``paper``), the medium (conductivity σ, or a
 :class:`core.Sea`) and a gradiometer's baseline. Γ, its rank, the unobservable direction,
 Fisher, CRLB, maps and CRLB maps take it as ``sensor=`` (a kind name builds one with the
-defaults); their old keywords ``sigma``, ``model``, ``sea`` still work and build the electric one.
+defaults). The spec's stable trio (:func:`core.gamma`, :func:`core.log10_abs_det_gamma`,
+:func:`core.observable_rank`) also takes the electric medium as ``sigma``, ``model``, ``sea``
+(spec §6); elsewhere those keywords are a deprecated convenience that warns and builds the same
+Sensor (:func:`sensor_model`).
 
 Every kind goes through the same compiled pipeline (:mod:`core.kernels.gamma` for Γ's rows,
 :mod:`core.kernels.measures` for the QR, the rank test and the measures): a kind only picks its
@@ -18,6 +21,9 @@ is the electric paper's and is refused for magnetic kinds.
 
 from __future__ import annotations
 
+import os
+import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -265,23 +271,28 @@ class Sensor:
 
     def free_columns(self, known):
         """Indices of the unknown states, given the names of the known ones."""
-        if not self.magnetic:
-            return validation.free_columns(known)
-        names = self.state_names
-        known = () if known is None else ((known,) if isinstance(known, str) else tuple(known))
-        for name in known:
-            if name not in names:
-                raise ValueError(f"known states must be names from {names}; got {name!r}")
-        free = [j for j, name in enumerate(names) if name not in known]
-        if not free:
-            raise ValueError("at least one state must be unknown; got all of them as known")
-        return np.array(free, dtype=np.int64)
+        return validation.free_columns(known, self.state_names)
 
 
-def sensor_model(sensor=None, *, sigma=4.0, model="exact", sea=None, noise=None):
+def sensor_model(sensor=None, *, sigma=None, model=None, sea=None, noise=None, warn=True):
     """The :class:`Sensor` of a call: ``sensor`` (a kind name or a Sensor) or, when None, the
-    electric one built from the old keywords. An object given together with non-default
-    medium keywords is a ValueError (two descriptions of one measurement)."""
+    electric one, built from the medium keywords ``sigma``, ``model``, ``sea`` (None: 4 S/m, the
+    exact field, the whole space). An object given together with non-default medium keywords is
+    a ValueError (two descriptions of one measurement).
+
+    The medium keywords beside ``sensor=`` are deprecated in every public function but the
+    spec's stable trio (:func:`core.gamma`, :func:`core.log10_abs_det_gamma`,
+    :func:`core.observable_rank`, which pass ``warn=False``): given (not None), they emit a
+    DeprecationWarning pointing at the caller outside :mod:`core`, and build the same Sensor as
+    ``sensor=core.Sensor("E", noise, sigma, sea, model)``."""
+    given = [name for name, v in (("sigma", sigma), ("model", model), ("sea", sea)) if v is not None]
+    if given and warn:
+        warnings.warn(
+            f"{', '.join(n + '=' for n in given)} beside sensor= are deprecated: describe the "
+            "measurement once, as sensor=core.Sensor('E', noise, sigma, sea, model)",
+            DeprecationWarning, stacklevel=_outside_core())
+    sigma = 4.0 if sigma is None else sigma
+    model = "exact" if model is None else model
     if isinstance(sensor, Sensor):
         if sigma != 4.0 or model != "exact" or sea is not None:
             raise ValueError(
@@ -300,6 +311,16 @@ def sensor_model(sensor=None, *, sigma=4.0, model="exact", sea=None, noise=None)
         raise ValueError(f"sensor kind {sensor!r} is magnetic: sigma, model and sea are electric "
                          f"options; got sigma={sigma!r}, model={model!r}, sea={sea!r}")
     return Sensor(sensor, noise)
+
+
+def _outside_core():
+    """``warnings.warn``'s stacklevel, counted from :func:`sensor_model`, of the first caller
+    outside the :mod:`core` package (the user's line, however deep the public call)."""
+    core_dir = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
+    frame, level = sys._getframe(1), 1  # sensor_model's frame
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(core_dir):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 def refuse_square(sensor, what):

@@ -64,14 +64,15 @@ def states_and_stations(states_value, stations_value):
     return flat, stations(stations_value), lead
 
 
-def positive(name, value, unit):
-    """A finite float > 0, or ValueError."""
+def positive(name, value, unit, *, zero=False):
+    """A finite float > 0 (≥ 0 with ``zero``), or ValueError."""
+    bound = "≥ 0" if zero else "> 0"
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number > 0 ({unit}); got {value!r}") from None
-    if not np.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a finite number > 0 ({unit}); got {value!r}")
+        raise ValueError(f"{name} must be a number {bound} ({unit}); got {value!r}") from None
+    if not np.isfinite(v) or v < 0.0 or (v == 0.0 and not zero):
+        raise ValueError(f"{name} must be a finite number {bound} ({unit}); got {value!r}")
     return v
 
 
@@ -89,15 +90,16 @@ def steps(value, minimum):
     return int(value)
 
 
-def free_columns(known):
-    """Indices of the unknown states, given the names of the known ones."""
+def free_columns(known, names=STATE_NAMES):
+    """Indices of the unknown states among ``names`` (the electric state's by default), given
+    the names of the known ones."""
     known = () if known is None else ((known,) if isinstance(known, str) else tuple(known))
     for name in known:
-        if name not in STATE_NAMES:
-            raise ValueError(f"known states must be names from {STATE_NAMES}; got {name!r}")
-    free = [j for j, name in enumerate(STATE_NAMES) if name not in known]
+        if name not in names:
+            raise ValueError(f"known states must be names from {names}; got {name!r}")
+    free = [j for j, name in enumerate(names) if name not in known]
     if not free:
-        raise ValueError("at least one state must be unknown; got all seven as known")
+        raise ValueError(f"at least one state must be unknown; got all {len(names)} as known")
     return np.array(free, dtype=np.int64)
 
 

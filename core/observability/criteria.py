@@ -98,7 +98,7 @@ def _criterion(states, stations, criterion, threshold, steps, T, known, sensor):
 
 def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 20.0),
                      criterion="mean_dopt", threshold=10.0, noise=None,
-                     steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=(),
+                     steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None, sea=None, known=(),
                      sensor=None):
     """How well a station layout covers a surveillance region.
 

@@ -8,8 +8,6 @@ Built on the all-rows Fisher information of :mod:`core.observability.fisher`
 - :func:`horizontal_error_ellipse` and :func:`crlb_maps` — the 1-σ horizontal position error
   ellipse (m, degrees), depth error σz (m), speed error σ|v| (m/s) per point or over a plane
   (:class:`CrlbErrors`).
-- :func:`magnetic_plane_states` and :func:`magnetic_clear` — a plane's magnetic target states,
-  and which of them stay clear of every station (used by :mod:`.maps` and :mod:`.design` too).
 
 Where Γ is structurally rank-deficient the CRLB is +inf (orientation NaN); the region criteria
 of :mod:`core.observability.design` say how they count such points.
@@ -31,8 +29,6 @@ __all__ = [
     "crlb_covariance",
     "crlb_maps",
     "horizontal_error_ellipse",
-    "magnetic_clear",
-    "magnetic_plane_states",
 ]
 
 #: Γ entries per chunk of :func:`crlb_maps` (bounds memory at ~32 MB per array).
@@ -66,7 +62,7 @@ def _covariance_flat(states, stations, observable, steps, T, known, sensor):
 
 
 def crlb_covariance(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
-                    sigma=4.0, model="exact", sea=None, known=(), sensor=None):
+                    sigma=None, model=None, sea=None, known=(), sensor=None):
     """Full Cramér–Rao covariance F⁻¹ of the 7 states.
 
     Parameters
@@ -79,9 +75,12 @@ def crlb_covariance(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
         Sensor noise standard deviation (V/m) on every field component, > 0.
     steps : int
         Number of instants N ≥ 1 (all rows of all stations).
-    T, sigma, model, sea, known, sensor
-        As for :func:`core.gamma` (``sea``: whole space or a :class:`core.Sea`; ``sensor``: the
-        measurement model, whose magnetic kinds take 8 states and noise in nT, nT/m).
+    T, known, sensor
+        As for :func:`core.gamma` (``sensor``: the measurement model with its medium, whose
+        magnetic kinds take 8 states and noise in nT, nT/m).
+    sigma, model, sea
+        Deprecated (a DeprecationWarning): the electric medium beside ``sensor=``; pass
+        ``sensor=core.Sensor("E", noise, sigma, sea, model)``, which they build.
 
     Returns
     -------
@@ -173,7 +172,7 @@ def _errors_from_cov(states, cov, observable):
 
 
 def horizontal_error_ellipse(states, stations, *, noise=None, steps=DEFAULT_STEPS,
-                             T=1.0, sigma=4.0, model="exact", sea=None, known=(), sensor=None):
+                             T=1.0, sigma=None, model=None, sea=None, known=(), sensor=None):
     """1-σ horizontal position error ellipse, depth and speed errors from the CRLB.
 
     Parameters
@@ -235,18 +234,6 @@ def _plane_states(plane, velocity, moments, sensor=None, rows=slice(None)):
     return out.reshape(-1, out.shape[-1])
 
 
-def magnetic_plane_states(plane, velocity, moments, rows=slice(None)):
-    """Magnetic target states (rows · n, 8) on a plane's grid: velocity (vx, vy) m/s and moment
-    (mx, my, mz) A·m² everywhere."""
-    return _plane_states(plane, velocity, moments, sensors.Sensor("BG"), rows)
-
-
-def magnetic_clear(states, stations, sensor, steps, T):
-    """(P,) True where a magnetic target (P, 8) stays clear of every station at every instant
-    of Γ (:meth:`core.Sensor.clear`)."""
-    return sensor.clear(states, stations, steps, T)
-
-
 def _pair(name, value):
     arr = np.asarray(value, dtype=np.float64) if np.ndim(value) == 1 else None
     if arr is None or arr.shape != (2,) or not np.all(np.isfinite(arr)):
@@ -254,12 +241,8 @@ def _pair(name, value):
     return arr
 
 
-def _off_station(states, stations):
-    return np.min(validation.station_distances(states, stations), axis=1) >= validation.ON_STATION
-
-
 def crlb_maps(plane, stations, *, velocity, moments, noise=None, steps=DEFAULT_STEPS,
-              T=1.0, sigma=4.0, model="exact", sea=None, known=(), sensor=None):
+              T=1.0, sigma=None, model=None, sea=None, known=(), sensor=None):
     """CRLB errors (ellipse, depth, speed, position) over a :class:`core.Plane`.
 
     Parameters

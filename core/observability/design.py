@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from .criteria import CRITERIA, CriterionResult, layout_criterion
 from .crlb import CrlbErrors, crlb_covariance, crlb_maps, horizontal_error_ellipse
-from .crlb import magnetic_plane_states  # noqa: F401  (re-exported: importable from here)
 from .layouts import LAYOUTS, MAX_STATIONS, station_layout
 from .optimiser import LayoutProblem, LayoutResult, optimise_layout
 from .spacing import SpacingResult, best_spacing, spacing_curve

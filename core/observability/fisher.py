@@ -56,13 +56,15 @@ class FisherMeasures:
 
 
 def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
-                    sigma=4.0, model="exact", sea=None, known=(), sensor=None):
+                    sigma=None, model=None, sea=None, known=(), sensor=None):
     """D-optimal measure and Cramér–Rao bounds at every state.
 
     Parameters
     ----------
-    states, stations, T, sigma, model, sea, known
+    states, stations, T, known
         As for :func:`core.gamma`.
+    sigma, model, sea
+        Deprecated, as for :func:`core.crlb_covariance`.
     noise : float or None
         Sensor noise standard deviation on each component, > 0: V/m (electric; None is
         :data:`DEFAULT_NOISE`), nT (B), nT/m (G), (nT, nT/m) (BG). None: the sensor's own.
@@ -124,7 +126,7 @@ def _fisher_from_kernel(states, options, n_rows, noise, names):
 
 
 def fisher_information(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
-                       sigma=4.0, model="exact", sea=None, known=(), sensor=None):
+                       sigma=None, model=None, sea=None, known=(), sensor=None):
     """Fisher information matrix F = Γᵀ R⁻¹ Γ, R = diag(noise²) of each component.
 
     Parameters are those of :func:`fisher_measures`.

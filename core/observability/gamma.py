@@ -109,7 +109,9 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=
         States treated as known (their columns dropped), e.g. ``("Ph", "Pv")``.
     sensor : {"E", "B", "G", "BG"} or core.Sensor or None
         The measurement model (:class:`core.Sensor`). None or ``"E"``: the electric field with
-        ``sigma``, ``model``, ``sea`` (a Sensor carries those itself; do not pass both). The
+        ``sigma``, ``model``, ``sea`` (spec §6: this function, :func:`log10_abs_det_gamma` and
+        :func:`observable_rank` keep them; elsewhere they are deprecated beside ``sensor=``; a
+        Sensor carries those itself: do not pass both). The
         magnetic kinds take states ``(..., 8)`` = ``[x, y, z, vx, vy, mx, my, mz]`` (m, m/s,
         A·m²), need ``steps=N`` (the paper's square rule is the electric paper's) and give
         C = 3 (B, nT), 5 (G, nT/m) or 8 (BG) rows per station and instant.
@@ -134,7 +136,7 @@ def gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=
     >>> core.gamma([30, 40, 20, 2, 2, 10, 20, 30], [[0, 0, 0]], steps=2, sensor="BG").shape
     (16, 8)
     """
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, warn=False)
     return _gamma(states, stations, T, sensor, steps, known, whiten=False)
 
 
@@ -176,12 +178,12 @@ def log10_abs_det_gamma(states, stations, *, T=1.0, sigma=4.0, model="exact", se
     >>> v.shape
     ()
     """
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, warn=False)
     sensors.refuse_square(sensor, "log10_abs_det_gamma")
     return _square(states, stations, T, sensor, known)[0]
 
 
-def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None,
+def observability_index(states, stations, *, T=1.0, sigma=None, model=None, sea=None,
                         steps=None, known=(), sensor=None):
     """Scale-free observability index log10 η, η = sqrt(det Γ_sᵀΓ_s) ∈ [0, 1].
 
@@ -189,6 +191,9 @@ def observability_index(states, stations, *, T=1.0, sigma=4.0, model="exact", se
     square paper-rule Γ, η = |det Γ| / Π‖Γ_j‖ (the Hadamard ratio); ``-inf`` where η is exactly
     0. η = Π σ_i of Γ_s is a measure, not the rank test: that is :func:`observable_rank`
     (module notes, "One criterion").
+
+    The keywords are :func:`gamma`'s (``sigma``, ``model``, ``sea`` deprecated: pass
+    ``sensor=core.Sensor("E", sigma=…, sea=…, model=…)``).
 
     Returns
     -------
@@ -241,10 +246,10 @@ def _full_rank(log_rcond, states, options, n_rows):
     return out
 
 
-def _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor):
+def _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor, warn=True):
     """Γ of the electric kind (one noise for every row: whitening changes nothing), or R^-½ Γ
     of a magnetic kind (its rows in nT and nT/m made commensurate by their noise)."""
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, warn=warn)
     return _gamma(states, stations, T, sensor, steps, known)
 
 
@@ -269,11 +274,11 @@ def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=No
     >>> int(core.observable_rank([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100], [15, 0, 100]]))
     7
     """
-    g = _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor)
+    g = _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor, warn=False)
     return _svd_rank(g)
 
 
-def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None,
+def unobservable_direction(states, stations, *, T=1.0, sigma=None, model=None, sea=None, steps=None,
                            known=(), sensor=None):
     """Unit vector n (in state units) with Γ n ≈ 0: the direction the data cannot resolve.
 
@@ -281,7 +286,8 @@ def unobservable_direction(states, stations, *, T=1.0, sigma=4.0, model="exact",
     back to state units and normalised, sign fixed so that its largest-magnitude entry is
     positive. Meaningful only where :func:`observable_rank` is below n; elsewhere it is the
     least-observable direction. For one station it is ∝ (x − sx, y − sy, z − sz, vx, vy,
-    3·Ph, 3·Pv) (the range ↔ source-strength ambiguity).
+    3·Ph, 3·Pv) (the range ↔ source-strength ambiguity). The keywords are :func:`gamma`'s
+    (``sigma``, ``model``, ``sea`` deprecated, as for :func:`observability_index`).
 
     Returns
     -------

@@ -38,8 +38,8 @@ class MapResult:
     measure: str
 
 
-def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1.0, sigma=4.0,
-                 model="exact", sea=None, known=(), noise=None, steps=DEFAULT_STEPS, sensor=None):
+def evaluate_map(plane, stations, *, velocity, moments, measure="log10_det", T=1.0, sigma=None,
+                 model=None, sea=None, known=(), noise=None, steps=DEFAULT_STEPS, sensor=None):
     """Evaluate one measure over a :class:`core.observability.grids.Plane`.
 
     Parameters

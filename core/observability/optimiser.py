@@ -152,7 +152,7 @@ def _same(a, b):
 
 def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                     moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                    noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                    noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None,
                     sea=None, known=(), d_range=None, n_curve=25, x0=None, bounds=None,
                     maxfev=400, client=None, sensor=None):
     """Optimise an N-station layout for a region criterion.
@@ -210,7 +210,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         given = dict(h=h, velocity=velocity, moments=moments, criterion=criterion,
                      threshold=threshold, noise=noise, steps=steps, T=T, sigma=sigma, model=model,
                      sea=sea, known=known, sensor=sensor)
-        defaults = dict(LayoutProblem(None).keywords(), noise=None, sigma=4.0, model="exact",
+        defaults = dict(LayoutProblem(None).keywords(), noise=None, sigma=None, model=None,
                         sea=None)
         twice = sorted(k for k, v in given.items() if not _same(v, defaults[k]))
         if twice:

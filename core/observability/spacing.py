@@ -51,7 +51,7 @@ def _map(f, values, client):
 
 def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
                   moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                  noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact",
+                  noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None,
                   sea=None, known=(), client=None, sensor=None):
     """Criterion against station spacing d (default: the paper's dual, a 2-station line).
 
@@ -120,7 +120,7 @@ class SpacingResult:
 def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
                  kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
                  criterion="mean_dopt", threshold=10.0, noise=None,
-                 steps=DEFAULT_STEPS, T=1.0, sigma=4.0, model="exact", sea=None, known=(),
+                 steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None, sea=None, known=(),
                  client=None, sensor=None):
     """Spacing d that maximises a region criterion.
 

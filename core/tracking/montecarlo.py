@@ -4,26 +4,7 @@
 and returns the TRMSE of its position against the PCRLB; ``python -m core.track``
 (:mod:`core.cli.track`) writes the result to files, the dashboard's Track tab plots it.
 
-Cases (our frame: x, y, z = depth positive down; seed 001's z-up frame is mapped by
-(x, y, z_up) → (x, −y, D − z_up), which keeps the frame right-handed; its bearings map by ψ → −ψ)
----------------------------------------------------------------------------------------------
-``seed001-sim``
-    Seed 001's simulation: p = 100 A·m (Ph = 100, Pv = 0), two 3-axis sensors on the y axis,
-    σa = 0.1 m/s², α = 0.001, σ = 1e-7 V/m, whole space σ = 4 S/m. Its Table 1 (sensor positions,
-    start, course) is lost in the text: we use the trial's geometry — sensors at (0, ±5 m) at
-    8.4 m depth, source 0.2 m deep starting at (−57.1, 280.0) m (seed frame (−57.1, −280.0)),
-    course along the array line (−y here, +y in seed 001), 2 m/s, 300 s at T = 1 s.
-``seed001-trial``
-    The same track replayed in seed 001's sea trial: layered sea D = 8.4 m, σ = 4 S/m,
-    σb = 0.4 S/m, two **2-axis** sensors on the seabed at (0, ±5 m, 8.4 m), source 0.2 m deep,
-    10 A × 10 m = 100 A·m. Simulated measurements (the trial's recordings are not published).
-
-Any sensor kind: a :class:`TrackCase` takes ``sensor=`` (a :class:`core.Sensor` or a kind name;
-its old keywords ``noise``, ``sigma``, ``sea_depth``, ``seabed_sigma`` build the electric one) and,
-for the magnetic kinds, the moment vector ``moments=(mx, my, mz)`` (A·m²) and an 8-entry
-``prior_std``; :func:`monte_carlo` takes ``sensor=`` too (it replaces the case's). The EKF and
-PUEKF run on it unchanged (the filters are generic over the measurement model); the bank is
-seed 001's electric one.
+Cases: :mod:`core.tracking.cases` (seed 001's two, any sensor kind); this module runs them.
 
 Truth: the nominal straight track (``truth_noise=False``, as seed 001's simulated straight
 course), or DWNA tracks sampled with the filter's own Q. The EKF and PUEKF start from a mean drawn
@@ -43,17 +24,15 @@ import dataclasses
 import multiprocessing as mp
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from ..model.measurement import SensorModel
-from ..model.sea import Sea
-from ..model.sensors import Sensor, sensor_model
 from .bank import BANK_BEARINGS, BANK_STRENGTHS, SEED_BEARINGS, run_bank
+from .cases import CASES, MAGNETIC_MOMENT, TrackCase, case_for_sensor, resolve_case
 from .filters import run_filters
-from .motion import dwna_model, sample_tracks, straight_track
+from .motion import dwna_model, sample_tracks
 from .pcrlb import linearisation_breaks, pcrlb
 
 __all__ = ["CASES", "FILTERS", "MAGNETIC_MOMENT", "NEES_LEVEL", "MonteCarloResult", "TrackCase",
@@ -66,150 +45,6 @@ FILTERS = ("ekf", "puekf", "bank")
 #: runs with N_pu = 1 / 2 / 3 / 5 — relinearising lets wrong-strength filters converge too, and
 #: the likelihood then tells the hypotheses apart less well (docs/tracking.md).
 DEFAULT_N_PU = 3
-
-
-@dataclass(frozen=True)
-class TrackCase:
-    """A tracking scenario: sensors, medium, true track, filter model and priors.
-
-    Lengths in m (z = depth), angles in rad (our frame), moments in A·m, noise in V/m (electric;
-    with ``sensor=`` the noise, medium and units are the Sensor's: nT, nT/m, A·m²).
-    """
-
-    name: str
-    stations: tuple
-    axes: int
-    start: tuple
-    heading: float
-    speed: float = 2.0
-    steps: int = 300
-    T: float = 1.0
-    Ph: float = 100.0
-    Pv: float = 0.0
-    noise: float = 1e-7
-    sigma: float = 4.0
-    sea_depth: float | None = None
-    seabed_sigma: float | None = None
-    sigma_a: float = 0.1
-    alpha: float = 0.001
-    #: Prior σ of the EKF/PUEKF start (x, y, z, vx, vy, Ph, Pv).
-    prior_std: tuple = (20.0, 20.0, 0.5, 0.5, 0.5, 20.0, 5.0)
-    #: Hypothesised source depth of the bank (m), its σ ξ_z (m) and the σ of Pv (A·m).
-    bank_depth: float = 0.2
-    bank_depth_std: float = 1.0
-    bank_pv_std: float = 10.0
-    description: str = field(default="", compare=False)
-    #: The measurement model (a core.Sensor or a kind name); None: the electric one of
-    #: ``noise``, ``sigma``, ``sea_depth``, ``seabed_sigma``.
-    sensor: object = None
-    #: The moment entries of the true state instead of (Ph, Pv): (mx, my, mz) in A·m² for a
-    #: magnetic sensor.
-    moments: tuple | None = None
-    #: The bank's strength levels (A·m electric, A·m² magnetic); None: seed 001's
-    #: :data:`core.BANK_STRENGTHS`.
-    bank_strengths: tuple | None = None
-
-    def sensors(self):
-        """The :class:`core.SensorModel` of the case (a :class:`core.Sea` where it has one)."""
-        stations = np.array(self.stations, float)
-        if self.sensor is not None:
-            return SensorModel(stations, axes=self.axes, sensor=self.sensor)
-        sea = None if self.sea_depth is None else Sea(self.sea_depth, self.seabed_sigma)
-        return SensorModel(stations, axes=self.axes, noise=self.noise, sigma=self.sigma, sea=sea)
-
-    def nominal_track(self):
-        """The straight true track, (steps, n): n = 7 electric, 8 with magnetic ``moments``."""
-        if self.moments is not None:
-            return straight_track(self.start, self.heading, self.speed, self.steps, T=self.T,
-                                  moments=self.moments)
-        return straight_track(self.start, self.heading, self.speed, self.steps, T=self.T,
-                              Ph=self.Ph, Pv=self.Pv)
-
-    def prior_cov(self):
-        """Prior covariance of the EKF / PUEKF start (n, n)."""
-        return np.diag(np.asarray(self.prior_std, float) ** 2)
-
-    def bank_prior_info(self):
-        """What every bank hypothesis knows a priori, as information (n, n): the depth (ξ_z)
-        and, electric, Pv; flat in x, y, velocity and the strength (what the hypotheses guess;
-        a magnetic hypothesis guesses every moment component)."""
-        sensors = self.sensors()
-        n = sensors.n_states
-        info = np.zeros((n, n))
-        info[2, 2] = 1.0 / self.bank_depth_std**2
-        _, std = sensors.sensor.bank_moments(np.inf, 1.0, self.bank_pv_std)  # guessed: σ = ∞
-        info[np.arange(5, n), np.arange(5, n)] = 1.0 / std**2
-        return info
-
-    def check(self):
-        """ValueError unless the track, the prior and the sensor have one state size."""
-        n = self.sensors().n_states
-        n_track = self.nominal_track().shape[-1]
-        if n_track != n:
-            raise ValueError(
-                f"case {self.name!r}: sensor kind {self.sensors().kind!r} has {n} states but the "
-                f"track has {n_track}: give moments=(mx, my, mz) (A·m²) for a magnetic sensor"
-            )
-        if len(self.prior_std) != n:
-            raise ValueError(f"case {self.name!r}: prior_std must have {n} entries (one per "
-                             f"state); got {len(self.prior_std)}")
-
-
-_SEED_GEOMETRY = dict(
-    stations=((0.0, -5.0, 8.4), (0.0, 5.0, 8.4)),
-    start=(-57.1, 280.0, 0.2),
-    heading=-np.pi / 2,
-)
-
-#: The two cases of seed 001 (see the module notes).
-CASES = {
-    "seed001-sim": TrackCase(
-        name="seed001-sim", axes=3, **_SEED_GEOMETRY,
-        description="seed 001 simulation: whole space, two 3-axis sensors, p = 100 A·m",
-    ),
-    "seed001-trial": TrackCase(
-        name="seed001-trial", axes=2, sea_depth=8.4, seabed_sigma=0.4, **_SEED_GEOMETRY,
-        prior_std=(20.0, 20.0, 0.1, 0.5, 0.5, 20.0, 5.0), bank_depth_std=0.2,
-        description="seed 001 sea-trial geometry: D = 8.4 m, σb = 0.4 S/m, two 2-axis seabed sensors",
-    ),
-}
-
-
-#: The magnetic target of :func:`case_for_sensor` (A·m²): |m| ≈ 1e5 A·m², a submarine's order
-#: of magnitude, mostly vertical (induced under a steep geomagnetic field) with a horizontal
-#: permanent part. At seed 001's start (≈ 285 m) B ≈ 0.4–0.9 nT (40–90 σ at 0.01 nT) while G
-#: (≈ 3B/r ≈ 0.005 nT/m) is below its 0.01 nT/m noise until the target comes within ~100 m.
-MAGNETIC_MOMENT = (3.0e4, 2.0e4, 9.0e4)
-
-
-def case_for_sensor(case, sensor):
-    """Seed 001's case (a name or a :class:`TrackCase`) measured by another sensor kind.
-
-    ``"E"`` (or None) returns the case. A magnetic kind (a name or a :class:`core.Sensor`) keeps
-    the geometry, track and filter model and changes what the target and the sensors are: the
-    target carries :data:`MAGNETIC_MOMENT` (A·m²), the stations report every component of the
-    kind (3 axes; a magnetostatic field does not see the layered sea), the prior σ of the
-    moment is 30 % of |m| per component, and the bank's strength levels are |m| × (½, 1, 2)
-    (seed 001's 50 / 100 / 200 around the truth).
-    """
-    case = _case(case)
-    sensor = sensor_model(sensor)
-    if sensor.kind == "E":
-        return case if sensor == Sensor("E") else dataclasses.replace(case, sensor=sensor)
-    m = float(np.linalg.norm(MAGNETIC_MOMENT))
-    return dataclasses.replace(
-        case, name=f"{case.name}-{sensor.kind}", sensor=sensor, axes=3, moments=MAGNETIC_MOMENT,
-        prior_std=tuple(case.prior_std[:5]) + (0.3 * m,) * 3,
-        bank_strengths=(0.5 * m, m, 2.0 * m),
-        description=f"{case.description}; sensor {sensor.kind}, moment {MAGNETIC_MOMENT} A·m²")
-
-
-def _case(case):
-    if isinstance(case, TrackCase):
-        return case
-    if case not in CASES:
-        raise ValueError(f"case must be one of {list(CASES)} or a TrackCase; got {case!r}")
-    return CASES[case]
 
 
 def hypothesis_labels(strengths=BANK_STRENGTHS, seed_bearings=SEED_BEARINGS):
@@ -370,7 +205,7 @@ def monte_carlo(case="seed001-sim", *, filter="bank", runs=100, seed=0, n_pu=Non
     -------
     MonteCarloResult
     """
-    case = _case(case)
+    case = resolve_case(case)
     if sensor is not None:
         case = dataclasses.replace(case, sensor=sensor)
     case.check()

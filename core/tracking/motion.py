@@ -39,16 +39,6 @@ _KINEMATIC = 5
 __all__ = ["dwna_model", "sample_tracks", "straight_track"]
 
 
-def _nonnegative(name, value, unit):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number ≥ 0 ({unit}); got {value!r}") from None
-    if not np.isfinite(v) or v < 0.0:
-        raise ValueError(f"{name} must be a finite number ≥ 0 ({unit}); got {value!r}")
-    return v
-
-
 def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=STATE_SIZES[0]):
     """Transition matrix F and process-noise covariance Q of the DWNA model.
 
@@ -82,8 +72,8 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=STATE_SIZES[0]):
     (2.0, 0.04, 0.04, 0.001)
     """
     T = validation.positive("T", T, "s")
-    sa2 = _nonnegative("sigma_a", sigma_a, "m/s²") ** 2
-    alpha = _nonnegative("alpha", alpha, "(A·m)² per step")
+    sa2 = validation.positive("sigma_a", sigma_a, "m/s²", zero=True) ** 2
+    alpha = validation.positive("alpha", alpha, "(A·m)² per step", zero=True)
     if n_states not in STATE_SIZES:
         raise ValueError(f"n_states must be {STATE_SIZES[0]} (electric) or {STATE_SIZES[1]} "
                          f"(magnetic); got {n_states!r}")

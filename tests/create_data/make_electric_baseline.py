@@ -3,9 +3,12 @@
 Issue 26 rebuilt the core around one measurement model (sensor kinds, magnetic physics, a
 package layout); the electric results must not move. This script evaluates a fixed set of
 cases through public names only (Γ, its measures and rank, Fisher, CRLB, maps, CRLB maps, in the
-whole space and a layered sea, both field models), so it runs unchanged on the code before and
-after. The committed data were made from commit 47b19e9 (the last before the change);
-tests/test_electric_baseline.py compares today's core with them. Run from the repository root:
+whole space and a layered sea, both field models). The committed data were made from commit
+47b19e9 (the last before the change), where every function took the medium as ``sigma=``,
+``model=``, ``sea=``; the cases now describe it as the ``core.Sensor`` those keywords build (the
+spec's Γ functions and the fields keep the keywords), so the script runs on the code since issue
+36 (on older code, use its version at 47b19e9). tests/test_electric_baseline.py compares the core
+with the data. Run from the repository root:
 
     python -m tests.create_data.make_electric_baseline [OUT.npz]
 """
@@ -46,6 +49,7 @@ def cases():
     for mname, medium in media.items():
         for sname, stations in (("single", SINGLE), ("dual", DUAL), ("triple", TRIPLE)):
             kw = dict(medium)
+            sensor = core.Sensor("E", **medium)
             key = f"{mname}_{sname}"
             out += [
                 (f"field_{key}", lambda kw=kw, st=stations: core.dipole_field(states, st, **kw)),
@@ -53,22 +57,23 @@ def cases():
                 (f"gamma_{key}", lambda kw=kw, st=stations: core.gamma(states, st, **kw)),
                 (f"gamma3_{key}", lambda kw=kw, st=stations: core.gamma(states, st, steps=3, **kw)),
                 (f"logdet_{key}", lambda kw=kw, st=stations: core.log10_abs_det_gamma(states, st, **kw)),
-                (f"eta_{key}", lambda kw=kw, st=stations: core.observability_index(states, st, **kw)),
+                (f"eta_{key}", lambda s=sensor, st=stations: core.observability_index(states, st, sensor=s)),
                 (f"rank_{key}", lambda kw=kw, st=stations: core.observable_rank(states, st, **kw)),
                 (f"rank3_{key}", lambda kw=kw, st=stations: core.observable_rank(states, st, steps=3, **kw)),
-                (f"fisher_{key}", lambda kw=kw, st=stations: core.fisher_information(states, st, **kw)),
-                (f"crlbcov_{key}", lambda kw=kw, st=stations: core.crlb_covariance(states, st, **kw)[0]),
+                (f"fisher_{key}", lambda s=sensor, st=stations: core.fisher_information(states, st, sensor=s)),
+                (f"crlbcov_{key}", lambda s=sensor, st=stations: core.crlb_covariance(states, st, sensor=s)[0]),
             ]
             for field in ("d_optimal", "position_std", "log10_eta", "observable"):
-                out.append((f"fm_{field}_{key}", lambda kw=kw, st=stations, f=field: np.asarray(
-                    getattr(core.fisher_measures(states, st, **kw), f))))
+                out.append((f"fm_{field}_{key}", lambda s=sensor, st=stations, f=field: np.asarray(
+                    getattr(core.fisher_measures(states, st, sensor=s), f))))
     # the paper model (whole space only)
     for sname, stations in (("single", SINGLE), ("dual", DUAL)):
         out += [
             (f"field_paper_{sname}", lambda st=stations: core.dipole_field(states, st, model="paper")),
             (f"gamma_paper_{sname}", lambda st=stations: core.gamma(states, st, model="paper")),
             (f"logdet_paper_{sname}", lambda st=stations: core.log10_abs_det_gamma(states, st, model="paper")),
-            (f"crlbcov_paper_{sname}", lambda st=stations: core.crlb_covariance(states, st, model="paper")[0]),
+            (f"crlbcov_paper_{sname}", lambda st=stations: core.crlb_covariance(
+                states, st, sensor=core.Sensor("E", model="paper"))[0]),
         ]
     # maps and CRLB maps (x–y plane at the paper's depth; x–z plane)
     planes = {"xy": core.Plane("xy", (-300, 300), (-300, 300), 120.0, 23),
@@ -78,14 +83,16 @@ def cases():
             for measure in ("log10_det", "log10_eta", "d_optimal", "crlb_position"):
                 key = f"map_{measure}_{pname}_{mname}"
                 out.append((key, lambda p=plane, m=measure, kw=medium: core.evaluate_map(
-                    p, DUAL, velocity=(2, 2), moments=(100, 20), measure=m, **kw).value))
+                    p, DUAL, velocity=(2, 2), moments=(100, 20), measure=m,
+                    sensor=core.Sensor("E", **kw)).value))
                 out.append((key + "_obs", lambda p=plane, m=measure, kw=medium: core.evaluate_map(
-                    p, SINGLE, velocity=(2, 2), moments=(100, 20), measure=m, **kw).observable))
+                    p, SINGLE, velocity=(2, 2), moments=(100, 20), measure=m,
+                    sensor=core.Sensor("E", **kw)).observable))
             for field in ("semi_major", "semi_minor", "orientation", "sigma_z", "sigma_speed",
                           "position", "observable"):
                 out.append((f"crlbmap_{field}_{pname}_{mname}", lambda p=plane, f=field, kw=medium:
                             getattr(core.crlb_maps(p, DUAL, velocity=(2, -1), moments=(80, 30),
-                                                   **kw), f)))
+                                                   sensor=core.Sensor("E", **kw)), f)))
     # a layout criterion (design)
     region = core.Plane("xy", (-200, 200), (-200, 200), 120.0, 9)
     out.append(("layout_criterion", lambda: np.asarray(core.layout_criterion(
