@@ -110,7 +110,8 @@ def compute(values, upload=None):
         (dict), ``note`` (str), ``diagnosis`` (:class:`core.calibration.FitDiagnosis`, when
         N ≥ 4) and ``from_residuals`` (None, or when the residual says the stated noise is off
         by more than chance: ``sigma_nt``, the reading σ the residuals give, ``bound_nt`` its
-        ± bound (the input's unit) and ``crlb`` (12,) for it).
+        ± bound (the input's unit) and ``crlb`` (12,) for it); ``printed``: seed 004's own solution
+        of its Table 1 (``K``, ``Bp``, ``be_rms_nt``, ``be_max_rel``; ``be_rms["printed"]``) or None.
     """
     v = values
     be = np.array([v["cal_be_n"], v["cal_be_e"], v["cal_be_d"]], dtype=float)
@@ -147,8 +148,11 @@ def compute(values, upload=None):
         # errors would make four level headings look barely "rank 12".
         design = rec if nominal is None else nominal
         obs = cal.calibration_observability(design, be, convention=conv)
+        t1 = cal.SEED004_TABLE1  # seed 004's own solution of its Table 1, beside the tab's
+        printed = (dict(K=np.array(t1["paper_K"]), Bp=np.array(t1["paper_Bp"]), be_rms_nt=t1["paper_be_rms_nt"],
+                        be_max_rel=t1["paper_be_max_rel"]) if src == "Seed 004 Table 1" else None)
         out = dict(error=None, attitudes=rec, be=be, convention=conv, truth=truth, obs=obs, note="",
-                   from_residuals=None)
+                   from_residuals=None, printed=printed)
         if rec.shape[0] < 4:
             out.update(crlb=np.full(12, np.inf), lsq=None, kalman=None, conv=None, be_err_kal=None,
                        be_err_lsq=None, be_rms={},
@@ -165,7 +169,10 @@ def compute(values, upload=None):
                    conv=int(cal.convergence_iteration(kal.coefficients, crlb)), diagnosis=diag,
                    from_residuals=_from_residuals(diag, design, be, sig_a, K_lin, conv))
         rms = {}
-        for key, (K, Bp) in (("kal", (kal.K, kal.Bp)), ("lsq", (lsq.K, lsq.Bp))):
+        solutions = [("kal", (kal.K, kal.Bp)), ("lsq", (lsq.K, lsq.Bp))]
+        if printed is not None:  # seed 004's K and Bp on the same readings, in this convention
+            solutions.append(("printed", (printed["K"], printed["Bp"])))
+        for key, (K, Bp) in solutions:
             try:
                 est = cal.geomagnetic_solution(B, rec, K, Bp, convention=conv)
             except ValueError:
@@ -260,9 +267,12 @@ def summary(res):
                          "*CRLB σ from residuals*; the button below sets that noise.")
         r = res["be_rms"]
         if r:
-            said = ", ".join(f"{'Kalman' if k == 'kal' else 'least squares'} "
-                             f"**{e.rms_nt:.1f} nT** (largest {100 * e.max_rel:.2f} % of |Be|)"
+            names = {"kal": "Kalman", "lsq": "least squares", "printed": "seed 004's printed K and Bp"}
+            said = ", ".join(f"{names[k]} **{e.rms_nt:.1f} nT** (largest {100 * e.max_rel:.2f} % of |Be|)"
                              for k, e in r.items())
+            if res.get("printed") is not None:  # seed 004's own figures for its Table 1
+                said += (f" (seed 004 prints {res['printed']['be_rms_nt']:g} nT and {100 * res['printed']['be_max_rel']:.1f} %, "
+                         "from a geomagnetic filter of its own)")
             if lost:
                 lines.append(f"- Geomagnetic solution Be = (KA)⁻¹(B − Bp) on these attitudes, RMS "
                              f"error per component: {said}. Not a check of K and Bp: the "
@@ -276,8 +286,10 @@ def summary(res):
 
 
 def coefficient_table(res):
-    """DataFrame: per coefficient its truth (if known), the Kalman and LSQ estimates, the CRLB
-    (and the CRLB for σ from the residuals when that differs from the stated σ)."""
+    """DataFrame: per coefficient its truth (if known), the Kalman and LSQ estimates, seed 004's
+    printed solution (its Table 1), the CRLB (and the CRLB for σ from the residuals when that
+    differs from the stated σ). Without a truth (Table 1, an upload) no truth columns: they were
+    "—" throughout, and cut the table off at 1280 px."""
     if res["error"]:
         return pd.DataFrame()
     rows = []
@@ -285,6 +297,8 @@ def coefficient_table(res):
     kal = None if res["kalman"] is None else res["kalman"].coefficients[-1]
     lsq = None if res["lsq"] is None else np.r_[res["lsq"].K.ravel(), res["lsq"].Bp]
     fr = res.get("from_residuals")
+    printed = res.get("printed")
+    printed = None if printed is None else np.r_[printed["K"].ravel(), printed["Bp"]]
     for j, (c, u) in enumerate(zip(cal.COEFFICIENTS, cal.COEFFICIENT_UNITS)):
         unit = "" if u == "1" else " nT"
         ok = bool(res["obs"].observable[j])
@@ -295,15 +309,16 @@ def coefficient_table(res):
         row = {
             "coefficient": c, "unit": "dimensionless" if u == "1" else "nT",
             "observable": "yes" if ok else "no: not identifiable",
-            "truth": _fmt(None if truth is None else truth[j], unit),
-            "Kalman": est(None if kal is None else kal[j]),
-            "least squares": est(None if lsq is None else lsq[j]),
-            "CRLB σ": _fmt(res["crlb"][j], unit),
         }
+        row.update({} if truth is None else {"truth": _fmt(truth[j], unit)})
+        row.update({"Kalman": est(None if kal is None else kal[j]), "least squares": est(None if lsq is None else lsq[j])})
+        row.update({} if printed is None else {"seed 004 (printed)": _fmt(printed[j], unit)})
+        row["CRLB σ"] = _fmt(res["crlb"][j], unit)
         if fr is not None:
             row["CRLB σ from residuals"] = _fmt(fr["crlb"][j], unit)
-        row["(Kalman − truth)/σ"] = _fmt(None if truth is None or kal is None or not np.isfinite(res["crlb"][j])
-                                         else (kal[j] - truth[j]) / res["crlb"][j])
+        if truth is not None:
+            row["(Kalman − truth)/σ"] = _fmt(None if kal is None or not np.isfinite(res["crlb"][j])
+                                             else (kal[j] - truth[j]) / res["crlb"][j])
         rows.append(row)
     return pd.DataFrame(rows)
 

@@ -36,6 +36,7 @@ from .scenario import (
     sidebar,
 )
 from .shape import shape_parts
+from .shown import WhenShown
 from .track import track_tab
 
 #: Sidebar sections: (title, parameters, collapsed?), as the inputs declare them (app.parts.sidebar).
@@ -330,10 +331,15 @@ def create_app():
             return main
         return make
 
+    # A hidden tab computes nothing: the Layout design and Track tabs follow the scenario when
+    # shown (a preset on the Maps tab waited 6-20 s for them, and its text and link 20-30 s:
+    # app/shown.py). Given the Tabs below, before any tab is built.
+    when_shown = {}
     later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
-                                          design_tab(scenario, cache, _widgets()),
+                                          design_tab(scenario, cache, _widgets(), when_shown[DESIGN_TAB]),
                                           sizing_mode="stretch_width", margin=0),
-             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB), track_tab(scenario),
+             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB),
+                                          track_tab(scenario, when_shown[TRACK_TAB]),
                                           sizing_mode="stretch_width", margin=0),
              titles[3]: in_sidebar(titles[3], calibration_parts),
              titles[4]: in_sidebar(titles[4], shape_parts)}
@@ -344,6 +350,7 @@ def create_app():
                for t in later}
     tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
                    *holders.items(), sizing_mode="stretch_width")
+    when_shown.update({tab: WhenShown(tabs, tab) for tab in (DESIGN_TAB, TRACK_TAB)})
     first_visit(tabs, titles, holders, later)
     live.shown_with(tabs, MAPS_TAB)  # no previews of the maps while another tab is shown
     if served:
@@ -368,18 +375,25 @@ def create_app():
     restyle()
     presets = pn.FlexBox(*buttons.values(), sizing_mode="stretch_width")
     sections = [_section(scenario, tabs, *section) for section in SECTIONS]
-    def download(ext, fn):
+    def download(ext, fn, label=None, suffix=""):
         # named after the scenario (was always observability_maps.*), set as the file is made
         def make():
-            button.filename = maps.download_name(scenario, cache, ext)
+            name = maps.download_name(scenario, cache, ext)
+            button.filename = name.removesuffix(f".{ext}") + f"_{suffix}.{ext}" if suffix else name
             return fn(scenario, cache)
 
         button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
-                                         label={"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
-                                         button_type="light", css_classes=[f"w-download-{ext}"])
+                                         label=label or {"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
+                                         button_type="light",
+                                         css_classes=[f"w-download-{ext}" + (f"-{suffix}" if suffix else "")])
         return button
 
-    downloads = pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png))
+    downloads = pn.Column(
+        pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
+        # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
+        pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
+                 for label, which, suffix in maps.MAP_PNGS]),
+        margin=0)
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
         # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
@@ -393,7 +407,8 @@ def create_app():
                  *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
                              sizing_mode="stretch_width") for t, side in sides.items()],
                  pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
-                                            f"{export.WIDTH_PX} px wide; one map as shown: its save tool)"),
+                                            f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
+                                            f"{export.MAP_WIDTH_PX} px wide)"),
                            downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
         main=[tabs],
         sidebar_width=360,

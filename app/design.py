@@ -14,7 +14,11 @@ from .compute import RUNAWAY_LIMIT, Snapshot
 from .design_compute import ERROR_MAP_READS, LAYOUT_READS, SPACING_READS
 from .inputs import number_input
 from .maps import alert, refusal
-from .scenario import MAX_STATIONS, PART_OF, Design
+from .scenario import MAX_STATIONS, Design
+from .shown import ALWAYS
+
+#: What redraws the Layout design map's layers (:func:`design_tab`).
+Refresh = hv.streams.Stream.define("Refresh")
 
 DESIGN_HELP = """
 **Layout design.** Click on the map to add a station (up to 8; it sits at the station depth h),
@@ -90,17 +94,18 @@ def spacing_text(sp):
             "beside or below.")
 
 
-def design_tab(scenario, cache, widgets):
+def design_tab(scenario, cache, widgets, shown=ALWAYS):
     """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
-    widget spec of pn.Param (the sidebar's)."""
+    widget spec of pn.Param (the sidebar's); ``shown``: the tab's :class:`app.shown.WhenShown`
+    (hidden, the tab computes nothing: its map, table and readout follow the scenario when it is
+    shown again, a spinner over the map meanwhile)."""
     snap = lambda: Snapshot.of(scenario, ERROR_MAP_READS)  # what the error map and the ellipse read
     st = scenario.stations  # the Stations part
-    points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True),
-                           streams=[hv.streams.Params(st, ["stations"])])
-    read = {}  # the inputs the error map reads, by part
-    for name in ERROR_MAP_READS:
-        read.setdefault(PART_OF[name], []).append(name)
-    scene = [hv.streams.Params(getattr(scenario, a), names) for a, names in read.items()]
+    # The map's three layers are redrawn by one stream, which the scenario's changes trigger
+    # through ``shown`` (streams on the scenario's parameters recomputed the map, on the thread
+    # of the change, on a hidden tab too: a preset clicked on the Maps tab waited for it)
+    redraw = Refresh()
+    points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True), streams=[redraw])
     # One more than allowed: a 9th click reaches the Scenario, which refuses it ("at most 8
     # stations") and restores the layout (with num_objects=8 the tool deleted the oldest silently)
     draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS + 1, empty_value=st.h)
@@ -114,12 +119,12 @@ def design_tab(scenario, cache, widgets):
     errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), design_compute.design),
                                                        "Custom layout: Cramér–Rao error",
                                                        scenario.design.error_quantity),
-                           streams=[*scene, hv.streams.Params(scenario.design, ["error_quantity"])])
+                           streams=[redraw])
+
     # The ellipse's point is an input of its own (a click on the map adds a station: it cannot
     # also move the ellipse)
-    tap = hv.streams.Params(scenario.design, ["ellipse_x", "ellipse_y"], rename={"ellipse_x": "x", "ellipse_y": "y"})
-
-    def ellipse(x, y, **_):
+    def ellipse(**_):
+        x, y = scenario.design.ellipse_x, scenario.design.ellipse_y
         return views.error_ellipse(design_compute.error_at(snap(), x, y), x, y,
                                    scenario.region.extent)[0]
 
@@ -147,10 +152,23 @@ def design_tab(scenario, cache, widgets):
             readout_task.start(key, partial(readout_of, key), partial(setattr, readout, "object"))
 
     readout = pn.pane.Markdown(readout_of(now()), sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
-    scenario.watch_inputs(refresh, ERROR_MAP_READS)
-    scenario.design.param.watch(refresh, ["ellipse_x", "ellipse_y"])
+    scenario.watch_inputs(shown(refresh), ERROR_MAP_READS)
+    scenario.design.param.watch(shown(refresh), ["ellipse_x", "ellipse_y"])
 
-    ell = hv.DynamicMap(ellipse, streams=[tap, *scene])
+    ell = hv.DynamicMap(ellipse, streams=[redraw])
+    map_pane = pn.pane.HoloViews(errors * points * ell)
+    # Shown again after a change made while hidden: the map computed off the event loop, a
+    # spinner over it meanwhile, then redrawn (from the shared cache) on the loop
+    map_task = offloop.Task("design-map", busy=[map_pane])
+
+    def redraw_now(*_):
+        redraw.event()
+
+    def redraw_later():
+        snapshot = snap()
+        map_task.start(None, partial(cache.get, snapshot, design_compute.design),
+                       lambda _: redraw.event())
+
     def frame(stations):
         return pd.DataFrame(stations, columns=COLUMNS, dtype=float)
 
@@ -161,14 +179,18 @@ def design_tab(scenario, cache, widgets):
 
     showing = [False]  # the table's value is being set from the layout: not an edit
 
-    def shown(*_):
+    def show_layout(*_):
         showing[0] = True
         try:
             table.value = frame(st.stations)  # a new frame: Panel sends it even amid an edit's sync
         finally:
             showing[0] = False
 
-    st.param.watch(shown, ["stations"])
+    st.param.watch(shown(show_layout), ["stations"])
+    # the map after the table: a change shows its layout at once, before the map (a layered
+    # sea's takes seconds) is computed
+    scenario.watch_inputs(shown(redraw_now, redraw_later), ERROR_MAP_READS)
+    scenario.design.param.watch(shown(redraw_now, redraw_later), ["error_quantity", "ellipse_x", "ellipse_y"])
 
     def edited(event):
         # On the table's value, not on_edit: Panel may run an edit's on_edit callbacks before
@@ -183,7 +205,7 @@ def design_tab(scenario, cache, widgets):
         if st.stations != wanted:
             # refused (the Scenario restored the layout and said why, next to the table): the
             # table shows the kept layout at once (it kept the refused cell, silently)
-            shown()
+            show_layout()
 
     table.param.watch(edited, ["value"])
     message = refusal(scenario, OWN, "w-design-message")
@@ -204,8 +226,8 @@ def design_tab(scenario, cache, widgets):
         return spacing_text(sp), (views.spacing_plot(sp), best * views.station_layer(sp.best.stations),
                                   paper * views.station_layer(sp.paper.stations))
 
-    def spacing_shown(shown):
-        text, plots = shown
+    def spacing_shown(result):
+        text, plots = result
         said.object = text
         found[:] = [pn.FlexBox(*[pn.pane.HoloViews(p) for p in plots], sizing_mode="stretch_width")]
 
@@ -248,7 +270,7 @@ def design_tab(scenario, cache, widgets):
     optimise.on_click(optimise_clicked)
     tab = pn.Column(
         pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
-        pn.FlexBox(pn.pane.HoloViews(errors * points * ell),
+        pn.FlexBox(map_pane,
                    pn.Column(pn.Param(scenario.design, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
                              number_input(scenario.design, "ellipse_x", css_classes=["w-ellipse_x"]),

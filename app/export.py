@@ -17,7 +17,12 @@ from . import map_data
 
 #: Pixels across the exported PNG (three maps side by side: ~900 px each).
 WIDTH_PX = 2700
+#: Pixels across the PNG of one map (the Download card's A, B and difference buttons; the save
+#: tool of a map on the page writes its canvas as shown, ~200-400 px).
+MAP_WIDTH_PX = 1200
 DPI = 200
+#: The maps of :func:`figure`: A, B and their difference.
+ALL = (0, 1, 2)
 
 
 def _rgba(hex_colour):
@@ -26,21 +31,30 @@ def _rgba(hex_colour):
     return tuple(int(h[k:k + 2], 16) / 255 for k in (0, 2, 4)) + (alpha,)
 
 
-def _tick_text(log):
-    """The colour bar's tick labels as the page writes them (map_figures._TICK_JS)."""
-    def text(tick, _pos=None):
-        if not log:
-            return f"{float(f'{tick:.6g}'):g}".replace("-", "\u2212")
-        m = 10.0 ** tick
-        return f"{m:.0e}" if m >= 1e4 or m < 1e-2 else f"{float(f'{m:.2g}'):g}"
-    return text
+def _tick_formatter(log):
+    """The colour bar's tick labels as the page writes them (map_data.tick_texts: one notation
+    for all the ticks of a bar, so the formatter sees them all)."""
+    from matplotlib.ticker import Formatter
+
+    class Ticks(Formatter):
+        ticks = ()
+
+        def set_locs(self, locs):  # the bar's ticks, given before their labels are asked for
+            self.ticks = list(locs)
+
+        def __call__(self, x, pos=None):
+            if pos is not None and pos < len(self.ticks) and self.ticks[pos] == x:
+                return map_data.tick_texts(self.ticks, log)[pos]
+            return map_data.tick_texts([x], log)[0]  # a value on its own
+
+    return Ticks()
 
 
-def figure(p):
-    """A matplotlib Figure of the maps of ``p`` (Panels, or their :func:`map_data.prepare`)."""
+def figure(p, which=ALL):
+    """A matplotlib Figure of the maps of ``p`` (Panels, or their :func:`map_data.prepare`):
+    those of ``which`` (indices: 0 A, 1 B, 2 the difference), side by side."""
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
-    from matplotlib.ticker import FuncFormatter
 
     d = p if isinstance(p, map_data.Prepared) else map_data.prepare(p)
     panels = d.panels
@@ -51,10 +65,15 @@ def figure(p):
     xname, vname = d.axes
     u0, u1, v0, v1 = map_data.view_box(panels)
     veil_colours = np.array([_rgba(c) for c in map_data.VEIL_PALETTE])
-    fig = Figure(figsize=(WIDTH_PX / DPI, 0.5 * WIDTH_PX / DPI), dpi=DPI, facecolor="white")
-    axes = fig.subplots(1, 3)
-    for which, (ax, (values, _obs, stations, title), (low, high, palette)) in enumerate(
-            zip(axes, d.maps, d.ranges)):
+    which = tuple(which)
+    if len(which) == 3:
+        size = (WIDTH_PX / DPI, 0.5 * WIDTH_PX / DPI)
+    else:  # each map about as tall for its width as in the three (its bar and caption below it)
+        size = (MAP_WIDTH_PX * len(which) / DPI, 1.4 * MAP_WIDTH_PX / DPI)
+    fig = Figure(figsize=size, dpi=DPI, facecolor="white")
+    axes = np.atleast_1d(fig.subplots(1, len(which)))
+    for ax, which in zip(axes, which):
+        (values, _obs, stations, title), (low, high, palette) = d.maps[which], d.ranges[which]
         cmap = ListedColormap(list(palette)).with_extremes(bad="white")
         shown = np.ma.masked_invalid(np.asarray(values, dtype=float))
         img = ax.imshow(shown, origin="lower", extent=extent, cmap=cmap, vmin=low, vmax=high,
@@ -79,7 +98,7 @@ def figure(p):
                  if which < 2 else panels.diff_label)
         log = which < 2 and panels.log_scale
         bar = fig.colorbar(img, ax=ax, orientation="horizontal", fraction=0.05, pad=0.16,
-                           format=FuncFormatter(_tick_text(log)))
+                           format=_tick_formatter(log))
         bar.set_label(f"{label}, log scale" if log else label, fontsize=7)
         bar.ax.tick_params(labelsize=6.5)
         bar.ax.annotate(map_data.wrapped(panels.captions[which], 70), xy=(0, 0), xycoords="axes fraction",
@@ -89,15 +108,18 @@ def figure(p):
         if said:
             ax.text(0.03, 0.03, said, transform=ax.transAxes, fontsize=6.5, va="bottom", ha="left",
                     bbox=dict(facecolor="white", alpha=0.9, edgecolor="#888888"))
-    fig.subplots_adjust(left=0.05, right=0.99, top=0.93, bottom=0.24, wspace=0.28)
+    if len(axes) == 3:
+        fig.subplots_adjust(left=0.05, right=0.99, top=0.93, bottom=0.24, wspace=0.28)
+    else:
+        fig.subplots_adjust(left=0.14, right=0.96, top=0.93, bottom=0.26, wspace=0.28)
     return fig
 
 
-def to_png(p) -> io.BytesIO:
-    """PNG bytes of :func:`figure` (WIDTH_PX wide)."""
+def to_png(p, which=ALL) -> io.BytesIO:
+    """PNG bytes of :func:`figure` (WIDTH_PX wide; one map: MAP_WIDTH_PX)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    fig = figure(p)
+    fig = figure(p, which)
     FigureCanvasAgg(fig)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI, facecolor="white")

@@ -220,3 +220,22 @@ def prepare(p: Panels, preview=False) -> Prepared:
     veils = tuple(veil_codes(observable, values, r) for (values, observable, *_), r in zip(maps, far))
     return Prepared(panels=p, maps=maps, axes=axes, ranges=scales, images=images, veils=veils,
                     preview=preview)
+
+
+_SUPERSCRIPT = str.maketrans("0123456789-", "\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b")
+
+
+def tick_texts(ticks, log):
+    """The colour bar's labels of ``ticks`` as :data:`app.map_figures._TICK_JS` writes them (the PNG export's
+    too): plain numbers; on a log10-metre bar metres, all as plain numbers ("3.2", "100") or,
+    when one of them is ≥ 10⁴ or < 10⁻² m, all as powers of ten ("10²", "3×10³", "10⁴")."""
+    if not log:
+        return [f"{float(f'{t:.6g}'):g}".replace("-", "\u2212") for t in ticks]
+    metres = [10.0 ** t for t in ticks]
+    if not any(m >= 1e4 or m < 1e-2 for m in metres):
+        return [f"{float(f'{m:.2g}'):g}" for m in metres]
+    out = []
+    for m in metres:
+        c, e = f"{m:.0e}".split("e")
+        out.append(("" if c == "1" else c + "\u00d7") + "10" + str(int(e)).translate(_SUPERSCRIPT))
+    return out

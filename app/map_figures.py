@@ -83,13 +83,18 @@ if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toE
 return v.toFixed(3) + far;
 """
 #: Colour bar ticks: in metres on a log10-metre scale (``log``), else the plain number. One
-#: formatter per bar, switched by its args (BokehJS keeps a colour bar's first formatter).
+#: formatter per bar, switched by its args (BokehJS keeps a colour bar's first formatter). On a
+#: log bar one notation for all its ticks (:func:`app.map_data.tick_texts`: "100" beside "1e+4" read as two
+#: scales).
 _TICK_JS = """
 if (!log) return String(Number(tick.toPrecision(6))).replace("-", "\u2212");
+const powers = ticks.some(t => Math.pow(10, t) >= 1e4 || Math.pow(10, t) < 1e-2);
 const m = Math.pow(10, tick);
-return m >= 1e4 || m < 1e-2 ? m.toExponential(0) : String(Number(m.toPrecision(2)));
+if (!powers) return String(Number(m.toPrecision(2)));
+const [c, e] = m.toExponential(0).split("e");
+const sup = String(Number(e)).replace(/[0-9-]/g, d => "\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b"["0123456789-".indexOf(d)]);
+return (c === "1" ? "" : c + "\u00d7") + "10" + sup;
 """
-
 
 #: Hover text after the value of a runaway point (app.compute.runaway).
 RUNAWAY_TEXT = (f" — over {RUNAWAY_LIMIT:.0%} of the range to the nearest station: the linearised "
@@ -118,6 +123,9 @@ class MapFigures:
     previews: tuple = ()  # per map: the preview layer's data source (app/live.py), column ``pv``
     preview_layers: tuple = ()  # per map: its renderer, shown only while previews are drawn
 
+
+#: The captions under the maps (the scenario's parameters) and the label of a veiled map.
+CAPTION_PX, CAPTION_COLOUR = "12px", "#2b2b2b"
 
 #: The figures' size before scaling to the page's width (``scale_width``): frames within ~8 % of square
 #: from ~300 px per map (a 1280 px screen) to ~400 (1600 px); ``match_aspect`` keeps
@@ -191,16 +199,18 @@ def build():
         fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
                                        visible=False), save)
         bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", orientation="horizontal",
-                       height=10, padding=4, margin=8, title_standoff=3, title_text_font_size="8pt",
-                       title_text_font_style="normal", major_label_text_font_size="8pt",
+                       height=10, padding=4, margin=8, title_standoff=3, title_text_font_size="11px",
+                       title_text_font_style="normal", major_label_text_font_size="11px",
                        formatter=CustomJSTickFormatter(code=_TICK_JS, args=dict(log=False)))
         bar.ticker = BasicTicker(desired_num_ticks=5)
         fig.add_layout(bar, "below")
-        caption = Title(text="", text_font_size="7.5pt", text_color="#555555", text_font_style="normal")
+        # readable: 12 px, near black (they were 7.5 pt grey, 10 px of #555)
+        caption = Title(text="", text_font_size=CAPTION_PX, text_color=CAPTION_COLOUR,
+                        text_font_style="normal")
         fig.add_layout(caption, "below")
         # Inside the frame: what a map veiled everywhere is (a newcomer took it for broken)
         label = Label(x=4, y=4, x_units="screen", y_units="screen", text="", visible=False,
-                      text_font_size="7.5pt", text_color="#222222", background_fill_color="white",
+                      text_font_size=CAPTION_PX, text_color="#222222", background_fill_color="white",
                       background_fill_alpha=0.9, border_line_color="#888888", padding=4)
         fig.add_layout(label)
         for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label, pv, pv_layer)):

@@ -17,6 +17,10 @@ from .scenario import defaults
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
 
+#: Width range (px) of each map on the page: at least MAP_MIN_PX (fewer maps per row if need
+#: be), at most MAP_MAX_PX.
+MAP_MIN_PX, MAP_MAX_PX = 360, 480
+
 #: Pixels kept for the paper-figure banner above the maps, shown or not.
 PAPER_HEIGHT = 52
 
@@ -252,7 +256,16 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     # the maps follow a dragged slider: previews until its release (app/live.py)
     follow = live.Live(scenario, figs, doc, exact)
     scenario.watch_inputs(redraw, READS)
-    plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+    # A row that wraps (public ``styles`` of Bokeh's models, on their elements): three maps
+    # across where each gets MAP_MIN_PX (a 1600 px screen), else A and B across and the
+    # difference under them (at 1280 × 800 the three in one row had 204 × 189 px frames). At
+    # most half the row each: the difference alone on its row is as wide as A and B, so that
+    # their shared ranges draw a metre as a metre in all three
+    for fig in figs.layout:
+        fig.styles = {"flex": f"1 0 {MAP_MIN_PX}px", "min-width": f"{MAP_MIN_PX}px",
+                      "max-width": f"min({MAP_MAX_PX}px, 50%)"}
+    plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width", styles={"flex-wrap": "wrap"}),
+                          sizing_mode="stretch_width")
     tab = pn.Column(paper, plots, start, key, note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                     sizing_mode="stretch_width")
@@ -261,8 +274,19 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     return tab
 
 
+def applied_inputs(scenario):
+    """The maps' inputs that apply to them (:func:`app.dashboard.applies` on the Maps tab), as a
+    download's header lists them: a header listing the moments of a sensor not used, a seabed
+    in the whole space or scenario B's inputs of another comparison misled (the maps' stations
+    are written as stations_A_m and stations_B_m)."""
+    from .dashboard import MAPS_TAB, applies  # the sidebar's rules (dashboard imports this module)
+
+    s = scenario.snapshot()
+    return {n: v for n, v in scenario.inputs(READS).items() if applies(n, s, MAPS_TAB)}
+
+
 def _current(scenario, cache):
-    return cache.get(Snapshot.of(scenario), compute), scenario.inputs(READS)
+    return cache.get(Snapshot.of(scenario), compute), applied_inputs(scenario)
 
 
 def download_name(scenario, cache, ext):
@@ -280,7 +304,12 @@ def to_netcdf(scenario, cache):
     return views.to_netcdf(*_current(scenario, cache))
 
 
-def to_png(scenario, cache):
-    """The three maps of ``scenario`` as one high-resolution PNG (:mod:`app.export`; the save tool
-    of a map writes its ~400 px canvas)."""
-    return export.to_png(cache.get(Snapshot.of(scenario), compute))
+def to_png(scenario, cache, which=export.ALL):
+    """The maps ``which`` (default the three; 0 A, 1 B, 2 the difference) of ``scenario`` as one
+    high-resolution PNG (:mod:`app.export`; the save tool of a map writes its canvas as shown,
+    ~200-400 px)."""
+    return export.to_png(cache.get(Snapshot.of(scenario), compute), which)
+
+
+#: The one-map PNG downloads: (label, map index, file name suffix).
+MAP_PNGS = (("A", 0, "A"), ("B", 1, "B"), ("B vs A", 2, "difference"))

@@ -47,6 +47,7 @@ from .design_compute import Design
 from .inputs import number_input
 from .maps import refusal
 from .scenario import SENSORS, Scenario, inputs
+from .shown import ALWAYS
 
 hv.extension("bokeh", logo=False)
 
@@ -302,7 +303,7 @@ def outputs_of(snapshot):
     return dict(summary=summary_text(out), plan=plan_view(out), error=error_view(out))
 
 
-def _outputs(scenario: Scenario):
+def _outputs(scenario: Scenario, shown=ALWAYS):
     """The summary, plan view and error plot, kept current off the event loop: a change of an
     input starts the Monte-Carlo on a worker thread (:class:`app.offloop.Task`), a spinner over
     them meanwhile; a case refused before computing (a track through a station, too many
@@ -349,7 +350,7 @@ def _outputs(scenario: Scenario):
                 return
             task.start(key, partial(outputs_of, key), show, failed)
 
-    scenario.watch_inputs(start, READS)
+    scenario.watch_inputs(shown(start), READS)  # hidden, it runs when the tab is shown again
     start()
     return pn.Column(problem, outputs, sizing_mode="stretch_width")
 
@@ -379,9 +380,11 @@ def note_text(s):
             "does not predict there).")
 
 
-def track_tab(scenario: Scenario):
+def track_tab(scenario: Scenario, shown=ALWAYS):
     """The Track tab's layout for a shared :class:`Scenario` (a Panel layout); its outputs are
-    built (and first computed) when the tab is first shown."""
+    built (and first computed) when the tab is first shown. ``shown``: the tab's
+    :class:`app.shown.WhenShown` (hidden, the tab computes nothing; it follows the scenario when
+    shown again, a spinner over its plots meanwhile)."""
     own = list(scenario.track.names())
     # every number is typed or dragged (a box above its slider, app.inputs: a refused text is
     # said, not dropped); the choices are selectors
@@ -396,10 +399,11 @@ def track_tab(scenario: Scenario):
         sizing_mode="stretch_width", margin=0)
     note = pn.pane.Markdown(note_text(scenario.snapshot(NOTE_READS)), sizing_mode="stretch_width",
                             css_classes=["w-track-note"])
-    scenario.watch(lambda *_: setattr(note, "object", note_text(scenario.snapshot(NOTE_READS))), NOTE_READS)
+    scenario.watch(shown(lambda *_: setattr(note, "object", note_text(scenario.snapshot(NOTE_READS)))),
+                   NOTE_READS)
 
     def outputs():
-        return _outputs(scenario)
+        return _outputs(scenario, shown)
 
     return pn.Row(
         pn.Column(widgets, refusal(scenario, own, "w-message-track"), width=320),

@@ -5,6 +5,7 @@ The comparison maps are plain Bokeh figures updated in place: :mod:`app.map_figu
 from __future__ import annotations
 
 import io
+import re
 
 import holoviews as hv
 import numpy as np
@@ -64,12 +65,18 @@ def to_dataset(p: Panels, params: dict):
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
+def _names_unit(label, unit):
+    """Whether ``label`` ends by naming ``unit`` in its parentheses ("(1σ, m)", "(m)")."""
+    return re.search(r"[(,]\s*" + re.escape(unit) + r"\)$", label) is not None
+
+
 def to_csv(p: Panels, params: dict) -> io.StringIO:
     """Tidy CSV, one row per grid point; the scenario as leading '#' comment lines."""
     ds = to_dataset(p, params)
     df = ds.to_dataframe().reset_index()
     # columns say what they hold (they were bare A, B, difference): measure and unit
-    unit = f" ({p.value_unit})" if p.value_unit else ""
+    # (not when the label already ends with it: "CRLB position error (1σ, m) (m)")
+    unit = f" ({p.value_unit})" if p.value_unit and not _names_unit(p.value_label, p.value_unit) else ""
     df = df.rename(columns={"x": "x (m)", ds["A"].dims[0]: f"{ds['A'].dims[0]} (m)",
                             "A": f"A: {p.value_label}{unit}", "B": f"B: {p.value_label}{unit}",
                             "difference": f"B vs A: {p.diff_label}"})

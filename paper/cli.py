@@ -15,6 +15,7 @@ the command above: it is the test that the committed document is current.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import re
@@ -29,8 +30,24 @@ from . import beyond, claims, figures, precision, report
 from . import scenarios as sc
 
 
+#: What ``--help`` says under its usage line: plain text (the module's notes are reStructuredText,
+#: and their first line was a second, shorter usage line of their own).
+DESCRIPTION = "Reproduce the paper's Figs. 1-6, check its claims and write the reproduction report."
+EPILOG = """\
+writes into OUT:
+  html/<model>/<figure>.html  one interactive page per figure (not with --no-html)
+  png/<model>/<panel>.png     one image per panel
+  claims.json                 the numbers behind every verdict
+  paper-reproduction.md       the report (or --doc PATH; its image links are relative to it)
+
+the committed docs are made with:
+  python -m paper --out docs/paper --doc docs/paper-reproduction.md --no-html --dpi 64
+and the same command with --check appended tests that they are current."""
+
+
 def _parser():
-    p = ArgumentParser(prog="python -m paper", description=__doc__.split("\n")[0])
+    p = ArgumentParser(prog="python -m paper", description=DESCRIPTION, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", required=True, help="output folder (created if missing)")
     p.add_argument("--n", type=int, default=121, help="grid points per axis (default 121)")
     p.add_argument("--doc", default=None, help="report path (default OUT/paper-reproduction.md)")

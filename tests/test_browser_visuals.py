@@ -88,7 +88,9 @@ def test_x_y_maps_are_at_equal_aspect_and_larger_with_their_colour_bar_below(chr
             assert g["bar_below"] and not g["bar_beside"], g
         width, height = maps[0]["frame"]
         if size == "-1280":
-            assert width >= 190 and height >= 170, maps[0]  # was 129 × 171
+            # issue 40: 204 × 189 px with the three in one row; A and B now share it
+            assert width >= 330 and height >= 330, maps[0]
+            assert maps[2]["frame"][0] >= 330, maps[2]  # the difference, under them
         else:
             assert width >= 300 and height >= 300, maps[0]  # was 236 × 289
         assert pg.errors == []
@@ -121,6 +123,59 @@ def test_the_png_download_is_high_resolution(chromium, server):
         assert download.suggested_filename == "fig_5_x_y_log10_det.png"
         img = Image.open(io.BytesIO(Path(download.path()).read_bytes()))
         assert img.size[0] >= 1600, img.size  # the save tool's PNG is the canvas: 403 × 446
+    finally:
+        pg.close()
+
+
+def test_each_map_downloads_alone_at_a_useful_resolution(chromium, server):
+    # issue 40 (still present): a map's own PNG was its save tool's canvas, 403 px wide
+    from PIL import Image
+
+    pg = _open(chromium, server, "-1280")
+    try:
+        for suffix in ("A", "B", "difference"):
+            with pg.expect_download(timeout=60_000) as info:
+                pg.locator(f".w-download-png-{suffix} button").first.click()
+            download = info.value
+            assert download.suggested_filename == f"fig_5_x_y_log10_det_{suffix}.png"
+            img = Image.open(io.BytesIO(Path(download.path()).read_bytes()))
+            assert img.size[0] >= 1000 and img.size[1] >= 1000, img.size
+    finally:
+        pg.close()
+
+
+#: Per map: [font size, colour] of each text under it that is not its colour bar (the captions).
+CAPTION_STYLE_JS = """() => { const out = [];
+  const walk = (v) => { if (!v) return;
+    if (v.model && v.model.renderers !== undefined && v.model.title !== undefined) out.push(v.model);
+    for (const c of (v.child_views ? Array.from(v.child_views) : [])) walk(c); };
+  for (const v of Object.values(Bokeh.index)) walk(v);
+  return out.slice(0, 3).map(p => p.below.filter(m => m.text !== undefined && m.text)
+    .map(m => [m.text_font_size, m.text_color])); }"""
+
+
+def _px(size):
+    value, unit = float(size[:-2]), size[-2:]
+    return value * {"px": 1.0, "pt": 4.0 / 3.0}[unit]
+
+
+def _contrast_on_white(colour):
+    """WCAG contrast ratio of a #rrggbb colour on white."""
+    channels = [int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5)]
+    lin = [c / 12.92 if c <= 0.03928 else ((c + 0.055) / 1.055) ** 2.4 for c in channels]
+    luminance = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+    return 1.05 / (luminance + 0.05)
+
+
+def test_the_map_captions_are_readable(chromium, server):
+    # issue 40 (still present): 7.5 pt (10 px) grey captions (#555: contrast 7.5) under the maps
+    pg = _open(chromium, server, "-1280")
+    try:
+        styles = pg.evaluate(CAPTION_STYLE_JS)
+        assert len(styles) == 3 and all(styles), styles
+        for size, colour in (st for per_map in styles for st in per_map):
+            assert _px(size) >= 11.0, size
+            assert _contrast_on_white(colour) >= 10.0, colour  # near black on white (#555: 7.5)
     finally:
         pg.close()
 

@@ -214,3 +214,27 @@ def test_convergence_curves_have_distinct_colours(which, names):
     for a, b in itertools.combinations(names, 2):
         d = np.linalg.norm(_lab(lines[a].line_color) - _lab(lines[b].line_color))
         assert d >= MIN_DELTA_E, (a, lines[a].line_color, b, lines[b].line_color, d)
+
+
+def test_table1_shows_seed_004s_printed_solution_beside_the_tabs():
+    # issue 40 (low): seed 004's own K and Bp for its Table 1 were not shown beside the tab's
+    res = ac.compute(values("Seed 004 Table 1"))
+    table = ac.coefficient_table(res).set_index("coefficient")
+    t1 = cal.SEED004_TABLE1
+    printed = np.r_[np.ravel(t1["paper_K"]), t1["paper_Bp"]]
+    shown = [float(t.replace("−", "-").removesuffix(" nT")) for t in table["seed 004 (printed)"]]
+    np.testing.assert_allclose(shown, printed, rtol=5e-4)  # shown to 4 significant digits
+    # no truth to compare with: no columns of dashes (they cut the table off at 1280 px)
+    assert "truth" not in table and "(Kalman − truth)/σ" not in table
+    # its geomagnetic solution on the same readings, beside seed 004's printed 266 nT
+    B, rec = cal.seed004_table1()
+    be = np.array(t1["be"])
+    err = cal.geomagnetic_error(cal.geomagnetic_solution(B, rec, np.array(t1["paper_K"]),
+                                                         np.array(t1["paper_Bp"]),
+                                                         convention=res["convention"]), be)
+    text = ac.summary(res)
+    assert f"seed 004's printed K and Bp **{err.rms_nt:.1f} nT**" in text, text
+    assert "seed 004 prints 266 nT and 1.9 %" in text
+    # a simulated case has its truth, and no printed column (the paper's attitudes are not these)
+    sim = ac.coefficient_table(ac.compute(values("Seed 004 simulation")))
+    assert "truth" in sim and "(Kalman − truth)/σ" in sim and "seed 004 (printed)" not in sim

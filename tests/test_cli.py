@@ -63,3 +63,15 @@ def test_the_readme_commands_outputs_are_ignored_by_git():
         done = subprocess.run(["git", "check-ignore", "-q", "--no-index", f"{out}/x.csv"],
                               cwd=ROOT, check=False)
         assert done.returncode == 0, f"{out}/ (written by a README command) is not git-ignored"
+
+
+@pytest.mark.parametrize("module", sorted(MAINS))
+def test_help_is_plain_text_with_one_usage_line(module, capsys):
+    # issue 40 (low): `python -m paper --help` showed the module's reStructuredText (``…``,
+    # :mod:) and a second usage line of its own, shorter than argparse's
+    code = _status(module, ["--help"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "``" not in out and not re.search(r":(mod|func|class|data):`", out), out
+    assert len(re.findall(r"(?im)^\s*(usage|command line):", out)) == 1, out
+    assert out.startswith(f"usage: python -m {MAINS[module]} "), out

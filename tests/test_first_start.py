@@ -9,6 +9,7 @@ import sys
 import threading
 import time
 import urllib.request
+from pathlib import Path
 
 import panel as pn
 
@@ -149,15 +150,19 @@ def test_a_page_whose_browser_connects_after_the_warm_up_ended_still_reloads():
 DASHBOARD_WITHIN_S = 180.0
 
 
-def starts_reach_the_dashboard(starts, env=None, browser=None):
+def starts_reach_the_dashboard(starts, env=None, browser=None, cold=None, within=DASHBOARD_WITHIN_S):
     """Start `panel serve app` ``starts`` times in a row; each time open /app in Chromium as soon
     as /liveness answers, touch nothing, and wait for the dashboard's three maps. Returns the
-    seconds from the start to the maps, per start; raises on a page that never gets there."""
+    seconds from the start to the maps, per start; raises on a page that never gets there (after
+    ``within`` s). ``cold``: a folder in which each start gets an empty numba cache of its own
+    (NUMBA_CACHE_DIR): a first start, which compiles every kernel."""
     from support.page import maps
 
     times = []
     env = {**os.environ, **SERVER_ENV, **(env or {})}
-    for _ in range(starts):
+    for start in range(starts):
+        if cold is not None:
+            env["NUMBA_CACHE_DIR"] = str(Path(cold) / f"numba-cache-{start}")
         port = free_port()
         cmd = [sys.executable, "-m", "panel", "serve", "app", "--port", str(port), "--address",
                "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}", "--liveness"]
@@ -176,8 +181,8 @@ def starts_reach_the_dashboard(starts, env=None, browser=None):
             try:
                 tab.goto(f"http://127.0.0.1:{port}/app", timeout=120_000)
                 while len(_maps_or_none(tab, maps) or []) != 3:
-                    assert time.monotonic() - t0 < DASHBOARD_WITHIN_S, (
-                        f"start {len(times) + 1}: no dashboard after {DASHBOARD_WITHIN_S} s "
+                    assert time.monotonic() - t0 < within, (
+                        f"start {len(times) + 1}: no dashboard after {within} s "
                         f"(page: {tab.inner_text('body')[:200]!r})")
                     time.sleep(0.25)
             finally:
@@ -202,3 +207,20 @@ def test_ten_starts_in_a_row_each_reach_the_dashboard_with_a_warm_cache():
         times = starts_reach_the_dashboard(10, browser=browser)
     print("seconds from the start to the maps, per start:", [round(t, 1) for t in times])
     assert len(times) == 10
+
+
+#: Cold starts in a row (each compiles the default page's kernels, ~1.5-5 min on 2 cores; the
+#: issue asks for ten: COLD_STARTS=10), and the seconds each may take to show the maps (the
+#: issue saw 5.2 min at load 5-8; the bound leaves room beyond it).
+COLD_STARTS = int(os.environ.get("COLD_STARTS", "1"))
+COLD_DASHBOARD_WITHIN_S = 900.0
+
+
+def test_starts_with_a_cold_cache_each_reach_the_dashboard(tmp_path):
+    """Issue 40: the same as a warm start, from an empty numba cache each time: the page opened as
+    soon as /liveness answers is the warming page, which must reload itself into the dashboard."""
+    with chromium_browser() as browser:
+        times = starts_reach_the_dashboard(COLD_STARTS, browser=browser, cold=tmp_path,
+                                           within=COLD_DASHBOARD_WITHIN_S)
+    print("cold cache: seconds from the start to the maps, per start:", [round(t, 1) for t in times])
+    assert len(times) == COLD_STARTS

@@ -1,5 +1,6 @@
 """The dashboard's state and computations, without a browser."""
 
+import csv
 import dataclasses
 import math
 
@@ -653,3 +654,39 @@ def test_presets_applied_from_two_threads_at_once_leave_one_of_them_whole():
         t.join()
     assert s.values() in whole
     assert all(v in whole for v in seen), "a watcher saw a mix of the two presets"
+
+
+def test_csv_names_each_unit_once_and_lists_only_the_inputs_that_apply():
+    # issue 40 (low): the column "A: CRLB position error (1σ, m) (m)", and a header listing the
+    # magnetic moments, the seabed and scenario B's inputs beside electric whole-space maps
+    from app import maps
+
+    s = Scenario(resolution=21, measure="CRLB position error (m)")
+    text = maps.to_csv(s, PanelCache()).read()
+    lines = text.splitlines()
+    columns = next(csv.reader([next(line for line in lines if not line.startswith("#"))]))
+    assert "A: CRLB position error (1σ, m)" in columns, columns
+    assert not any("(m) (m)" in c for c in columns), columns
+    listed = {line[2:].split(" = ")[0] for line in lines if line.startswith("# ")}
+    assert {"Ph", "Pv", "z", "d", "noise", "sigma", "measure", "comparison"} <= listed, listed
+    assert not listed & {"mx", "my", "mz", "noise_b", "noise_g", "baseline", "sea_depth",
+                         "seabed_sigma", "Ph_b", "Pv_b", "k", "d_ref", "y", "z_min", "z_max",
+                         "sensor_b", "layout", "stations"}, listed
+    # another measure's unit is still said once
+    s.maps.measure = "Observability index log10 η"
+    columns = next(csv.reader([next(line for line in maps.to_csv(s, PanelCache()).read().splitlines()
+                                    if not line.startswith("#"))]))
+    assert "A: log10 η (observability index) (dimensionless)" in columns, columns
+
+
+def test_one_map_exports_alone_at_a_useful_resolution():
+    # issue 40 (still present): a map's own PNG was its save tool's canvas, 403 px wide
+    from PIL import Image
+
+    from app import export
+
+    p = compute(Snapshot.of(Scenario(resolution=21)))
+    for which in range(3):
+        img = Image.open(export.to_png(p, (which,)))
+        assert img.size == (export.MAP_WIDTH_PX, round(1.4 * export.MAP_WIDTH_PX)), img.size
+    assert Image.open(export.to_png(p)).size[0] == export.WIDTH_PX  # the three, as before

@@ -99,7 +99,10 @@ def _int(lo, what, hi=None, why=""):
 
 
 def _parser():
-    p = _Parser(prog=PROG, description=__doc__.split("\n")[0])
+    # plain text: the module's notes are reStructuredText, and their first line a usage line
+    p = _Parser(prog=PROG, description="Run one of seed 003's target-sizing cases (Monte-Carlo "
+                                       "passes over the target) and write summary.json and its "
+                                       "figures into OUT.")
     p.add_argument("--case", required=True, choices=list(CASES), metavar="CASE",
                    help="one of " + ", ".join(CASES))
     p.add_argument("--runs", type=_int(1, "Monte-Carlo passes", MAX_RUNS,
