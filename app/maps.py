@@ -11,6 +11,7 @@ import panel as pn
 from bokeh.layouts import row
 
 from . import export, live, map_data, map_figures, offloop, views
+from .applies import MAPS_TAB, applies
 from .compute import READS, RUNAWAY_LIMIT, Snapshot, compute
 from .scenario import defaults
 
@@ -275,12 +276,10 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
 
 
 def applied_inputs(scenario):
-    """The maps' inputs that apply to them (:func:`app.dashboard.applies` on the Maps tab), as a
+    """The maps' inputs that apply to them (:func:`app.applies.applies` on the Maps tab), as a
     download's header lists them: a header listing the moments of a sensor not used, a seabed
     in the whole space or scenario B's inputs of another comparison misled (the maps' stations
     are written as stations_A_m and stations_B_m)."""
-    from .dashboard import MAPS_TAB, applies  # the sidebar's rules (dashboard imports this module)
-
     s = scenario.snapshot()
     return {n: v for n, v in scenario.inputs(READS).items() if applies(n, s, MAPS_TAB)}
 

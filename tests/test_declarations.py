@@ -9,7 +9,7 @@ import panel as pn
 import param
 import pytest
 
-from app import dashboard
+from app import applies, dashboard
 from app.part import declared
 from app.scenario import (
     ACCEPTED,
@@ -31,7 +31,7 @@ VARIANTS = [{}, dict(sensor="magnetometer (B, nT)"), dict(sensor="gradiometer (G
             dict(comparison="Moment split B − A (Fig. 4)", sensor="magnetometer (B, nT)"),
             dict(comparison="Spacing d − reference d (Fig. 6)"),
             dict(comparison="Sensor kind B − A (seed 003)"), dict(measure="CRLB position error (m)")]
-TABS = (dashboard.MAPS_TAB, dashboard.DESIGN_TAB, dashboard.TRACK_TAB)
+TABS = (applies.MAPS_TAB, applies.DESIGN_TAB, applies.TRACK_TAB)
 
 
 def on_a_card():
@@ -60,7 +60,7 @@ def test_the_sidebar_built_shows_each_input_where_its_declared_rule_says():
                  for title, names, _ in sidebar()}
         for tab in TABS:
             tabs.active = tab
-            w = dashboard.where(s.snapshot(), tab)
+            w = applies.where(s.snapshot(), tab)
             for title, names, _ in sidebar():
                 card = built[title][0]
                 rows = list(card.objects)
@@ -72,18 +72,18 @@ def test_the_sidebar_built_shows_each_input_where_its_declared_rule_says():
 
 
 def test_what_decides_visibility_is_what_the_rules_read():
-    """DECIDING (recorded from dashboard.where) holds every input a rule's answer depends on: the
+    """DECIDING (recorded from applies.where) holds every input a rule's answer depends on: the
     answer of every rule for every variant changes only through those inputs."""
-    assert {"plane", "comparison", "measure", "sensor", "sensor_b", "sea_model", "layout"} <= set(dashboard.DECIDING)
+    assert {"plane", "comparison", "measure", "sensor", "sensor_b", "sea_model", "layout"} <= set(applies.DECIDING)
     base = Scenario().snapshot()
     for tab in TABS:
-        before = {n: shown(n, dashboard.where(base, tab)) for n in on_a_card()}
-        for name in set(PART_OF) - set(dashboard.DECIDING):
+        before = {n: shown(n, applies.where(base, tab)) for n in on_a_card()}
+        for name in set(PART_OF) - set(applies.DECIDING):
             p = parameter(name)
             if isinstance(p, param.Number) and not isinstance(p, param.Integer):
                 other = Scenario().snapshot()
                 setattr(other, name, p.default + 1.0)
-                assert {n: shown(n, dashboard.where(other, tab)) for n in on_a_card()} == before
+                assert {n: shown(n, applies.where(other, tab)) for n in on_a_card()} == before
 
 
 def test_the_limits_are_the_declared_ones_and_refuse_what_is_outside():

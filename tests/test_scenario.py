@@ -594,7 +594,7 @@ def test_the_sea_trial_preset_is_the_command_lines_trial_on_the_track_tab():
 
 def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():
     # issue 25 (Track): the sidebar's Speed/Heading stayed visible though the track uses its own
-    from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+    from app.applies import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
 
     s = Scenario()
     for name in ("speed", "heading"):

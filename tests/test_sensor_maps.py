@@ -7,7 +7,7 @@ import core
 from app import map_data, map_figures
 from app.compute import Snapshot, compute
 from app.design_compute import ERROR_MAP_READS
-from app.dashboard import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+from app.applies import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
 from app.design_compute import design
 from app.scenario import PRESETS, Scenario
 
