@@ -149,8 +149,8 @@ STATE_JS = """() => { const B = window.__bench; const ws = window.__ws;
   const painted = ids.every(id => B.paints.some(p => p[2] === id && p[3] === B.last[id]));
   return {now: performance.now(), lastIn, last: Object.assign({}, B.last), ids, painted}; }"""
 
-#: The exact value of the P_h slider model (the text box shows it rounded).
-PH_VALUE_JS = """(name) => {
+#: The exact value of a slider model (the text box shows it rounded): the P_h slider unless named.
+PH_VALUE_JS = """(name) => { name = name || 'Ph';
   const col = Array.from(Bokeh.documents[0].all_models).find(m => (m.css_classes || []).includes('w-' + name));
   const stack = [col];
   while (stack.length) {
