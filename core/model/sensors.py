@@ -21,8 +21,8 @@ is the electric paper's and is refused for magnetic kinds.
 
 from __future__ import annotations
 
+import inspect
 import os
-import sys
 import warnings
 from dataclasses import dataclass
 
@@ -317,7 +317,7 @@ def _outside_core():
     """``warnings.warn``'s stacklevel, counted from :func:`sensor_model`, of the first caller
     outside the :mod:`core` package (the user's line, however deep the public call)."""
     core_dir = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-    frame, level = sys._getframe(1), 1  # sensor_model's frame
+    frame, level = inspect.currentframe().f_back, 1  # sensor_model's frame
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(core_dir):
         frame, level = frame.f_back, level + 1
     return level
