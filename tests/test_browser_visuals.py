@@ -14,8 +14,7 @@ from urllib.parse import urlencode
 import pytest
 
 from support import ROOT, screenshots
-from support.page import CHROMIUM, chromium_browser
-from support.server import served_app
+from support.page import CHROMIUM
 
 pytest.importorskip("playwright.sync_api")
 SIZES = screenshots.SIZES
@@ -45,15 +44,9 @@ MAPS_READY = """() => window.Bokeh && Bokeh.documents.length > 0 && Array.from(B
 
 
 @pytest.fixture(scope="module")
-def server():
-    with served_app() as (url, _):
-        yield url + "/app"
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    with chromium_browser() as browser:
-        yield browser
+def app_url(server):
+    """The dashboard's page on conftest's served app."""
+    return server + "/app"
 
 
 def _open(chromium, url, size=""):
@@ -76,10 +69,10 @@ def _geometry(pg):
 
 
 @pytest.mark.parametrize("size", list(SIZES))
-def test_x_y_maps_are_at_equal_aspect_and_larger_with_their_colour_bar_below(chromium, server, size):
+def test_x_y_maps_are_at_equal_aspect_and_larger_with_their_colour_bar_below(chromium, app_url, size):
     # a: circles were upright ellipses (0.21 px/m across, 0.28 up at 1280 × 800); b: each map
     # was ~130 × 190 px there, its colour bar's labels against the frame
-    pg = _open(chromium, server, size)
+    pg = _open(chromium, app_url, size)
     try:
         maps = _geometry(pg)
         for g in maps:
@@ -98,9 +91,9 @@ def test_x_y_maps_are_at_equal_aspect_and_larger_with_their_colour_bar_below(chr
         pg.close()
 
 
-def test_an_x_z_section_states_its_vertical_exaggeration_and_is_drawn_with_it(chromium, server):
+def test_an_x_z_section_states_its_vertical_exaggeration_and_is_drawn_with_it(chromium, app_url):
     query = urlencode({"plane": "x–z", "z_min": 100.0, "z_max": 400.0})
-    pg = _open(chromium, f"{server}?{query}")
+    pg = _open(chromium, f"{app_url}?{query}")
     try:
         pg.wait_for_function("() => Array.from(Bokeh.documents[0].all_models).some("
                              "m => m.axis_label === 'z (m), vertical ×2')", timeout=30_000)
@@ -112,10 +105,10 @@ def test_an_x_z_section_states_its_vertical_exaggeration_and_is_drawn_with_it(ch
         pg.close()
 
 
-def test_the_png_download_is_high_resolution(chromium, server):
+def test_the_png_download_is_high_resolution(chromium, app_url):
     from PIL import Image
 
-    pg = _open(chromium, server)
+    pg = _open(chromium, app_url)
     try:
         with pg.expect_download(timeout=60_000) as info:
             pg.locator(".w-download-png button").first.click()
@@ -127,11 +120,11 @@ def test_the_png_download_is_high_resolution(chromium, server):
         pg.close()
 
 
-def test_each_map_downloads_alone_at_a_useful_resolution(chromium, server):
+def test_each_map_downloads_alone_at_a_useful_resolution(chromium, app_url):
     # issue 40 (still present): a map's own PNG was its save tool's canvas, 403 px wide
     from PIL import Image
 
-    pg = _open(chromium, server, "-1280")
+    pg = _open(chromium, app_url, "-1280")
     try:
         for suffix in ("A", "B", "difference"):
             with pg.expect_download(timeout=60_000) as info:
@@ -167,9 +160,9 @@ def _contrast_on_white(colour):
     return 1.05 / (luminance + 0.05)
 
 
-def test_the_map_captions_are_readable(chromium, server):
+def test_the_map_captions_are_readable(chromium, app_url):
     # issue 40 (still present): 7.5 pt (10 px) grey captions (#555: contrast 7.5) under the maps
-    pg = _open(chromium, server, "-1280")
+    pg = _open(chromium, app_url, "-1280")
     try:
         styles = pg.evaluate(CAPTION_STYLE_JS)
         assert len(styles) == 3 and all(styles), styles
@@ -184,9 +177,9 @@ def _legend(pg):
     return pg.locator(".w-legend .maps-legend").first.text_content()  # in the pane's shadow root
 
 
-def test_the_runaway_legend_shows_only_with_runaway_marks(chromium, server):
+def test_the_runaway_legend_shows_only_with_runaway_marks(chromium, app_url):
     # d: shown for every measure; the runaway marks exist on CRLB maps only
-    pg = _open(chromium, server)
+    pg = _open(chromium, app_url)
     try:
         assert "unobservable" in _legend(pg) and "runaway" not in _legend(pg)
         pg.locator(".w-measure select").first.select_option("CRLB position error (m)")
@@ -198,9 +191,9 @@ def test_the_runaway_legend_shows_only_with_runaway_marks(chromium, server):
         pg.close()
 
 
-def test_text_typed_in_a_number_box_is_refused_with_its_reason(chromium, server):
+def test_text_typed_in_a_number_box_is_refused_with_its_reason(chromium, app_url):
     # l: the browser's numeric box dropped "abc" without a word
-    pg = _open(chromium, server, "-1280")
+    pg = _open(chromium, app_url, "-1280")
     try:
         box = pg.locator(".w-Ph input").first
         box.fill("abc")
@@ -233,10 +226,10 @@ TRACK_STATE_JS = """() => { const ms = Array.from(Bokeh.documents[0].all_models)
           ms.some(m => (m.css_classes || []).includes('w-track-summary'))]; }"""
 
 
-def test_the_track_tab_shows_a_spinner_until_its_first_plots(chromium, server):
+def test_the_track_tab_shows_a_spinner_until_its_first_plots(chromium, app_url):
     # j: blank for 2-3 s on the first visit: the tab's first render carried the plots (computed
     # in every new session), with no indicator
-    pg = _open(chromium, server, "-1280")
+    pg = _open(chromium, app_url, "-1280")
     try:
         start = time.time()
         pg.get_by_text("Track", exact=True).first.click()
@@ -258,9 +251,9 @@ def test_the_track_tab_shows_a_spinner_until_its_first_plots(chromium, server):
         pg.close()
 
 
-def test_the_best_spacing_is_said_under_its_button(chromium, server):
+def test_the_best_spacing_is_said_under_its_button(chromium, app_url):
     # k: the result appeared below the fold (1280 × 800), the button's neighbourhood unchanged
-    pg = _open(chromium, server, "-1280")
+    pg = _open(chromium, app_url, "-1280")
     try:
         pg.get_by_text("Layout design", exact=True).first.click()
         button = pg.get_by_role("button", name="Find best spacing")
@@ -293,7 +286,7 @@ def test_the_screenshots_command_takes_every_view(chromium, server, tmp_path):
     set-up changed what is shown), no page error (``take`` raises on one)."""
     from PIL import Image
 
-    written = screenshots.take(chromium, server.removesuffix("/app"), tmp_path)
+    written = screenshots.take(chromium, server, tmp_path)
     expected = {f"screenshot-{screenshots.file_name(n, s)}.png"
                 for n, (_, _, sizes) in screenshots.SHOTS.items() for s in sizes}
     assert {p.name for p in written} == expected == {p.name for p in tmp_path.iterdir()}

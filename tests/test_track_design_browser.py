@@ -8,9 +8,8 @@ import time
 
 import pytest
 
-from support.page import (SMALL_VIEWPORT, VIEWPORT, chromium_browser, chromium_missing, type_value,
+from support.page import (SMALL_VIEWPORT, VIEWPORT, chromium_missing, type_value,
                           value_of, wait_count, wait_plots)
-from support.server import served_app
 
 pytest.importorskip("playwright.sync_api")
 pytestmark = pytest.mark.skipif(chromium_missing(), reason="Debian's chromium is not installed")
@@ -46,15 +45,9 @@ STATION_AT_JS = """(y) => Array.from(Bokeh.documents[0].all_models).some(
 
 
 @pytest.fixture(scope="module")
-def server():
-    with served_app() as (url, _):
-        yield url + "/app"
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    with chromium_browser() as browser:
-        yield browser
+def app_url(server):
+    """The dashboard's page on conftest's served app."""
+    return server + "/app"
 
 
 def _open(chromium, url, viewport=VIEWPORT):
@@ -82,10 +75,10 @@ def _until(fn, what, timeout=30.0):
         time.sleep(0.2)
 
 
-def test_the_track_inputs_take_typed_values_and_say_a_refusal(chromium, server):
+def test_the_track_inputs_take_typed_values_and_say_a_refusal(chromium, app_url):
     # defects 13 and 5: the Track sliders took no typed value (a start of −100 m took 1,500 key
     # presses) and the α box dropped −1, 200 and abc without a word
-    pg, errors = _open(chromium, server + "?tab=Track")
+    pg, errors = _open(chromium, app_url + "?tab=Track")
     try:
         for name, value in (("track_x0", "-100"), ("track_y0", "37.5"), ("track_heading", "-33"),
                             ("track_speed", "3.5"), ("track_duration", "120"),
@@ -115,10 +108,10 @@ def test_the_track_inputs_take_typed_values_and_say_a_refusal(chromium, server):
     assert errors == [], errors
 
 
-def test_a_short_track_is_computed_and_a_refused_one_says_none_is(chromium, server):
+def test_a_short_track_is_computed_and_a_refused_one_says_none_is(chromium, app_url):
     # defect 9: ?track_duration=5&tab=Track said "init_steps must be an integer in [1, 3]; got 10"
     # under "Computing the track …" for good
-    pg, errors = _open(chromium, server + "?track_duration=5&tab=Track")
+    pg, errors = _open(chromium, app_url + "?track_duration=5&tab=Track")
     try:
         _, text = wait_plots(pg, lambda got, text: "bank, 5 runs" in text, timeout=120)
         assert "init_steps" not in text + _text(pg, "w-track-problem")
@@ -131,7 +124,7 @@ def test_a_short_track_is_computed_and_a_refused_one_says_none_is(chromium, serv
     finally:
         pg.close()
     # a first track refused before it is computed (6,001 steps): no track was ever shown
-    pg, more = _open(chromium, server + "?T=0.1&track_duration=600&tab=Track")
+    pg, more = _open(chromium, app_url + "?T=0.1&track_duration=600&tab=Track")
     errors += more
     try:
         _until(lambda: "No track computed yet" in _text(pg, "w-track-summary"), "No track computed yet", 60)
@@ -146,10 +139,10 @@ def test_a_short_track_is_computed_and_a_refused_one_says_none_is(chromium, serv
 
 
 @pytest.mark.parametrize("viewport", [VIEWPORT, SMALL_VIEWPORT], ids=["1600", "1280"])
-def test_the_plan_views_are_drawn_to_scale(chromium, server, viewport):
+def test_the_plan_views_are_drawn_to_scale(chromium, app_url, viewport):
     # defect 8: 1.333 px/m in x against 0.785 in y at 1600 × 1000 (a 25° track looked like 15°);
     # and the Layout design map was 320 × 320 px with ~200 px blank under it
-    pg, errors = _open(chromium, server + "?tab=Track", viewport)
+    pg, errors = _open(chromium, app_url + "?tab=Track", viewport)
     try:
         w, h, xs, ys = _until(lambda: (lambda g: g if g and g[0] > 0 else None)(
             pg.evaluate(SCALE_JS, "Track, PCRLB")), "the plan view drawn", 120)
@@ -185,9 +178,9 @@ def _edit(pg, rows, row, field, text):
     box.press("Enter")
 
 
-def test_a_refused_table_edit_is_reverted_at_once_and_the_next_one_kept(chromium, server):
+def test_a_refused_table_edit_is_reverted_at_once_and_the_next_one_kept(chromium, app_url):
     # defect 4: z = −5 sat in the table with no message for 16 s; then y = 130 was lost
-    pg, errors = _open(chromium, server + "?tab=Layout+design")
+    pg, errors = _open(chromium, app_url + "?tab=Layout+design")
     try:
         rows = pg.locator(".w-station-table .tabulator-row")
         wait_count(rows, 2, timeout=60)
@@ -211,9 +204,9 @@ def test_a_refused_table_edit_is_reverted_at_once_and_the_next_one_kept(chromium
     assert errors == [], errors
 
 
-def test_the_station_depth_h_moves_the_design_and_track_stations(chromium, server):
+def test_the_station_depth_h_moves_the_design_and_track_stations(chromium, app_url):
     # defect 6: h = 120 moved no custom station; clicked ones then sat at 120 m beside 100 m
-    pg, errors = _open(chromium, server + "?tab=Layout+design")
+    pg, errors = _open(chromium, app_url + "?tab=Layout+design")
     try:
         rows = pg.locator(".w-station-table .tabulator-row")
         wait_count(rows, 2, timeout=60)
