@@ -23,6 +23,7 @@ from . import offloop
 from .calibration_plots import Figures, plot_data
 from .maps import refusal
 from .number_box import number_box
+from .part import declared
 from .scenario import Calibration
 
 #: The parts (app.scenario.PARTS) the tab reads: its own.
@@ -30,8 +31,10 @@ READS = ("calibration",)
 #: The tab's inputs.
 FIELDS = Calibration.names()
 
-_SIM_BE = dict(zip(("cal_be_n", "cal_be_e", "cal_be_d"), cal.SEED004_SIMULATION["be"]))
-_T1_BE = dict(zip(("cal_be_n", "cal_be_e", "cal_be_d"), cal.SEED004_TABLE1["be"]))
+#: The geomagnetic field's inputs (north, east, down), as declared (``vector="Be"``).
+BE = tuple(n for n in FIELDS if declared(Calibration.param[n]).get("vector") == "Be")
+_SIM_BE = dict(zip(BE, cal.SEED004_SIMULATION["be"]))
+_T1_BE = dict(zip(BE, cal.SEED004_TABLE1["be"]))
 #: One click loads a case: seed 004's two, and the manoeuvres that make its observability point.
 PRESETS = {
     "Seed 004 simulation": dict(_SIM_BE, cal_source="Seed 004 simulation", cal_n_attitudes=12,
@@ -53,21 +56,12 @@ PRESETS = {
 for _preset in PRESETS.values():  # seed 004's cases, in its eq. (2)
     _preset["cal_convention"] = "seed004"
 
-#: Which inputs apply to which data source (the others are hidden): the design's shape to a
-#: designed manoeuvre; the number of attitudes and the seed of the simulated errors to the
-#: simulated sources; the noise, Be, convention and filter settings to every source.
-SOURCE_INPUTS = {
-    "cal_headings": ("Designed manoeuvre",),
-    "cal_roll_deg": ("Designed manoeuvre",),
-    "cal_pitch_deg": ("Designed manoeuvre",),
-    "cal_n_attitudes": ("Designed manoeuvre", "Seed 004 simulation"),
-    "cal_seed": ("Designed manoeuvre", "Seed 004 simulation"),
-}
-
-
 def applies(name, source):
-    """Whether the input of ``name`` (one of FIELDS) applies to the data source ``source``."""
-    return source in SOURCE_INPUTS.get(name, (source,))
+    """Whether the input of ``name`` (one of FIELDS) applies to the data source ``source``, as
+    declared (``sources``: the design's shape to a designed manoeuvre; the number of attitudes
+    and the seed of the simulated errors to the simulated sources; the noise, Be, convention and
+    filter settings, declaring none, to every source)."""
+    return source in declared(Calibration.param[name]).get("sources", (source,))
 
 HELP = """
 **Ship magnetometer calibration** (seed 004). A magnetometer on a ship reads
@@ -114,7 +108,7 @@ def compute(values, upload=None):
         of its Table 1 (``K``, ``Bp``, ``be_rms_nt``, ``be_max_rel``; ``be_rms["printed"]``) or None.
     """
     v = values
-    be = np.array([v["cal_be_n"], v["cal_be_e"], v["cal_be_d"]], dtype=float)
+    be = np.array([v[n] for n in BE], dtype=float)
     conv = v.get("cal_convention", "seed004")
     sim = cal.SEED004_SIMULATION
     truth = None
@@ -357,7 +351,7 @@ def fixes(res):
                 convention=None if d.suggested_convention is None
                 else {"cal_convention": d.suggested_convention},
                 be=None if d.suggested_be is None
-                else dict(zip(("cal_be_n", "cal_be_e", "cal_be_d"), d.suggested_be)))
+                else dict(zip(BE, d.suggested_be)))
 
 
 def _fix_label(kind, values):
@@ -365,7 +359,7 @@ def _fix_label(kind, values):
         return f"Use σ from the residuals (reading error ± {_fmt(values['cal_noise_nt'], ' nT')})"
     if kind == "convention":
         return f"Use the '{values['cal_convention']}' attitude convention"
-    return "Use Be = [" + ", ".join(_fmt(values[k]) for k in ("cal_be_n", "cal_be_e", "cal_be_d")) + "] nT"
+    return "Use Be = [" + ", ".join(_fmt(values[k]) for k in BE) + "] nT"
 
 
 #: Bytes per piece of an upload. Bokeh's websocket takes messages of at most 20 MB: a 26 MB CSV
@@ -384,11 +378,14 @@ def upload_widget():
 
 
 def uploaded_bytes(upload):
-    """The uploaded file's bytes (None if none): Panel decodes a text/* file to str."""
+    """The bytes of the file uploaded last (None if none): Panel decodes a text/* file to str.
+    FileDropper's ``value`` keeps every file sent under another name unless the browser deletes
+    it: the tab took the first, and a second log sent without that delete was ignored (its key
+    was the first's: nothing computed). The newest name is the dict's last."""
     files = upload.value or {}
     if not files:
         return None
-    data = next(iter(files.values()))
+    data = next(reversed(files.values()))
     return data.encode("utf-8") if isinstance(data, str) else bytes(data)
 
 
@@ -406,6 +403,7 @@ def calibration_parts(scenario):
     error = pn.pane.HTML("", sizing_mode="stretch_width", css_classes=["w-cal-error"])
     text = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-cal-summary"])
     # What the diagnosis offers to set (fixes()): one button each, shown when offered.
+    LABEL = "label" if "label" in pn.widgets.Button.param else "name"
     offered = {}
     buttons = {kind: pn.widgets.Button(name="", button_type="warning", button_style="outline",
                                        visible=False, css_classes=[f"w-cal-fix-{kind}"])
@@ -432,7 +430,10 @@ def calibration_parts(scenario):
         offered.update(shown["fixes"])
         for kind, button in buttons.items():
             values = offered[kind]
-            button.param.update(name=_fix_label(kind, values) if values else "", visible=bool(values))
+            # its text: ``label`` from Panel 1.9; before it ``name``, constant after creation
+            with param.edit_constant(button):
+                button.param.update(**{LABEL: _fix_label(kind, values) if values else ""},
+                                    visible=bool(values))
 
     def failed(exc):  # compute says what is wrong with the inputs; anything else is said here
         error.object = _error_html(dict(error=f"Not computed: {type(exc).__name__}: {exc}"))

@@ -14,6 +14,7 @@ import numpy as np
 
 import core
 
+from . import timings
 from .cache import KERNEL_LOCK
 from .scenario import (
     COMPARISONS,
@@ -25,6 +26,7 @@ from .scenario import (
     inputs,
     preset_of,
 )
+from .sensors import KINDS as SENSOR_PARTS
 
 #: The inputs the comparison maps read (:func:`compute`): the scene (a target in a sea, seen by
 #: sensors on the paper's stations, over a region) and the Maps tab's own settings; not the
@@ -113,9 +115,9 @@ class Panels:
         return np.where(np.isfinite(out), out, np.nan)
 
 
-#: A sensor kind in titles and captions (core kind -> words, and the unit of its readings).
-KIND_NAMES = {"E": ("electric", "V/m"), "B": ("magnetometer", "nT"), "G": ("gradiometer", "nT/m"),
-              "BG": ("magnetometer + gradiometer", "nT, nT/m")}
+#: A sensor kind in titles and captions (core kind -> words, and the unit of its readings), as its
+#: sensor part says (app.sensors).
+KIND_NAMES = {part.kind: (part.words, part.unit) for part in SENSOR_PARTS}
 
 
 def moment_text(moments, kind):
@@ -403,10 +405,12 @@ def compute(snapshot: Snapshot) -> Panels:
     (st_a, mom_a, title_a, kind_a), (st_b, mom_b, title_b, kind_b) = scenarios_ab(s)
     vel = s.velocity()
     with KERNEL_LOCK:
+        timings.stamp_current("locked")  # app/timings.py, when APP_TIMINGS asks
         a = core.evaluate_map(plane, st_a, velocity=vel, moments=mom_a, measure=measure,
                               **s.core_options(kind_a, measure=False))
         b = core.evaluate_map(plane, st_b, velocity=vel, moments=mom_b, measure=measure,
                               **s.core_options(kind_b, measure=False))
+    timings.stamp_current("unlocked")
     diff, diff_label, diff_short = difference(a, b, measure, s.difference)
     label, unit, _ = core.MEASURES[measure]
     note = unobservable_note(s, ((title_a, a), (title_b, b)), (st_a, st_b), (mom_a, mom_b),

@@ -9,11 +9,13 @@ from __future__ import annotations
 import ctypes
 import gc
 import threading
+from functools import partial
 
 import panel as pn
 import param
+from panel.io.state import set_curdoc
 
-from . import export, live, maps, url
+from . import export, live, maps, offloop, url
 from .applies import (
     CALIBRATION_TAB,
     DECIDING,
@@ -26,6 +28,7 @@ from .applies import (
 from .cache import SHARED
 from .calibration import calibration_parts
 from .compute import KIND_NAMES, MAP_INPUTS
+from .derive import MAGNETIC_READS
 from .design import design_tab
 from .inputs import number_input
 from .number_box import number_box
@@ -40,6 +43,7 @@ from .scenario import (
     parameter,
     sidebar,
 )
+from .sensors import BY_KIND
 from .shape import shape_parts
 from .shown import WhenShown
 from .track import track_tab
@@ -93,9 +97,6 @@ _alert = maps.alert
 #: those declared with a box only (the noise: a slider cannot span 1e-12 … 1e-2 V/m).
 NUMBERS = tuple(n for _, names, _ in SECTIONS for n in names
                 if isinstance(parameter(n), param.Number) and declared(parameter(n)).get("slider", True))
-#: Number formats other than number_input's default, as declared (the magnetic noise is
-#: hundredths of nT).
-FORMATS = {n: declared(parameter(n))["fmt"] for n in PART_OF if "fmt" in declared(parameter(n))}
 
 
 def _widgets():
@@ -122,8 +123,7 @@ def _section(scenario, tabs, title, names, collapsed):
         if name == "noise":  # a box that says why it refuses (emptied, it raised in the server)
             return number_box(scenario.part_of(name), name, css_classes=[f"w-{name}"])
         if name in NUMBERS:
-            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"],
-                                **({"fmt": FORMATS[name]} if name in FORMATS else {}))
+            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"])
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
         return cls.from_param(scenario.ref(name), **spec)
@@ -139,25 +139,42 @@ def _section(scenario, tabs, title, names, collapsed):
             rows[name] = maps.with_refusal(scenario, column, [name], f"w-message-{name}")
         return rows[name]
 
-    # A collapsed card's inputs are built when it is first opened (a new page carries only what
-    # it shows: the two collapsed cards held ~40 % of the sidebar's models)
-    card = pn.Card(*([] if collapsed else map(row, names)), title=title, collapsed=collapsed,
-                   sizing_mode="stretch_width")
+    # An input is built when it first applies, and a collapsed card's inputs when it is first
+    # opened: a new page carries only what it shows (the two collapsed cards held ~40 % of the
+    # sidebar's models, the inputs of the open cards that do not apply, e.g. a magnetic sensor's
+    # moment or a layered sea's depth, another third).
+    card = pn.Card(title=title, collapsed=collapsed, sizing_mode="stretch_width")
     # Hidden as a whole in a plain column: a hidden Card still showed its header in the browser.
     outer = pn.Column(card, sizing_mode="stretch_width", margin=0)
+    opened_once = [not collapsed]
+    lock = threading.Lock()  # watchers run on Panel's threads: one build of an input
+    doc = pn.state.curdoc  # the session's (None outside a server)
 
-    def show_applicable(*_):
+    def apply():
         """Each input shown where it applies, the card where one does: one watcher per card (one
         binding per input re-read the scenario once per input, and carried its own watchers)."""
         s = scenario.snapshot()
         shown = {name: applies(name, s, tabs.active) for name in names}
-        for name, r in rows.items():
-            r.visible = shown[name]
+        with lock:
+            new = [name for name in names if opened_once[0] and shown[name] and name not in rows]
+            for name in new:
+                row(name)
+            for name, r in rows.items():
+                r.visible = shown[name]
+            if new:  # in their declared places among those built
+                card.objects = [rows[name] for name in names if name in rows]
         outer.visible = any(shown.values())
 
+    def show_applicable(*_):
+        """:func:`apply` as a change of the page's document on its loop, events held
+        (``offloop.soon``): an input built here brings new models to the page, and made on
+        Panel's threads their message could be overtaken by a later one that refers to them
+        (docs/dashboard.md, "Changes in the order they were made")."""
+        offloop.soon(doc, apply)
+
     def opened(event):
-        if not event.new and not card.objects:
-            card.objects = [row(name) for name in names]
+        if not event.new and not opened_once[0]:
+            opened_once[0] = True
             show_applicable()
 
     card.param.watch(opened, ["collapsed"])
@@ -166,7 +183,7 @@ def _section(scenario, tabs, title, names, collapsed):
         by_owner.setdefault(ref.owner, []).append(ref.name)
     for owner, params in by_owner.items():  # one call per change of an owner's values
         owner.param.watch(show_applicable, params)
-    show_applicable()
+    apply()  # while the page is built
     return outer
 
 
@@ -200,15 +217,13 @@ def sensor_banner(scenario, tab):
         if kind == "E":
             return ""
         name = f"{KIND_NAMES[kind][0]} ({KIND_NAMES[kind][1]})"
-        noise_b, noise_g = scenario.sensor.noise_b, scenario.sensor.noise_g
-        noise = {"B": f"{noise_b:g} nT", "G": f"{noise_g:g} nT/m",
-                 "BG": f"{noise_b:g} nT and {noise_g:g} nT/m"}[kind]
+        noise = BY_KIND[kind].noise_text(scenario.sensor)  # the kind's sensor part says it
         text = TRACK_SENSOR if tab == TRACK_TAB else DESIGN_SENSOR
         return _alert(text.format(name=name, mx=scenario.target.mx, my=scenario.target.my, mz=scenario.target.mz,
                                   noise=noise, tensor=tensor_text(kind, scenario.sensor.baseline)),
                       "info")
 
-    deps = [scenario.ref(n) for n in ("sensor", "mx", "my", "mz", "noise_b", "noise_g", "baseline")]
+    deps = [scenario.ref(n) for n in ("sensor", *MAGNETIC_READS)]
     return pn.pane.HTML(pn.bind(text, *deps), visible=pn.bind(lambda k, *_: SENSORS[k] != "E", *deps),
                         sizing_mode="stretch_width",
                         css_classes=["w-track-sensor" if tab == TRACK_TAB else "w-design-sensor"])
@@ -224,23 +239,58 @@ def panel_extension():
                  notifications=False)
 
 
+def in_parts(doc, parts):
+    """Run the functions ``parts`` (each builds a part of the page) one per turn of the event
+    loop of ``doc``'s session, in order, after the step that runs now: between two parts the
+    server's loop serves other sessions (Bokeh runs a new session's script in one step, which
+    held the loop for the whole page). Each in Panel's document context; a part should change the
+    page once (Panel applies each change of a page not yet connected in a turn of its own, and
+    Bokeh walks the whole document's model graph for it). Outside a served session (``doc``
+    None or without a session: tests) they run at once."""
+    if doc is None or doc.session_context is None:
+        for part in parts:
+            part()
+        return
+    queue = list(parts)
+
+    def next_part():
+        part = queue.pop(0)
+        try:
+            # built as the first step's objects are, before the template set the session's
+            # design: the template's hooks style them (with the session's design set, the cards
+            # were drawn in another style: plain titles, narrower padding)
+            with set_curdoc(doc), pn.config.set(design=None):
+                part()
+        finally:  # a part that failed (Bokeh logs it) leaves the others to be built
+            if queue:  # queued from inside this step: it runs in the loop's next turn
+                doc.add_next_tick_callback(next_part)
+
+    if queue:
+        doc.add_next_tick_callback(next_part)
+
+
 def first_visit(tabs, titles, holders, makers):
     """Build tab ``title``'s content with ``makers[title]()`` into its holder ``holders[title]``
     (a Column, with a placeholder until then) the first time it is the active tab of ``tabs``: a new page
     carries the Python objects and models of the tab it shows only (the hidden tabs were ~half
     of a new page's server CPU, docs/performance.md)."""
     built, lock = set(), threading.Lock()
+    doc = pn.state.curdoc  # the session's (None outside a server)
 
-    def fill(active):
+    def fill(active, now=False):
         title = titles[active]
         with lock:  # one build per tab, whichever thread sees the click
             if title not in holders or title in built:
                 return
             built.add(title)
-        holders[title].objects = [makers[title]()]
+        content = makers[title]()  # Panel's objects, on the watcher's thread
+        # their models join the page as a change of the document on its loop, events held: made
+        # on Panel's threads, the message bringing them could be overtaken (offloop.soon)
+        put = partial(setattr, holders[title], "objects", [content])
+        put() if now else offloop.soon(doc, put)
 
     tabs.param.watch(lambda event: fill(event.new), ["active"])
-    fill(tabs.active)
+    fill(tabs.active, now=True)
 
 
 def create_app():
@@ -281,7 +331,7 @@ def create_app():
         def make():
             inputs, main = parts(scenario)
             inputs.param.update(width=None, sizing_mode="stretch_width")
-            sides[title].objects = [inputs]
+            offloop.soon(pn.state.curdoc, partial(setattr, sides[title], "objects", [inputs]))
             return main
         return make
 
@@ -313,22 +363,40 @@ def create_app():
                                       waits=lambda names: bool(set(names) & MAP_INPUTS),
                                       link=link))
 
-    buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
-                                       width=90 if len(name) <= 6 else 150,  # a seed's name is longer
-                                       css_classes=[f"w-preset-{name[-1]}"],
-                                       on_click=lambda e, n=name: scenario.apply_preset(n))
-               for name in PRESETS}
+    # The sidebar is built after the page's first step, in two parts, each in a turn of the
+    # session's event loop of its own (in_parts): Bokeh runs this whole function in one step of
+    # the server's loop, which every other session waits for. The parts fill ``sidebar``, in the
+    # page from the start: built before the browser pulls the document (it has the page's HTML
+    # and scripts to load first), they reach it with the document, else as a change. Panel
+    # applies a change to a page not yet connected in a turn of its own, in which Bokeh walks
+    # the whole document's model graph again: so one change of ``sidebar`` per part (a change
+    # per card cost 8 more walks, ~15 % of a page's server CPU).
+    sidebar = pn.Column(sizing_mode="stretch_width", margin=0)
 
-    def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
-        active = scenario.active_preset()
-        for name, button in buttons.items():
-            button.button_style = "solid" if name == active else "outline"
+    def preset_buttons():
+        buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
+                                           width=90 if len(name) <= 6 else 150,  # a seed's name is longer
+                                           css_classes=[f"w-preset-{name[-1]}"],
+                                           on_click=lambda e, n=name: scenario.apply_preset(n))
+                   for name in PRESETS}
 
-    for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
-        part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
-    restyle()
-    presets = pn.FlexBox(*buttons.values(), sizing_mode="stretch_width")
-    sections = [_section(scenario, tabs, *section) for section in SECTIONS]
+        def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
+            active = scenario.active_preset()
+            for name, button in buttons.items():
+                button.button_style = "solid" if name == active else "outline"
+
+        for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
+            part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
+        restyle()
+        # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
+        # own (Calibration, Shape), where a click changed the hidden Maps state.
+        return pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
+                                          "the figure's map gets a red frame; the Layout design "
+                                          "and Track tabs' own settings stay)"),
+                         pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"),
+                         visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
+                         sizing_mode="stretch_width", margin=0)
+
     def download(ext, fn, label=None, suffix=""):
         # named after the scenario (was always observability_maps.*), set as the file is made
         def make():
@@ -342,28 +410,32 @@ def create_app():
                                          css_classes=[f"w-download-{ext}" + (f"-{suffix}" if suffix else "")])
         return button
 
-    downloads = pn.Column(
-        pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
-        # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
-        pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
-                 for label, which, suffix in maps.MAP_PNGS]),
-        margin=0)
+    def download_buttons():
+        return pn.Column(
+            pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
+                             f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
+                             f"{export.MAP_WIDTH_PX} px wide)"),
+            pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
+            # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
+            pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
+                     for label, which, suffix in maps.MAP_PNGS]),
+            visible=tabs.param.active.rx() == MAPS_TAB, margin=0)
+
+    def cards(sections):
+        return [_section(scenario, tabs, *section) for section in sections]
+
+    def first_part():
+        sidebar.objects = [preset_buttons(), maps.refusal(scenario, None, "w-message"), *cards(SECTIONS[:2])]
+
+    def second_part():
+        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), download_buttons()]
+
+    in_parts(pn.state.curdoc, [first_part, second_part])
     template = pn.template.BootstrapTemplate(
         title="Dipole observability explorer",
-        # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
-        # own (Calibration, Shape), where a click changed the hidden Maps state.
-        sidebar=[pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
-                                            "the figure's map gets a red frame; the Layout design "
-                                            "and Track tabs' own settings stay)"), presets,
-                           visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
-                           sizing_mode="stretch_width", margin=0),
-                 maps.refusal(scenario, None, "w-message"), *sections,
-                 *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
-                             sizing_mode="stretch_width") for t, side in sides.items()],
-                 pn.Column(pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
-                                            f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
-                                            f"{export.MAP_WIDTH_PX} px wide)"),
-                           downloads, visible=tabs.param.active.rx() == MAPS_TAB, margin=0)],
+        # the Calibration and Shape tabs' inputs, shown on their tabs (where nothing else is)
+        sidebar=[sidebar, *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
+                                      sizing_mode="stretch_width") for t, side in sides.items()]],
         main=[tabs],
         sidebar_width=360,
         header_background="#1f5f8b",
@@ -373,4 +445,5 @@ def create_app():
         busy_indicator=None,
     )
     template.scenario = scenario  # for tests and the load benchmark
+    template.built_later = sidebar  # for tests
     return template

@@ -9,7 +9,7 @@ import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
-from . import compute, design_compute, offloop, views
+from . import compute, design_compute, design_live, offloop, views
 from .compute import RUNAWAY_LIMIT, Snapshot
 from .design_compute import ERROR_MAP_READS, LAYOUT_READS, SPACING_READS
 from .inputs import number_input
@@ -33,6 +33,8 @@ optimum with scipy; *Optimise N-station layout* does the same for a line, triang
 N stations (or free positions, ~10 s) and makes it the custom layout.
 """.format(limit=RUNAWAY_LIMIT)
 
+#: The title of the Layout design map.
+DESIGN_TITLE = "Custom layout: Cramér–Rao error"
 #: The station table's columns.
 COLUMNS = ["x (m)", "y (m)", "z (m)"]
 #: Inputs of this tab whose refusal is shown here, next to their inputs.
@@ -105,7 +107,11 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     # through ``shown`` (streams on the scenario's parameters recomputed the map, on the thread
     # of the change, on a hidden tab too: a preset clicked on the Maps tab waited for it)
     redraw = Refresh()
-    points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True), streams=[redraw])
+    # The map follows a dragged station: previews until the drop (app/design_live.py), drawn
+    # into layers the station layer's hook adds to the figure
+    follow = design_live.StationDrag(scenario, lambda: scenario.design.error_quantity, pn.state.curdoc)
+    points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True).opts(hooks=[follow.hook]),
+                           streams=[redraw])
     # One more than allowed: a 9th click reaches the Scenario, which refuses it ("at most 8
     # stations") and restores the layout (with num_objects=8 the tool deleted the oldest silently)
     draw = hv.streams.PointDraw(source=points, num_objects=MAX_STATIONS + 1, empty_value=st.h)
@@ -113,11 +119,15 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     def drawn(data):
         if data is None or not len(data.get("x", [])):
             return
-        st.stations = drawn_stations(data, st.stations, st.h)
+        # the preview hidden and the exact map of the layout drawn in one message (this runs on
+        # the event loop, outside a callback of the document: Bokeh models change in a hold)
+        with pn.io.hold():
+            follow.dropped()
+            st.stations = drawn_stations(data, st.stations, st.h)
 
     draw.add_subscriber(drawn)
     errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), design_compute.design),
-                                                       "Custom layout: Cramér–Rao error",
+                                                       DESIGN_TITLE,
                                                        scenario.design.error_quantity),
                            streams=[redraw])
 
@@ -282,4 +292,5 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )
+    tab.follow = follow  # the drag's previews (tests, the benchmark)
     return tab

@@ -20,18 +20,21 @@ import panel as pn
 import param
 
 from . import live
+from .part import declared
 from .number_box import number_box, parsed, shown_text  # noqa: F401  (shown_text, parsed: as before)
 
 
-def number_input(owner, name, *, fmt="0.[00]", css_classes=(), visible=True):
+def number_input(owner, name, *, fmt=None, css_classes=(), visible=True):
     """A Column (box, slider) for the Number or Integer parameter ``name`` of ``owner``.
 
     The box takes any typed text; a number sets ``owner.<name>`` (the owner may refuse it and
     restore the last good one, which both then show), other text is refused with a message in
     ``owner.message`` (module docstring). The slider spans the parameter's soft bounds, widened to
-    include the current value. ``fmt``: the slider's number format; ``css_classes`` and
+    include the current value. ``fmt``: the slider's number format (default: the parameter's
+    declared ``fmt``, app.part, else ``0.[00]``); ``css_classes`` and
     ``visible`` go to the Column (``visible`` may be a bound function)."""
     p = owner.param[name]
+    fmt = fmt or declared(p).get("fmt", "0.[00]")
     integer = isinstance(p, param.Integer)
     lo, hi = p.get_soft_bounds()
     value = getattr(owner, name)

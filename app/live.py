@@ -9,11 +9,13 @@ inputs is dragged, the path here is shorter, through public Bokeh and Panel only
   ``[input, value, sequence, released]`` to :class:`Drag`, a Bokeh ``DataModel`` of the session,
   through a closed loop (:data:`LOOP_JS`): a value goes out once the server has answered the
   previous one (``Drag.ready``, set with the preview it drew, in the same message), and at most
-  one every THROTTLE_MS; meanwhile the latest value waits in the page and replaces older ones. A
-  busy server therefore gets no queue of values, only the latest one when it can take it. A
-  change of the slider model's ``value_throttled`` (its release; connected through BokehJS's
-  signal API on the first drag: Panel's ``jscallback`` does not offer that property) writes the
-  final value at once, ``released`` set;
+  one every THROTTLE_MS (the first of a gesture THROTTLE_MS after it: a click on the track or a
+  flick is released before then, and computes no preview); meanwhile the latest value waits in
+  the page and replaces older ones. A busy server therefore gets no queue of values, only the
+  latest one when it can take it. A change of the slider model's ``value_throttled`` (its
+  release; connected through BokehJS's signal API in the slider's first callback: Panel's
+  ``jscallback`` does not offer that property) writes the final value at once, ``released``
+  set; ``APP_PREVIEWS=off`` in the server's environment turns all of this off (:data:`PREVIEWS`);
 * on the server, Bokeh's ``on_change`` of that model runs :meth:`Live.changed` on the event loop
   as the message arrives (no debounce). A preview is computed off the loop at PREVIEW_N² points
   (fewer when that takes longer than PREVIEW_BUDGET_S: :func:`next_n`) of the handle's value,
@@ -37,11 +39,13 @@ unless a drag of it is under way. Nothing is previewed while the Maps tab is hid
 from __future__ import annotations
 
 import asyncio
+import os
 import time
 import weakref
 from functools import partial
 
 import panel as pn
+import param
 from bokeh.core.properties import Any, Int, List
 from bokeh.models import CustomJS
 from bokeh.model import DataModel
@@ -62,6 +66,11 @@ PREVIEW_N, PREVIEW_MIN_N = 100, 30
 #: still follow the hand (and hold the kernels, which every session shares, for less long); a
 #: fast one lets the grid grow back to PREVIEW_N.
 PREVIEW_BUDGET_S = 0.06
+
+#: Whether dragged sliders and stations are previewed: ``APP_PREVIEWS=off`` in the server's
+#: environment turns them off (the maps wait for the release), for a replica that serves many
+#: analysts on few cores: a short drag's previews cost ~70–80 ms of server CPU (docs/performance.md).
+PREVIEWS = os.environ.get("APP_PREVIEWS", "on").strip().lower() not in ("off", "0", "no", "false")
 
 #: Previews of every session, off the event loop (core runs one kernel at a time anyway).
 _PREVIEWS = offloop.pool("previews", 2)
@@ -102,7 +111,14 @@ if (loop === undefined) {
     loop.pending = null;
     loop.send(name, value, false);
   };
-  loop.offer = (name, value) => { loop.pending = [name, value]; loop.pump(); };
+  loop.offer = (name, value) => {
+    // a gesture's first value waits one throttle: a click on the track, or a flick, is released
+    // within it (the release drops it), so no preview is computed only to be thrown away
+    const now = performance.now();
+    if (loop.pending === null && drag.ready >= loop.sent && now - loop.at > throttle) loop.at = now;
+    loop.pending = [name, value];
+    loop.pump();
+  };
   loop.drop = () => {
     if (loop.timer !== null) { clearTimeout(loop.timer); loop.timer = null; }
     loop.pending = null;
@@ -120,6 +136,10 @@ if (!hooked.has(source)) {  // the release: the slider's value_throttled, set wh
   hooked.add(source);
   source.connect(source.properties.value_throttled.change,
                  () => loop.release(name, source.value_throttled));
+  // BokehJS runs this callback after the change that called it (it compiles it first): when that
+  // change was a click on the track (value and value_throttled set at once), its release has
+  // passed before the hook above was there
+  if (source.value_throttled === source.value) { loop.release(name, source.value); return; }
 }
 loop.offer(name, source.value);
 """
@@ -175,7 +195,11 @@ class Live:
             answer(self.drag, seq)
             return
         owner = self.scenario.part_of(name)
-        if isinstance(getattr(owner, name), int):
+        # Whole numbers for an Integer input only: the type of the value a Number input holds
+        # says nothing (a link's or a release's 151 arrives as int 151), and rounding there set
+        # P_h = 263 on the release of 263.2, then Panel's own release set 263.2: the maps ended
+        # at 263.2, the slider's handle at 263 (and a drag's previews were rounded too)
+        if isinstance(owner.param[name], param.Integer):
             value = int(round(value))
         if released:
             self.release(owner, name, value)
@@ -274,9 +298,9 @@ def next_n(n, seconds):
 
 def follow(slider, name):
     """Make the Panel ``slider`` of input ``name`` drive the current session's previews (a no-op
-    for an input the maps do not read, or a page without a Maps tab)."""
+    for an input the maps do not read, a page without a Maps tab, or previews off: PREVIEWS)."""
     live = _SESSIONS.get(pn.state.curdoc) if pn.state.curdoc is not None else None
-    if live is None or name not in MAP_INPUTS:
+    if live is None or not PREVIEWS or name not in MAP_INPUTS:
         return
     args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS, patience=PATIENCE_MS)
     slider.jscallback(args=args, value=FOLLOW_JS)
@@ -298,5 +322,5 @@ def shown_with(tabs, index):
     tabs.param.watch(active, ["active"])
 
 
-__all__ = ["Drag", "LOOP_JS", "Live", "PATIENCE_MS", "PREVIEW_N", "THROTTLE_MS", "answer", "drag_model",
+__all__ = ["Drag", "LOOP_JS", "Live", "PATIENCE_MS", "PREVIEWS", "PREVIEW_N", "THROTTLE_MS", "answer", "drag_model",
            "follow", "next_n", "shown_with"]

@@ -19,7 +19,9 @@ Veils are uint8 codes, sent only when they change.
 Previews (issue 38, app/live.py). While a slider is dragged, each map's preview layer (over the
 map, under its veil) shows a coarser grid as uint8 levels of the colour range (:func:`quantised`),
 colour-mapped in the browser by a mapper of its own (0 … PREVIEW_TOP, PREVIEW_NAN drawn white);
-:func:`fill` with a ``prepare(p, preview=True)`` draws it, the exact maps hide it.
+:func:`fill` with a ``prepare(p, preview=True)`` draws it, the exact maps hide it. The layers
+are made on a page's first preview (:func:`add_previews`), not with the page: most sessions
+never drag, and the three layers are 18 of a page's Bokeh models (issue 40 item 3).
 
 Aspect (issue 25). A metre is as long across as up on an x–y map: the ranges are Bokeh
 ``DataRange1d`` fitted to the view box (:func:`view_box`, corners drawn invisibly) with the
@@ -44,6 +46,7 @@ from bokeh.models import (
     CustomJSHover,
     CustomJSTickFormatter,
     DataRange1d,
+    GlyphRenderer,
     HoverTool,
     Image,
     Label,
@@ -52,6 +55,9 @@ from bokeh.models import (
     Scatter,
     Title,
 )
+from bokeh.core.properties import Bool, String
+from bokeh.core.property.validation import validate
+from bokeh.model import DataModel
 from bokeh.palettes import Viridis256
 
 from .compute import RUNAWAY_LIMIT
@@ -71,15 +77,17 @@ from .map_data import (
 #: The hover of a map, on its veil layer (a veil code is never NaN: Bokeh shows a NaN value as
 #: "NaN" without asking the formatter): what the point is, or its value, the normalised image
 #: value (``img``: the map's data source) turned back with the colour range of its colour bar's
-#: mapper ``bar`` (kept current with the range: the args themselves change only with the texts:
-#: setting args, which refer to models, makes Bokeh re-walk the document, ~0.1 s each).
+#: mapper ``bar`` (kept current with the range), its words and scale from ``texts`` (a
+#: :class:`HoverTexts`). The args themselves never change: setting args, which refer to models,
+#: makes Bokeh re-walk the whole document (on the server, and in every client), 0.1–0.3 s of the
+#: event loop per map on a change of measure.
 _HOVER_JS = """
 if (value == 1 || value == 2) return texts.unobservable;
 const s = img.data.image[0][special_vars.image_index.flat_index];
 if (s == null || !isFinite(s)) return texts.none;
 const v = bar.low + s * (bar.high - bar.low);
 const far = value >= 4 ? texts.runaway : "";
-if (log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m" + far; }
+if (texts.log) { const m = Math.pow(10, v); return (m < 1e4 ? m.toPrecision(3) : m.toExponential(2)) + " m" + far; }
 return v.toFixed(3) + far;
 """
 #: Colour bar ticks: in metres on a log10-metre scale (``log``), else the plain number. One
@@ -100,6 +108,17 @@ return (c === "1" ? "" : c + "\u00d7") + "10" + sup;
 RUNAWAY_TEXT = (f" — over {RUNAWAY_LIMIT:.0%} of the range to the nearest station: the linearised "
                 "bound does not predict a tracker's error here (far-field runaway)")
 RUNAWAY_DIFF_TEXT = f" — A's or B's CRLB is over {RUNAWAY_LIMIT:.0%} of the range (far-field runaway)"
+
+
+class HoverTexts(DataModel):
+    """What a map's hover says besides its value, and whether the value is log10 metres: changed
+    with the measure or the layout, in properties of their own (a change of them is one small
+    message and no walk of the document, unlike a change of the formatter's ``args``)."""
+
+    log = Bool(default=False)
+    unobservable = String(default="")
+    none = String(default="")
+    runaway = String(default="")
 
 
 @dataclass
@@ -162,7 +181,7 @@ def build():
                            for _ in range(2))
     veil_mapper = LinearColorMapper(palette=list(VEIL_PALETTE), low=0, high=len(VEIL_PALETTE) - 1)
     out = {k: [] for k in ("figs", "images", "veils", "stations", "bars", "hovers", "formatters",
-                           "captions", "saves", "labels", "previews", "preview_layers")}
+                           "captions", "saves", "labels")}
     for which in range(3):
         fig = _figure(x_range, y_range)
         # The images' mapper spans 0 … 1 for good (images come normalised: module docstring).
@@ -176,22 +195,13 @@ def build():
         # add_glyph: one glyph model per layer (the plotting API adds a non-selection and a
         # muted copy of each; these maps neither select nor mute)
         fig.add_glyph(img, Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper))
-        # The preview while a slider is dragged (app/live.py): uint8 levels 0 … PREVIEW_TOP of the
-        # colour range, PREVIEW_NAN where no value, over the map and under its veil. Its column is
-        # ``pv``, not ``image``: what reads a map's layers by their ``image`` column (the hover,
-        # the tests) sees the exact map and its veil only.
-        pv = ColumnDataSource(dict(pv=[np.zeros((2, 2), np.uint8)], x=[-1], y=[-1], dw=[2], dh=[2]),
-                              name="map-preview")
-        pv_mapper = LinearColorMapper(palette=Viridis256, low=0, high=PREVIEW_TOP, high_color=NAN_COLOUR)
-        pv_layer = fig.add_glyph(pv, Image(image="pv", x="x", y="y", dw="dw", dh="dh", color_mapper=pv_mapper),
-                                 visible=False)
         v = fig.add_glyph(veil, Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=veil_mapper))
         s = fig.add_glyph(st, Scatter(x="x", y="y", marker="triangle", size=13, fill_color="white",
                                       line_color="black", line_width=1.5))
         if which == 0:  # what the shared ranges fit: drawn once, in the first map
             corners.append(fig.add_glyph(view_source, Scatter(x="x", y="y", size=0, line_alpha=0, fill_alpha=0)))
         fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
-                                                      log=False, texts=dict(unobservable="", none="", runaway="")))
+                                                      texts=HoverTexts()))
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
                                                    ("value", "@image{custom}")],
                           formatters={"@image": fmt}, visible=False)  # no toolbar icon: room for save
@@ -213,7 +223,7 @@ def build():
                       text_font_size=CAPTION_PX, text_color="#222222", background_fill_color="white",
                       background_fill_alpha=0.9, border_line_color="#888888", padding=4)
         fig.add_layout(label)
-        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label, pv, pv_layer)):
+        for key, model in zip(out, (fig, img, veil, st, bar, hover, fmt, caption, save, label)):
             out[key].append(model)
     for rng in (x_range, y_range):
         rng.renderers = corners
@@ -223,13 +233,46 @@ def build():
                       bar_mappers=(value_bar, diff_bar), colorbars=tuple(out["bars"]),
                       hovers=tuple(out["hovers"]), formatters=tuple(out["formatters"]),
                       captions=tuple(out["captions"]), saves=tuple(out["saves"]),
-                      labels=tuple(out["labels"]), previews=tuple(out["previews"]),
-                      preview_layers=tuple(out["preview_layers"]))
+                      labels=tuple(out["labels"]))
+
+
+def add_previews(figs: MapFigures):
+    """Each map's preview layer (app/live.py), made on the first preview: over the map and under
+    its veil (the renderer put right after the map's image), hidden. uint8 levels 0 … PREVIEW_TOP
+    of the colour range, PREVIEW_NAN where no value. Its column is ``pv``, not ``image``: what reads
+    a map's layers by their ``image`` column (the hover, the tests) sees the exact map and its veil
+    only. A no-op when the figures have them."""
+    if figs.preview_layers:
+        return
+    previews, layers = [], []
+    for fig in figs.figures:
+        pv = ColumnDataSource(dict(pv=[np.zeros((2, 2), np.uint8)], x=[-1], y=[-1], dw=[2], dh=[2]),
+                              name="map-preview")
+        pv_mapper = LinearColorMapper(palette=Viridis256, low=0, high=PREVIEW_TOP, high_color=NAN_COLOUR)
+        layer = GlyphRenderer(data_source=pv, glyph=Image(image="pv", x="x", y="y", dw="dw", dh="dh",
+                                                          color_mapper=pv_mapper), visible=False)
+        fig.renderers = [fig.renderers[0], layer, *fig.renderers[1:]]
+        previews.append(pv)
+        layers.append(layer)
+    figs.previews, figs.preview_layers = tuple(previews), tuple(layers)
 
 
 def _changed(model, values):
     """The items of ``values`` that differ from ``model``'s (validating a palette costs time)."""
     return {k: v for k, v in values.items() if getattr(model, k) != v}
+
+
+def _update_mapper(mapper, values):
+    """Set the items of ``values`` that differ on a colour ``mapper``. A new palette (bokeh.palettes'
+    own, reversed for the CRLB) is set without Bokeh's property validation (its public
+    ``validate(False)``): checking 256 colours took 10–25 ms per mapper, five mappers on every
+    change of measure to or from the CRLB, on the event loop."""
+    changed = _changed(mapper, values)
+    if "palette" in changed:
+        with validate(False):
+            mapper.update(**changed)
+    elif changed:
+        mapper.update(**changed)
 
 
 #: After a map's title while it shows a preview (app/live.py).
@@ -244,7 +287,7 @@ def set_ranges(figs: MapFigures, p):
     """The colour bars' ranges and palettes (the images come normalised to them: module
     docstring). ``p``: Panels or their :func:`prepare`."""
     for bar, (low, high, palette) in zip(figs.bar_mappers, _prepared(p).ranges[1:]):
-        bar.update(**_changed(bar, dict(low=low, high=high, palette=palette)))
+        _update_mapper(bar, dict(low=low, high=high, palette=palette))
 
 
 def fill(figs: MapFigures, p):
@@ -253,6 +296,20 @@ def fill(figs: MapFigures, p):
     d = _prepared(p)
     set_ranges(figs, d)
     set_maps(figs, d)
+
+
+#: Veil codes drawn transparent (VEIL_PALETTE) and the unobservable stripes' two codes.
+_CLEAR_CODES, _STRIPE_CODES = (0, 3, 5), (1, 2)
+
+
+def uniform_veil(veil):
+    """"clear" if the veil ``veil`` shows nothing anywhere, "striped" if it stripes every point
+    (unobservable everywhere), else None: what it shows does not depend on its grid."""
+    if np.isin(veil, _CLEAR_CODES).all():
+        return "clear"
+    if np.isin(veil, _STRIPE_CODES).all():
+        return "striped"
+    return None
 
 
 def set_maps(figs: MapFigures, prepared):
@@ -264,6 +321,8 @@ def set_maps(figs: MapFigures, prepared):
     where = geometry(p.plane)
     stretch = exaggeration(p.plane)
     vertical = f", vertical ×{stretch:g}" if stretch != 1 else ""
+    if d.preview:
+        add_previews(figs)
     for which, ((values, observable, stations, title), (low, high, palette)) in enumerate(zip(maps, d.ranges)):
         fig = figs.figures[which]
         layer = figs.preview_layers[which] if figs.preview_layers else None
@@ -273,14 +332,28 @@ def set_maps(figs: MapFigures, prepared):
         else:
             figs.images[which].data = dict(image=[d.images[which]], **where)
             mapper = fig.renderers[0].glyph.color_mapper
-        mapper.update(**_changed(mapper, dict(palette=palette)))
+        _update_mapper(mapper, dict(palette=palette))
         if layer is not None and layer.visible != d.preview:
             layer.visible = d.preview
         veil = d.veils[which]
         old = figs.veils[which].data
         same_rect = all(old[k] == v for k, v in where.items())
-        if not (same_rect and old["image"][0].shape == veil.shape and np.array_equal(old["image"][0], veil)):
-            figs.veils[which].data = dict(image=[veil], **where)  # sent only when it changes
+        # sent only when it changes; a preview's veil also not when it says what the one shown
+        # says everywhere (clear, or striped: :func:`uniform_veil`): the exact veil stays, so
+        # the release has nothing to re-send (each release re-sent three 200² veils, 120 kB,
+        # after a drag's 100² ones)
+        # (the exact veil keeps its rectangle, the exact grid's pixel edges, within a coarse pixel
+        # of the preview's: the same plane)
+        was = old["image"][0]
+        same = same_rect and was.shape == veil.shape and np.array_equal(was, veil)
+        if d.preview and not same:
+            du, dv = where["dw"][0] / veil.shape[1], where["dh"][0] / veil.shape[0]
+            near = all(abs(old[k][0] - where[k][0]) <= step
+                       for k, step in (("x", du), ("dw", du), ("y", dv), ("dh", dv)))
+            shows = uniform_veil(veil)
+            same = near and shows is not None and shows == uniform_veil(was)
+        if not same:
+            figs.veils[which].data = dict(image=[veil], **where)
         st = figs.stations[which].data
         if len(st["x"]) != len(stations) or not (np.array_equal(st["x"], stations[:, 0])
                                                  and np.array_equal(st["y"], stations[:, 1])):
@@ -301,9 +374,8 @@ def set_maps(figs: MapFigures, prepared):
                      "undefined: A or B unobservable (rank-deficient)",
                      none="undefined: on a station" if which < 2 else p.blank,
                      runaway=RUNAWAY_TEXT if which < 2 else RUNAWAY_DIFF_TEXT)
-        fmt = figs.formatters[which]
-        if fmt.args["log"] != log or fmt.args["texts"] != texts:  # rare: a new measure or layout
-            fmt.args = dict(fmt.args, log=log, texts=texts)
+        words = figs.formatters[which].args["texts"]  # a new measure or layout: a few strings
+        words.update(**_changed(words, dict(texts, log=log)))
         figs.hovers[which].tooltips = [("x", "$x{0.0} m"), (vname, "$y{0.0} m"), (label, "@image{custom}")]
         figs.captions[which].text = wrapped(p.captions[which])
         said = veiled_text(p, which)

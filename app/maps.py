@@ -10,7 +10,7 @@ import numpy as np
 import panel as pn
 from bokeh.layouts import row
 
-from . import export, live, map_data, map_figures, offloop, views
+from . import export, live, map_data, map_figures, offloop, timings, views
 from .applies import MAPS_TAB, applies
 from .compute import READS, RUNAWAY_LIMIT, Snapshot, compute
 from .scenario import defaults
@@ -106,8 +106,9 @@ def with_refusal(scenario, column, names, css):
     end while there is one: the message pane is made on the first refusal and put in the column
     only while it says something (a page of inputs carried one hidden pane each)."""
     inputs, pane = list(column.objects), []
+    doc = pn.state.curdoc  # the session's (None outside a server)
 
-    def update(*_):
+    def update():
         if _refused_here(scenario.message, scenario.refused, names):
             if not pane:
                 pane.append(refusal(scenario, names, css))
@@ -116,7 +117,10 @@ def with_refusal(scenario, column, names, css):
         elif len(column.objects) > len(inputs):
             column.objects = inputs
 
-    scenario.param.watch(update, ["message", "refused"])
+    # A watcher on Panel's threads: the pane's models join the page as a change of the document
+    # on its loop, events held, so no later message can overtake the one bringing them
+    # (offloop.soon).
+    scenario.param.watch(lambda *_: offloop.soon(doc, update), ["message", "refused"])
     update()
     return column
 
@@ -188,21 +192,37 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     #: value, restored) sends no maps again (0.5 MB, which held up its message by ~30 ms).
     latest = [Snapshot.of(scenario)]
     doc = pn.state.curdoc  # the session document this tab is built for
+    timings.watch_arrivals(doc)  # where an update's time goes, when APP_TIMINGS asks (app/timings.py)
 
     def redraw(*_):
         # Start computing at once, on a worker thread (the kernels release the GIL): the server's
         # event loop keeps serving other sessions meanwhile, and the compute does not wait for
         # the widget updates already queued on the loop. Then draw, on the loop.
+        rec = timings.start(doc)
         snapshot = Snapshot.of(scenario)
+        if rec is not None:
+            rec["changed"] = _changed_inputs(latest[0], snapshot)
         if snapshot == latest[0]:
+            timings.finish(rec, "unchanged")
             return
         latest[0] = snapshot
-        computing = _COMPUTE.submit(lambda: map_data.prepare(cache.get(snapshot, compute)))
-        offloop.schedule(doc, partial(draw, snapshot, computing))  # app.offloop's pattern
+        timings.stamp(rec, "submitted")
+        computing = _COMPUTE.submit(prepared_maps, snapshot, rec)
+        offloop.schedule(doc, partial(draw, snapshot, computing, rec))  # app.offloop's pattern
 
-    async def draw(snapshot, computing):
+    def prepared_maps(snapshot, rec):  # on a thread of the maps' pool
+        timings.stamp(rec, "started")
+        with timings.current(rec):  # the kernel lock's legs (app.compute.compute)
+            prepared = map_data.prepare(cache.get(snapshot, compute))
+        timings.stamp(rec, "computed")
+        return prepared
+
+    async def draw(snapshot, computing, rec=None):
         try:
-            await show_maps(snapshot, computing)
+            await show_maps(snapshot, computing, rec)
+        except BaseException:
+            timings.finish(rec, "failed")
+            raise
         finally:
             if after_draw is not None:
                 await asyncio.sleep(URL_AFTER)  # the browser paints the maps first
@@ -211,7 +231,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     def spinner(on):
         busy.param.update(value=on, visible=on)
 
-    async def show_maps(snapshot, computing):
+    async def show_maps(snapshot, computing, rec=None):
         maps = asyncio.wrap_future(computing)
         # ``panels``: the maps and the arrays to send (map_data.prepare), from the worker
         try:  # the spinner only for a slow change: for a fast one it costs more than it says
@@ -224,9 +244,11 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             finally:
                 if busy is not None:
                     await offloop.changes(doc, partial(spinner, False))
+        timings.stamp(rec, "resumed")
         # Each session's draw is a callback of its own on the loop (~10 ms of Python): other
         # sessions' events queued meanwhile go between them
         if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
+            timings.finish(rec, "superseded")
             return
         # The maps' own Bokeh models in one message, as Panel sends a change made on the
         # loop: they are not changed from Panel's threads, so nothing overtakes them with a
@@ -236,6 +258,9 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         # per event) the images were painted up to ~50 ms apart.
         with pn.io.hold():
             map_figures.fill(figs, panels)
+            timings.stamp(rec, "drawn")
+        timings.stamp(rec, "sent")
+        timings.finish(rec, "sent")
         follow.drawn_exact()
         # the panes under the maps, whose first update brings Panel's stylesheets: in order
         # with the threads' changes
@@ -273,6 +298,13 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
     tab.figures = figs  # for tests
     tab.live = follow
     return tab
+
+
+def _changed_inputs(before, after):
+    """The inputs whose values differ between two snapshots (name -> the new value), for a timing
+    record (app/timings.py); every input when there is no ``before``."""
+    old = dict(before.items) if before is not None else {}
+    return {n: v for n, v in after.items if n not in old or old[n] != v}
 
 
 def applied_inputs(scenario):

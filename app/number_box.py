@@ -13,6 +13,8 @@ owner's :meth:`~app.part.Part.refuse`. The box then shows the value the owner ho
 
 from __future__ import annotations
 
+import threading
+
 import panel as pn
 import param
 
@@ -59,35 +61,40 @@ def number_box(owner, name, *, decimals=2, label=None, **widget):
     title = {"label" if "label" in pn.widgets.TextInput.param else "name": label or p.label}
     box = pn.widgets.TextInput(value=shown_text(getattr(owner, name), integer, decimals),
                                **{"sizing_mode": "stretch_width", **title, **widget})
-    showing = [False]  # the box's text is being set from the value: not typed
 
-    def show(v, again=False):
-        showing[0] = True
-        try:
-            text = shown_text(v, integer, decimals)
-            if again:
-                # Panel drops an update equal to the last value the browser sent, as an echo of
-                # it; after a refused text the last good value often is that one (typed before
-                # it), and the box kept showing the refused text: step through another text
-                box.value = text + " "
+    def wanted():
+        """The text of the value the owner holds now."""
+        return shown_text(getattr(owner, name), integer, decimals)
+
+    def settle():
+        """Show the owner's value, as it is when this runs (a later typed value may have changed
+        it). Scheduled on the session's event loop after the updates already queued, so it
+        comes after both deliveries of a typed text (below)."""
+        text = wanted()
+        if box.value != text:
             box.value = text
-        finally:
-            showing[0] = False
+
+    # Panel delivers one Enter twice (the ``value`` change and an ``enter-pressed`` event that
+    # sets ``value`` again), on two of its threads, often at once: one at a time here, or the
+    # second set the refused value while the first restored the last good one, whose check
+    # (Scenario.checked) skips while a restore runs, and the owner kept -1 for α.
+    one_at_a_time = threading.RLock()
 
     def typed(event):
-        if showing[0]:
-            return
-        v, why = parsed(event.new, integer)
-        if v is None:
-            show(getattr(owner, name), again=True)  # the last good value
-            owner.refuse(name, why)
-        elif v != getattr(owner, name):
-            setattr(owner, name, v)
-            if getattr(owner, name) != v:  # refused by the owner's limits: it restored the last
-                show(getattr(owner, name), again=True)  # good value, which the box shows again
+        if event.new == wanted():
+            return  # the owner's value shown (set by settle, or typed as it is shown)
+        with one_at_a_time:
+            if box.value != event.new:
+                return  # a later text has replaced this one; its own event takes it
+            v, why = parsed(event.new, integer)
+            if v is None:
+                owner.refuse(name, why)  # the owner keeps its last good value
+            elif v != getattr(owner, name):
+                setattr(owner, name, v)  # its limits may refuse it and restore the last good value
+        pn.state.execute(settle, schedule=True)
 
     # The owner's current value, not the event's: a refused value is restored inside the owner's
     # own watcher, so this event may already be stale.
-    owner.param.watch(lambda _event: show(getattr(owner, name)), [name])
+    owner.param.watch(lambda _event: settle(), [name])
     box.param.watch(typed, ["value"])
     return box

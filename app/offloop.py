@@ -80,16 +80,19 @@ def schedule(doc, coroutine_function, *, after_changes=False):
         pn.state.execute(coroutine_function)
 
 
-async def changes(doc, fn):
+def soon(doc, fn):
     """Run ``fn()`` (changes to the page of ``doc``'s session) on the loop as a callback of the
-    document, with its lock and its events held, and wait for it: its messages join Bokeh's queue
-    of the session's writes, in order with the changes from Panel's threads (module docstring).
-    Outside a server, ``fn()`` runs here in ``pn.io.hold()``."""
+    document, with its lock and its events held, without waiting for it; whichever thread calls
+    this. Its messages join Bokeh's queue of the session's writes, in order with the changes from
+    Panel's threads (module docstring). For a watcher on Panel's threads that brings new models
+    to the page (an input built when it first applies, a tab built on its first visit): made
+    there, Panel applies such a change as a callback of the document but inside its own
+    ``hold``, on its own path, which a later message from Bokeh's queue could overtake. Outside
+    a server, ``fn()`` runs here in ``pn.io.hold()``."""
     if doc is None or doc.session_context is None:
         with pn.io.hold():
             fn()
         return
-    done = asyncio.get_running_loop().create_future()
 
     def run():
         ours = not doc.callbacks.hold_value  # a hold of another caller's is released by it
@@ -98,15 +101,31 @@ async def changes(doc, fn):
         try:
             with set_curdoc(doc):
                 fn()
-        except BaseException as exc:  # noqa: BLE001 (handed to the awaiting coroutine)
-            done.set_exception(exc)
-        else:
-            done.set_result(None)
         finally:
             if ours:
                 doc.unhold()
 
     doc.add_next_tick_callback(run)
+
+
+async def changes(doc, fn):
+    """Run ``fn()`` (changes to the page of ``doc``'s session) on the loop as a callback of the
+    document, with its lock and its events held, and wait for it (:func:`soon`). Outside a
+    server, ``fn()`` runs here in ``pn.io.hold()``."""
+    if doc is None or doc.session_context is None:
+        soon(doc, fn)
+        return
+    done = asyncio.get_running_loop().create_future()
+
+    def run():
+        try:
+            fn()
+        except BaseException as exc:  # noqa: BLE001 (handed to the awaiting coroutine)
+            done.set_exception(exc)
+        else:
+            done.set_result(None)
+
+    soon(doc, run)
     await done
 
 
@@ -175,4 +194,4 @@ class Task:
         await changes(self.doc, apply)
 
 
-__all__ = ["Task", "changes", "pool", "schedule"]
+__all__ = ["Task", "changes", "pool", "schedule", "soon"]

@@ -9,7 +9,18 @@ soft bounds, label with the unit, doc) and, in the parameter's ``metadata`` (:fu
 - ``card``: (title, place) of the sidebar card it is shown in (:data:`CARDS`), and ``shown``: a
   rule of a :class:`Where` saying when it applies (it is hidden otherwise);
 - ``moves``: a choice whose change moves other values by a rule (said under it); ``fmt``: its
-  slider's number format; ``slider``: False for a number with a box only.
+  slider's number format; ``slider``: False for a number with a box only;
+- ``kinds``: the sensor kinds (core kinds E, B, G, BG) whose measurement reads it (shown only
+  where one of them is measured, and what each kind's part reads: app.sensors); ``moment``: a
+  component of the target's moments (the states a "moments known" scenario drops);
+- ``seabed``: where a layered sea puts it, and keeps it when the sea depth D changes:
+  ``"bottom"`` (on the seabed, z = D; a list of stations: each station's z), ``"within"`` (kept
+  in the water column [0, D]), ``"surface"`` (z = 0); ``layered``: the only value a layered sea
+  takes;
+- ``group``: the card of a tab's own inputs it is shown in (the Shape tab's), in declaration
+  order; ``sources``: the Calibration tab's data sources it applies to (default: every one);
+  ``vector``: a component of a vector input (the geomagnetic field Be: north, east, down, in
+  declaration order).
 
 The sidebar, visibility, refusals, the URL and depth handling are derived from these.
 

@@ -21,6 +21,7 @@ import param
 import core
 
 from .part import CARDS, Part, declared, limits
+from .sensors import KINDS, MODELS
 
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
@@ -50,16 +51,14 @@ ERROR_QUANTITIES = {
     "Depth error σz (m)": "sigma_z",
     "Speed error σ|v| (m/s)": "sigma_speed",
 }
-#: Sensor kinds (spec §11, core.Sensor): label -> core kind.
-SENSORS = {"electric (E, V/m)": "E", "magnetometer (B, nT)": "B", "gradiometer (G, nT/m)": "G",
-           "magnetometer + gradiometer (BG)": "BG"}
-#: Moments of a magnetic target named by the "moments known" state set.
-MAGNETIC_KNOWN = ("mx", "my", "mz")
+#: Sensor kinds (spec §11, core.Sensor): label -> core kind, of the sensor parts (app.sensors).
+SENSORS = {part.label: part.kind for part in KINDS}
 #: Measures that use the paper's square Γ (electric only): a magnetic kind moves off them.
 SQUARE_MEASURES = ("log10|det Γ| (paper)", "Observability index log10 η")
 DIFFERENCES = {"log10 Δ|det| (paper, Δ ≤ 0 blank)": "paper", "Signed log-ratio": "ratio"}
-MODELS = {"exact dipole": "exact", "paper eqs. (10)–(12) as printed": "paper"}
-STATE_SETS = {"all 7 unknown": (), "moments known (5 states)": ("Ph", "Pv")}
+#: The unknown states: label -> whether the target's moments are known (their states are then
+#: dropped: core.Sensor.state_names past position and velocity).
+STATE_SETS = {"all 7 unknown": False, "moments known (5 states)": True}
 SEA_MODELS = ("whole space", "layered")
 
 def _in(**declaration):
@@ -77,22 +76,22 @@ class Target(Part):
     and its depth."""
 
     Ph = _num(100.0, (0, 1000), "P_h (A·m)", "Horizontal dipole moment of the target, A·m.",
-        metadata=_in(card=("Target", 0), hard=(0.0, 1e5, "A·m"), shown=lambda w: w.electric))
+        metadata=_in(moment=True, kinds=("E",), card=("Target", 0), hard=(0.0, 1e5, "A·m")))
     Pv = _num(20.0, (0, 1000), "P_v (A·m)", "Vertical dipole moment of the target, A·m.",
-        metadata=_in(card=("Target", 1), hard=(0.0, 1e5, "A·m"), shown=lambda w: w.electric))
+        metadata=_in(moment=True, kinds=("E",), card=("Target", 1), hard=(0.0, 1e5, "A·m")))
     mx = _num(-3000.0, (-20000, 20000), "m_x (A·m²)", "Magnetic moment of the target, x, A·m².",
-        metadata=_in(card=("Target", 2), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.magnetic))
+        metadata=_in(moment=True, kinds=("B", "G", "BG"), card=("Target", 2), hard=(-1e7, 1e7, "A·m²")))
     my = _num(1000.0, (-20000, 20000), "m_y (A·m²)", "Magnetic moment of the target, y, A·m².",
-        metadata=_in(card=("Target", 3), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.magnetic))
+        metadata=_in(moment=True, kinds=("B", "G", "BG"), card=("Target", 3), hard=(-1e7, 1e7, "A·m²")))
     mz = _num(5000.0, (-20000, 20000), "m_z (A·m²)", "Magnetic moment of the target, z (down), A·m².",
-        metadata=_in(card=("Target", 4), hard=(-1e7, 1e7, "A·m²"), shown=lambda w: w.magnetic))
+        metadata=_in(moment=True, kinds=("B", "G", "BG"), card=("Target", 4), hard=(-1e7, 1e7, "A·m²")))
     speed = _num(2.0 * math.sqrt(2.0), (0.1, 20), "Speed (m/s)", "Target speed, m/s (> 0).",
         metadata=_in(card=("Target", 5), hard=(0.01, 100.0, "m/s"), shown=lambda w: not w.on_track))
     heading = _num(45.0, (-180, 180), "Heading (°)",
                    "Course over ground, degrees from +x towards +y; the horizontal dipole points along it.",
         metadata=_in(card=("Target", 6), hard=(-180.0, 180.0, "°"), shown=lambda w: not w.on_track))
     z = _num(120.0, (0, 1000), "Target depth z (m)", "Target depth for the x–y plane, m (same axis as h).",
-        metadata=_in(card=("Target", 7), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.plane == "x–y" or not w.on_maps))
+        metadata=_in(seabed="within", card=("Target", 7), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.plane == "x–y" or not w.on_maps))
 
 
 class Stations(Part):
@@ -125,7 +124,7 @@ class Stations(Part):
     h = _num(100.0, (0, 1000), "Station depth h (m)",
              "Depth of the paper's stations, and of every custom station at it (Layout design, "
              "Track): they move with h; one given its own depth in the table keeps it, m.",
-        metadata=_in(card=("Stations", 0), hard=(0.0, 5000.0, "m"), depth=True))
+        metadata=_in(seabed="bottom", card=("Stations", 0), hard=(0.0, 5000.0, "m"), depth=True))
     d = _num(15.0, (0.5, 300), "Station spacing d (m)", "Station 2 sits at (d, 0, h); station 1 at (0, 0, h).",
         metadata=_in(card=("Stations", 1), hard=(0.1, 5000.0, "m"), shown=lambda w: w.on_maps and not (w.comparison in ("moments_scaled", "moment_split", "sensor_kinds") and w.layout == "single")))
     layout = param.Selector(objects=["single", "dual"], default="dual", label="Layout for Figs. 3–4",
@@ -133,7 +132,8 @@ class Stations(Part):
         metadata=_in(card=("Stations", 2), shown=lambda w: w.on_maps and w.comparison in ("moments_scaled", "moment_split", "sensor_kinds")))
     stations = param.List([[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]], item_type=list,
                           label="Stations (x, y, z) (m)",
-                          doc="Custom layout for the design tab: 1 to 8 stations anywhere, m.")
+                          doc="Custom layout for the design tab: 1 to 8 stations anywhere, m.",
+        metadata=_in(seabed="bottom"))
 
 
 class Medium(Part):
@@ -142,17 +142,17 @@ class Medium(Part):
     sea_model = param.Selector(objects=list(SEA_MODELS), default="whole space", label="Sea",
                                doc="Whole space (the paper) or layered: insulating air above, a "
                                    "seabed below; z and h are then depths in [0, D].",
-        metadata=_in(card=("Sea", 0), moves=True, shown=lambda w: w.electric))
+        metadata=_in(kinds=("E",), card=("Sea", 0), moves=True))
     sea_depth = _num(200.0, (1, 500), "Sea depth D (m)", "Water depth D of the layered sea, m.",
-        metadata=_in(card=("Sea", 1), hard=(0.5, 10000.0, "m"), shown=lambda w: w.layered))
+        metadata=_in(kinds=("E",), card=("Sea", 1), hard=(0.5, 10000.0, "m"), shown=lambda w: w.layered))
     seabed_sigma = _num(1.0, (0, 10), "Seabed conductivity σb (S/m)",
                         "Conductivity of the seabed half-space, S/m (0: insulating).",
-        metadata=_in(card=("Sea", 2), hard=(0.0, 1000.0, "S/m"), shown=lambda w: w.layered))
+        metadata=_in(kinds=("E",), card=("Sea", 2), hard=(0.0, 1000.0, "S/m"), shown=lambda w: w.layered))
     sigma = _num(4.0, (0.1, 10), "Conductivity σ (S/m)", "Sea conductivity, S/m; shifts log10|det Γ| only.",
-        metadata=_in(card=("Advanced", 3), hard=(1e-3, 100.0, "S/m"), shown=lambda w: w.electric))
+        metadata=_in(kinds=("E",), card=("Advanced", 3), hard=(1e-3, 100.0, "S/m")))
     model = param.Selector(objects=list(MODELS), default="exact dipole", label="Field model",
                            doc="'paper' reproduces the printed equations, which are not a dipole field.",
-        metadata=_in(card=("Advanced", 0), moves=True, shown=lambda w: w.electric))
+        metadata=_in(kinds=("E",), layered="exact dipole", card=("Advanced", 0), moves=True))
 
 
 class Sensor(Part):
@@ -160,22 +160,23 @@ class Sensor(Part):
 
     sensor = param.Selector(objects=list(SENSORS), default="electric (E, V/m)", label="Sensor",
                             doc="What every station measures: the electric field (the paper), the "
-                                "magnetic field, its gradient tensor, or both (spec §11).",
+                                "magnetic field, its gradient tensor, or both (spec §11): the label "
+                                "of a sensor part (app.sensors), which builds its core.Sensor.",
         metadata=_in(card=("View", 0), moves=True))
     noise = _num(1e-7, (1e-9, 1e-5), "Sensor noise (V/m)", "Noise standard deviation per component, V/m.",
-        metadata=_in(card=("Advanced", 4), hard=(1e-12, 1e-2, "V/m"), slider=False, shown=lambda w: w.electric))
+        metadata=_in(kinds=("E",), card=("Advanced", 4), hard=(1e-12, 1e-2, "V/m"), slider=False))
     noise_b = _num(0.01, (1e-3, 10), "Magnetometer noise (nT)",
                    "Noise standard deviation per field component, nT.",
-        metadata=_in(card=("Advanced", 5), hard=(1e-6, 1e3, "nT"), fmt='0.[0000]', shown=lambda w: bool(w.kinds & {"B", "BG"})))
+        metadata=_in(kinds=("B", "BG"), card=("Advanced", 5), hard=(1e-6, 1e3, "nT"), fmt='0.[0000]'))
     noise_g = _num(0.01, (1e-3, 10), "Gradiometer noise (nT/m)",
                    "Noise standard deviation per tensor component, nT/m.",
-        metadata=_in(card=("Advanced", 6), hard=(1e-6, 1e3, "nT/m"), fmt='0.[0000]', shown=lambda w: bool(w.kinds & {"G", "BG"})))
+        metadata=_in(kinds=("G", "BG"), card=("Advanced", 6), hard=(1e-6, 1e3, "nT/m"), fmt='0.[0000]'))
     baseline = _num(0.0, (0, 2), "Gradiometer baseline L (m)",
                     "0: the point gradient tensor. L > 0: magnetometers ±L/2 along each axis read "
                     "as differences (seed 003: 0.5 m). It sets the scale: one gradiometer alone "
                     "becomes observable, its bound growing steeply with range / L; targets within "
                     "L of a station are masked.",
-        metadata=_in(card=("Advanced", 7), hard=(0.0, 10.0, "m"), shown=lambda w: bool(w.kinds & {"G", "BG"})))
+        metadata=_in(kinds=("G", "BG"), card=("Advanced", 7), hard=(0.0, 10.0, "m")))
     T = _num(1.0, (0.1, 10), "Sample interval T (s)", "Time between measurements, s.",
         metadata=_in(card=("Advanced", 2), hard=(1e-3, 1000.0, "s")))
     steps = param.Integer(3, softbounds=(1, 10), label="Instants N (Fisher)",
@@ -197,9 +198,9 @@ class Region(Part):
     extent = _num(300.0, (10, 2000), "Half-width of x (and y) (m)", "Maps span ±extent in x (and y), m.",
         metadata=_in(card=("Advanced", 9), hard=(1.0, 10000.0, "m")))
     z_min = _num(100.0, (0, 1000), "x–z plane: z from (m)", "Shallowest target depth of the x–z plane, m.",
-        metadata=_in(card=("Advanced", 10), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.on_maps and w.plane == "x–z"))
+        metadata=_in(seabed="surface", card=("Advanced", 10), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.on_maps and w.plane == "x–z"))
     z_max = _num(400.0, (0, 2000), "x–z plane: z to (m)", "Deepest target depth of the x–z plane, m.",
-        metadata=_in(card=("Advanced", 11), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.on_maps and w.plane == "x–z"))
+        metadata=_in(seabed="bottom", card=("Advanced", 11), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.on_maps and w.plane == "x–z"))
     resolution = param.Integer(200, softbounds=(20, 400), label="Grid points per axis",
                                doc="Map resolution; at most 400 per axis.",
         metadata=_in(card=("Advanced", 12), hard=(20, 400, "points per axis")))
@@ -292,12 +293,12 @@ class Track(Part):
     track_sigma_a = param.Number(0.1, softbounds=(0.0, 1.0),
                                  label="Acceleration noise σa (m/s²)",
                                  doc="DWNA process noise per horizontal axis, m/s² (seed 001: 0.1).",
-        metadata=_in(hard=(0.0, 10.0, "m/s²")))
+        metadata=_in(fmt="0.[000]", hard=(0.0, 10.0, "m/s²")))
     track_alpha = param.Number(0.001, softbounds=(0.0, 0.1),
                                label="Moment random walk α (moment²/step)",
                                doc="Variance of the moments' random walk per step: (A·m)² for the "
                                    "electric dipole (seed 001: 0.001), (A·m²)² for a magnetic one.",
-        metadata=_in(hard=(0.0, 100.0, "moment²/step")))
+        metadata=_in(fmt="0.[0000]", hard=(0.0, 100.0, "moment²/step")))
     track_filter = param.Selector(objects=["bank", "ekf", "puekf"], default="bank", label="Tracker",
                                   doc="bank: seed 001's 12 filters, no prior, ML selection; ekf / "
                                       "puekf: one filter from a prior about the truth.")
@@ -320,16 +321,17 @@ class Calibration(Part):
         objects=list(core.calibration.CONVENTIONS), default="seed004", label="Attitude convention",
         doc="How heading, roll and pitch make A (core.calibration.CONVENTIONS); seed004 is its eq. (2).")
     cal_headings = param.String("0, 90, 180, 270", label="Headings (°)",
-                                doc="Designed manoeuvre: headings sailed in turn, degrees from north.")
+                                doc="Designed manoeuvre: headings sailed in turn, degrees from north.",
+        metadata=_in(sources=("Designed manoeuvre",)))
     cal_roll_deg = param.Number(10.0, softbounds=(0.0, 45.0), label="Roll amplitude (°)",
                                 doc="Designed manoeuvre: roll = amplitude · cos(2πn/N), degrees.",
-        metadata=_in(hard=(0.0, 45.0, "°")))
+        metadata=_in(sources=("Designed manoeuvre",), hard=(0.0, 45.0, "°")))
     cal_pitch_deg = param.Number(5.0, softbounds=(0.0, 30.0), label="Pitch amplitude (°)",
                                  doc="Designed manoeuvre: pitch = amplitude · sin(2πn/N), degrees.",
-        metadata=_in(hard=(0.0, 30.0, "°")))
+        metadata=_in(sources=("Designed manoeuvre",), hard=(0.0, 30.0, "°")))
     cal_n_attitudes = param.Integer(12, softbounds=(1, 120), label="Attitudes N",
                                     doc="Number of attitudes of a designed or simulated manoeuvre.",
-        metadata=_in(hard=(1, 120, "attitudes")))
+        metadata=_in(sources=("Designed manoeuvre", "Seed 004 simulation"), hard=(1, 120, "attitudes")))
     cal_noise_nt = param.Number(100.0, softbounds=(0.1, 5000.0), label="Reading error bound ± (nT)",
                                 doc="Uniform reading errors within ± this, nT; the filter and the CRLB "
                                     "use σ = bound/√3.",
@@ -339,13 +341,13 @@ class Calibration(Part):
         metadata=_in(hard=(0.0, 2.0, "°")))
     cal_be_n = param.Number(34000.0, softbounds=(-1e5, 1e5), label="Be north (nT)",
                             doc="Geomagnetic field, north component, nT.",
-        metadata=_in(hard=(-1e5, 1e5, "nT")))
+        metadata=_in(vector="Be", hard=(-1e5, 1e5, "nT")))
     cal_be_e = param.Number(2000.0, softbounds=(-1e5, 1e5), label="Be east (nT)",
                             doc="Geomagnetic field, east component, nT.",
-        metadata=_in(hard=(-1e5, 1e5, "nT")))
+        metadata=_in(vector="Be", hard=(-1e5, 1e5, "nT")))
     cal_be_d = param.Number(35000.0, softbounds=(-1e5, 1e5), label="Be down (nT)",
                             doc="Geomagnetic field, down component, nT.",
-        metadata=_in(hard=(-1e5, 1e5, "nT")))
+        metadata=_in(vector="Be", hard=(-1e5, 1e5, "nT")))
     cal_iterations = param.Integer(600, softbounds=(1, 5000), label="Kalman iterations",
                                    doc="Filter steps; the readings are reused cyclically (seed 004).",
         metadata=_in(hard=(1, 5000, "iterations")))
@@ -355,7 +357,7 @@ class Calibration(Part):
         metadata=_in(hard=(0.01, 1e6, "nT")))
     cal_seed = param.Integer(4, softbounds=(0, 1_000_000), label="Random seed",
                              doc="Seed of the simulated attitudes and errors.",
-        metadata=_in(hard=(0, 1_000_000, "")))
+        metadata=_in(sources=("Designed manoeuvre", "Seed 004 simulation"), hard=(0, 1_000_000, "")))
 
 
 class Shape(Part):
@@ -367,55 +369,58 @@ class Shape(Part):
 
     shape_type = param.Selector(objects=["cylinder", "disc"], default="cylinder", label="Target type",
                                 doc="Seed 003: a cylinder has H > R (read as a line), a disc H ≤ R "
-                                    "(read as a plane). Switching sets typical sizes if H, R disagree.")
+                                    "(read as a plane). Switching sets typical sizes if H, R disagree.",
+        metadata=_in(group="Target"))
     shape_height = _num(3.0, (0.1, 6.0), "Height H (m)", "Target height H along its axis, m.",
-        metadata=_in(hard=(0.1, 20.0, "m")))
+        metadata=_in(group="Target", hard=(0.1, 20.0, "m")))
     shape_radius = _num(0.5, (0.05, 3.0), "Radius R (m)", "Target radius R, m.",
-        metadata=_in(hard=(0.05, 10.0, "m")))
+        metadata=_in(group="Target", hard=(0.05, 10.0, "m")))
     shape_inner_height = _num(0.0, (0.0, 6.0), "Cavity height H_in (m, 0: solid)",
                               "Hollow target: height of the coaxial cavity, m (0 with R_in = 0: solid).",
-        metadata=_in(hard=(0.0, 20.0, "m")))
+        metadata=_in(group="Target", hard=(0.0, 20.0, "m")))
     shape_inner_radius = _num(0.0, (0.0, 3.0), "Cavity radius R_in (m, 0: solid)",
                               "Hollow target: radius of the coaxial cavity, m (< R).",
-        metadata=_in(hard=(0.0, 10.0, "m")))
+        metadata=_in(group="Target", hard=(0.0, 10.0, "m")))
     shape_roll = _num(30.0, (-180, 180), "Roll θ (°)", "Attitude: roll about x, degrees (R = Rz·Ry·Rx).",
-        metadata=_in(hard=(-180.0, 180.0, "°")))
+        metadata=_in(group="Target", hard=(-180.0, 180.0, "°")))
     shape_pitch = _num(45.0, (-180, 180), "Pitch β (°)", "Attitude: pitch about y, degrees.",
-        metadata=_in(hard=(-180.0, 180.0, "°")))
+        metadata=_in(group="Target", hard=(-180.0, 180.0, "°")))
     shape_yaw = _num(60.0, (-180, 180), "Yaw φ (°)", "Attitude: yaw about z, degrees.",
-        metadata=_in(hard=(-180.0, 180.0, "°")))
+        metadata=_in(group="Target", hard=(-180.0, 180.0, "°")))
     shape_mx = _num(-3.0, (-10, 10), "Cell moment mx (A·m²)", "Moment of each 0.1 m cell, x (A·m²).",
-        metadata=_in(hard=(-1000.0, 1000.0, "A·m² per cell")))
+        metadata=_in(group="Target", hard=(-1000.0, 1000.0, "A·m² per cell")))
     shape_my = _num(1.0, (-10, 10), "Cell moment my (A·m²)", "Moment of each 0.1 m cell, y (A·m²).",
-        metadata=_in(hard=(-1000.0, 1000.0, "A·m² per cell")))
+        metadata=_in(group="Target", hard=(-1000.0, 1000.0, "A·m² per cell")))
     shape_mz = _num(5.0, (-10, 10), "Cell moment mz (A·m²)", "Moment of each 0.1 m cell, z (A·m²).",
-        metadata=_in(hard=(-1000.0, 1000.0, "A·m² per cell")))
+        metadata=_in(group="Target", hard=(-1000.0, 1000.0, "A·m² per cell")))
     shape_offset = _num(5.0, (-30, 30), "Track lateral offset y (m)",
                         "y of the straight track along x (the target's centre is the origin), m.",
-        metadata=_in(hard=(-100.0, 100.0, "m")))
+        metadata=_in(group="Pass and noise", hard=(-100.0, 100.0, "m")))
     shape_above = _num(5.0, (-30, 30), "Track height above the target (m)",
                        "Height of the track above the target's centre, m (z = −height: z is down).",
-        metadata=_in(hard=(-100.0, 100.0, "m")))
+        metadata=_in(group="Pass and noise", hard=(-100.0, 100.0, "m")))
     shape_noise = param.Number(0.01, softbounds=(1e-3, 1.0), label="Noise σ (nT/m)",
                                doc="Gaussian noise of each tensor component, nT/m (seed 003: 0.01).",
-        metadata=_in(hard=(1e-5, 10.0, "nT/m")))
+        metadata=_in(fmt="0.[00000]", group="Pass and noise", hard=(1e-5, 10.0, "nT/m")))
     shape_outliers = param.String("", label="Outliers at platform x (m)",
                                   doc="Comma-separated x positions (m) of the samples that get an "
-                                      "outlier on all five components (Fig. 5: −20, −10, 0); empty: none.")
+                                      "outlier on all five components (Fig. 5: −20, −10, 0); empty: none.",
+        metadata=_in(group="Pass and noise"))
     shape_outlier_size = _num(500.0, (0, 2000), "Outlier size (σ)",
                               "Added to each hit component, in units of the noise σ (Fig. 5: 500).",
-        metadata=_in(hard=(0.0, 1e5, "σ")))
+        metadata=_in(group="Pass and noise", hard=(0.0, 1e5, "σ")))
     shape_window = param.Selector(objects=["seed 003 window (lag 5)", "one sample"],
                                   default="seed 003 window (lag 5)", label="Filter update",
                                   doc="Seed 003's window of three lagged readings (eq. 15, the paper's "
                                       "method; every sample counts three times, so the filters' σ is "
                                       "optimistic). One sample: the honest update, shown for "
-                                      "comparison (it misreads the axis in about half of the passes).")
+                                      "comparison (it misreads the axis in about half of the passes).",
+        metadata=_in(group="Filters"))
     shape_runs = param.Integer(1, softbounds=(1, 20), label="Monte-Carlo passes",
                                doc="Noise realisations: errors and shape are their medians, 1 to 20.",
-        metadata=_in(hard=(1, 20, "passes")))
+        metadata=_in(group="Filters", hard=(1, 20, "passes")))
     shape_seed = param.Integer(0, softbounds=(0, 100), label="Random seed", doc="Seed of the noise.",
-        metadata=_in(hard=(0, 1_000_000, "")))
+        metadata=_in(group="Filters", hard=(0, 1_000_000, "")))
 
 
 #: The parts of a scenario: attribute -> class. Their parameter names are unique across them.
@@ -455,10 +460,16 @@ def sidebar():
 
 
 def shown(name, where):
-    """Whether input ``name`` applies where ``where`` (:class:`Where`) says, by its declared rule
-    (an input with no rule always applies)."""
-    rule = declared(parameter(name)).get("shown")
+    """Whether input ``name`` applies where ``where`` (:class:`Where`) says: one of its declared
+    ``kinds`` is measured there, and its declared rule holds (an input with neither always
+    applies)."""
+    d = declared(parameter(name))
+    if "kinds" in d and not where.kinds & set(d["kinds"]):
+        return False
+    rule = d.get("shown")
     return True if rule is None else bool(rule(where))
+
+
 
 
 def inputs(*parts, but=()):

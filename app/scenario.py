@@ -29,6 +29,9 @@ from param.parameterized import batch_call_watchers
 
 import core
 
+from .sensors import BY_KIND
+from .derive import LAYERED, SEABED, groups, having, moments, on_seabed, read_by  # noqa: F401
+
 # The parts live in app/parts.py (their base in app/part.py); their names are this module's too
 # (``from app.scenario import Target``), as before the split.
 from .part import CARDS, Part, Where  # noqa: F401
@@ -39,7 +42,6 @@ from .parts import (  # noqa: F401
     DEPTHS,
     DIFFERENCES,
     ERROR_QUANTITIES,
-    MAGNETIC_KNOWN,
     MAX_STATIONS,
     MEASURE_LABELS,
     MODELS,
@@ -129,7 +131,7 @@ class Scenario(param.Parameterized):
         if unknown:
             raise TypeError(f"Scenario has no input {', '.join(unknown)}")
         super().__init__()
-        self._restoring = False
+        self._restoring_in = threading.local()  # per thread: Panel runs watchers on two at once
         #: One update (a preset, a link) at a time, its watchers included: Panel runs two clicks'
         #: watchers on two of its threads at once, and two presets interleaved left a mix of both
         self._updating = threading.RLock()
@@ -141,12 +143,13 @@ class Scenario(param.Parameterized):
         if notes:
             self.message = "; ".join(notes) + ". Used the default."
         # the rules between parts, each watching what triggers it
-        for part, names, rule in ((self.medium, ["sea_model"], self._seabed),
-                                  (self.medium, ["model"], self._exact_in_a_sea),
-                                  (self.sensor, ["sensor"], self._all_rows),
-                                  (self.maps, ["sensor_b", "comparison", "measure"], self._all_rows),
-                                  (self.shape, ["shape_type"], self._shape_sizes)):
-            part.param.watch(lambda *_, rule=rule: None if self._restoring else rule(), names)
+        def unless_restoring(rule):
+            return lambda *_: None if self._restoring else rule()
+
+        self.watch_inputs(unless_restoring(self._seabed), ["sea_model"])
+        self.watch_inputs(unless_restoring(self._layered_values), list(LAYERED))
+        self.watch_inputs(unless_restoring(self._all_rows), ["sensor", "sensor_b", "comparison", "measure"])
+        self.watch_inputs(unless_restoring(self._shape_sizes), ["shape_type"])
         self._all_rows()
 
     def __setattr__(self, name, value):
@@ -201,6 +204,10 @@ class Scenario(param.Parameterized):
         layered&sea_depth=80&h=100`` is refused for its h, not opened with h moved to 80)."""
         with self._updating:
             self._update({**(values or {}), **more}, as_given)
+
+    #: Whether this thread restores or moves values: no part checks, no rule (on this thread only)
+    _restoring = property(lambda self: getattr(self._restoring_in, "on", False),
+                          lambda self, on: setattr(self._restoring_in, "on", on))
 
     def _update(self, values, as_given=False):
         notes = [p for p in (self.problem(n, v) for n, v in values.items()) if p]
@@ -309,23 +316,23 @@ class Scenario(param.Parameterized):
 
     # -- rules that move values
     def _seabed(self, keep=()):
-        """Switching to a layered sea puts the stations on the seabed (h = D), the target and
-        the x–z plane into the water column, and the field model to the exact dipole (the
-        paper's printed equations have no images). ``keep``: inputs it leaves as they are."""
+        """Switching to a layered sea puts each input where its declaration says (``seabed``:
+        the stations on the seabed, h = D; the target and the x–z plane into the water column)
+        and the field model to the exact dipole (its ``layered`` value: the paper's printed
+        equations have no images). ``keep``: inputs it leaves as they are."""
         if self.medium.sea_model != "layered":
             return
         D = self.medium.sea_depth
-        moved = dict(h=D, z=min(max(self.target.z, 0.0), D), z_min=0.0, z_max=D, model="exact dipole",
-                     stations=[[st[0], st[1], D] for st in self.stations.stations])
+        moved = {**{n: on_seabed(rule, self.value(n), D) for n, rule in SEABED.items()}, **LAYERED}
         moved = {n: v for n, v in moved.items() if n not in keep}
         if not moved:
             return
         said = [f"{parameter(n).label.split(' (')[0]} {self.value(n):g} → {moved[n]:g} m"
-                for n in ("h", "z", "z_min", "z_max") if n in moved and self.value(n) != moved[n]]
-        if moved.get("stations", self.stations.stations) != self.stations.stations:
-            said.append(f"custom stations to the seabed ({D:g} m)")
-        if "model" in moved and self.medium.model != "exact dipole":
-            said.append("field model → exact dipole (the paper's printed equations have no images)")
+                for n in DEPTHS if n in moved and self.value(n) != moved[n]]
+        said += [f"custom stations to the seabed ({D:g} m)" for n in moved
+                 if isinstance(self.value(n), list) and moved[n] != self.value(n)]
+        said += [f"{parameter(n).label.lower()} → {v} (the paper's printed equations have no images)"
+                 for n, v in LAYERED.items() if n in moved and self.value(n) != v]
         self._quietly(**moved)
         note = ("Layered sea: moved " + "; ".join(said) + ". These stay when you switch back to the "
                 "whole space." if said else "")
@@ -346,18 +353,30 @@ class Scenario(param.Parameterized):
         """Whether map A or B measures with a magnetic kind."""
         return _magnetic_maps(self.sensor.sensor, self.maps.comparison, self.maps.sensor_b)
 
-    def _exact_in_a_sea(self):
-        if self.medium.sea_model == "layered" and self.medium.model != "exact dipole":
-            self._quietly(model="exact dipole")
-            self.param.update(message="The paper's printed equations have no layered-sea form: "
-                                      "use the whole space.", refused=["model"])
+    def _layered_values(self):
+        """In a layered sea, an input declared with the only value a layered sea takes (the
+        exact dipole) is set back to it."""
+        if self.medium.sea_model != "layered":
+            return
+        for n, v in LAYERED.items():
+            if self.value(n) != v:
+                self._quietly(**{n: v})
+                self.param.update(message="The paper's printed equations have no layered-sea form: "
+                                          "use the whole space.", refused=[n])
 
     def _follow_seabed(self, old, new):
-        """Values that sat on the old seabed (h, z_max, custom stations), moved to the new one."""
-        moved = {n: new for n in ("h", "z_max") if self.value(n) == old}
-        stations = [[st[0], st[1], new if st[2] == old else st[2]] for st in self.stations.stations]
-        if stations != self.stations.stations:
-            moved["stations"] = stations
+        """Values that sat on the old seabed (declared ``seabed="bottom"``: h, z_max, custom
+        stations), moved to the new one."""
+        moved = {}
+        for n, rule in SEABED.items():
+            value = self.value(n)
+            if rule != "bottom":
+                continue
+            if isinstance(value, list):  # stations: each station's depth
+                stations = [[st[0], st[1], new if st[2] == old else st[2]] for st in value]
+                moved.update({n: stations} if stations != value else {})
+            elif value == old:
+                moved[n] = new
         return moved
 
     def _follow_h(self, old, new):
@@ -467,20 +486,15 @@ class ScenarioValues(types.SimpleNamespace):
         ``measure``: with the maps' measure (:meth:`measure_key`); the Layout design tab's
         computations read none."""
         kind = SENSORS[self.sensor] if kind is None else kind
-        known = STATE_SETS[self.state_set]
         common = dict(T=self.T, steps=int(self.steps))
         if measure:
             common["measure"] = self.measure_key()
-        if kind != "E":
-            noise = {"B": self.noise_b, "G": self.noise_g, "BG": (self.noise_b, self.noise_g)}[kind]
-            baseline = self.baseline if "G" in kind and self.baseline > 0 else None
-            return dict(common, known=MAGNETIC_KNOWN if known else (),
-                        sensor=core.Sensor(kind, noise, baseline=baseline))
-        sea = core.Sea(self.sea_depth, self.seabed_sigma) if self.sea_model == "layered" else None
-        return dict(common, known=known,
-                    sensor=core.Sensor("E", self.noise, self.sigma, sea, MODELS[self.model]))
+        sensor = BY_KIND[kind].sensor(self)  # the kind's sensor part builds it (app.sensors)
+        # known moments: the sensor's states past position and velocity (x, y, z, vx, vy)
+        known = sensor.state_names[5:] if STATE_SETS[self.state_set] else ()
+        return dict(common, known=known, sensor=sensor)
 
     def moments(self, kind=None):
         """The target's moments for sensor ``kind``: (P_h, P_v) A·m, or (m_x, m_y, m_z) A·m²."""
         kind = SENSORS[self.sensor] if kind is None else kind
-        return (self.Ph, self.Pv) if kind == "E" else (self.mx, self.my, self.mz)
+        return tuple(getattr(self, n) for n in moments(kind))

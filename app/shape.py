@@ -28,6 +28,7 @@ from functools import partial
 import holoviews as hv
 import numpy as np
 import panel as pn
+import param
 
 from core.shape import Outliers, Pass, Target
 from core.shape.targets import CLEARANCE, clearance
@@ -41,7 +42,7 @@ from .cache import KERNEL_LOCK, SHARED
 from .compute import Snapshot
 from .inputs import number_input
 from .maps import alert, with_refusal
-from .scenario import Scenario, Shape, inputs
+from .scenario import Scenario, Shape, groups, inputs
 from .shape_text import verdict_text
 
 hv.extension("bokeh", logo=False)
@@ -50,8 +51,6 @@ hv.extension("bokeh", logo=False)
 READS = ("shape",)
 #: The tab's inputs.
 PARAMS = Shape.names()
-#: Selectors and text (the rest are numbers: a box and a slider).
-CHOICES = ("shape_type", "shape_window", "shape_outliers")
 #: The filter update: label -> lag of core.shape.experiment.Case (0: one sample).
 WINDOWS = {"one sample": 0, "seed 003 window (lag 5)": LAG}
 #: The pass (seed 003): start x (m), speed along +x (m/s), rate (Hz), samples: x −40 … +40 m.
@@ -359,13 +358,15 @@ def views(key):
 
 
 def _input(scenario, name):
-    if name in CHOICES:
-        cls = pn.widgets.TextInput if name == "shape_outliers" else pn.widgets.Select
-        w = cls.from_param(scenario.shape.param[name], css_classes=[f"w-{name}"], sizing_mode="stretch_width")
+    """A number (a box and a slider, in its declared format) or a choice or text, by the
+    parameter's type."""
+    p = scenario.shape.param[name]
+    if isinstance(p, param.Number):
+        column = number_input(scenario.shape, name, css_classes=[f"w-{name}"])
     else:
-        fmt = "0.[00000]" if name == "shape_noise" else "0.[00]"
-        w = number_input(scenario.shape, name, fmt=fmt, css_classes=[f"w-{name}"])
-    column = w if name not in CHOICES else pn.Column(w, margin=0, sizing_mode="stretch_width")
+        cls = pn.widgets.TextInput if isinstance(p, param.String) else pn.widgets.Select
+        w = cls.from_param(p, css_classes=[f"w-{name}"], sizing_mode="stretch_width")
+        column = pn.Column(w, margin=0, sizing_mode="stretch_width")
     return with_refusal(scenario, column, [name], "w-message-shape")
 
 
@@ -383,14 +384,8 @@ def _inputs(scenario):
 
     preset.param.watch(chosen, ["value"])
     scenario.watch(follow, READS)
-    groups = (("Target", ("shape_type", "shape_height", "shape_radius", "shape_inner_height",
-                          "shape_inner_radius", "shape_roll", "shape_pitch", "shape_yaw",
-                          "shape_mx", "shape_my", "shape_mz")),
-              ("Pass and noise", ("shape_offset", "shape_above", "shape_noise", "shape_outliers",
-                                  "shape_outlier_size")),
-              ("Filters", ("shape_window", "shape_runs", "shape_seed")))
     cards = [pn.Card(*[_input(scenario, n) for n in names], title=title, collapsed=False,
-                     sizing_mode="stretch_width") for title, names in groups]
+                     sizing_mode="stretch_width") for title, names in groups(PARAMS)]
     return pn.Column(preset, *cards, width=300)
 
 

@@ -47,6 +47,7 @@ from .design_compute import Design
 from .inputs import number_input
 from .maps import refusal
 from .scenario import SENSORS, Scenario, inputs
+from .sensors import BY_KIND
 from .shown import ALWAYS
 
 hv.extension("bokeh", logo=False)
@@ -364,12 +365,11 @@ def note_text(s):
     the sidebar's Target and Advanced sections (the help said "set above", and the noise is in
     the collapsed Advanced section on the left)."""
     kind = SENSORS[s.sensor]
+    noise = BY_KIND[kind].noise_text(s)  # the kind's sensor part says it (app.sensors)
     if kind == "E":
         source = (f"the target's moments P = ({s.Ph:g}, {s.Pv:g}) A·m (sidebar, *Target*) and the "
-                  f"sensor noise {s.noise:g} V/m (sidebar, *Advanced*)")
+                  f"sensor noise {noise} (sidebar, *Advanced*)")
     else:
-        noise = {"B": f"{s.noise_b:g} nT", "G": f"{s.noise_g:g} nT/m",
-                 "BG": f"{s.noise_b:g} nT and {s.noise_g:g} nT/m"}[kind]
         source = (f"the target's moment m = ({s.mx:g}, {s.my:g}, {s.mz:g}) A·m² (sidebar, *Target*) "
                   f"and the sensor noise {noise} (sidebar, *Advanced*)")
     return (f"A straight track over the design tab's stations at the target depth z = {s.z:g} m, "
@@ -386,13 +386,11 @@ def track_tab(scenario: Scenario, shown=ALWAYS):
     :class:`app.shown.WhenShown` (hidden, the tab computes nothing; it follows the scenario when
     shown again, a spinner over its plots meanwhile)."""
     own = list(scenario.track.names())
-    # every number is typed or dragged (a box above its slider, app.inputs: a refused text is
-    # said, not dropped); the choices are selectors
-    fmt = {"track_alpha": "0.[0000]", "track_sigma_a": "0.[000]"}
+    # every number is typed or dragged (a box above its slider in its declared format, app.inputs:
+    # a refused text is said, not dropped); the choices are selectors
     numbers = [n for n in own if isinstance(scenario.track.param[n], param.Number)]
     widgets = pn.Column(*[
-        number_input(scenario.track, name, fmt=fmt.get(name, "0.[00]"), css_classes=[f"w-{name}"])
-        for name in numbers],
+        number_input(scenario.track, name, css_classes=[f"w-{name}"]) for name in numbers],
         # the choices in one Param (one per choice cost ~20 ms more each to build)
         pn.Param(scenario.track, parameters=[n for n in own if n not in numbers], show_name=False,
                  sizing_mode="stretch_width"),

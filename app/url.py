@@ -22,6 +22,7 @@ from urllib.parse import parse_qsl, urlencode
 
 import param
 
+from .derive import LAYERED, SEABED
 from .scenario import PART_OF, PARTS, Scenario, defaults, parameter
 
 #: The query key of the tab shown.
@@ -62,9 +63,10 @@ def _rounded(value):
     return float(format(value, ".12g")) if isinstance(value, float) else value
 
 
-#: What a layered sea moves when a link switches to it (app.scenario.Scenario._seabed): written
-#: in a layered sea's link even at their defaults, so that reopening it moves none of them.
-SEABED_INPUTS = ("h", "z", "z_min", "z_max", "model", "stations")
+#: What a layered sea moves when a link switches to it (app.scenario.Scenario._seabed), as the
+#: inputs declare it (``seabed``, ``layered``): written in a layered sea's link even at their
+#: defaults, so that reopening it moves none of them.
+SEABED_INPUTS = (*SEABED, *LAYERED)
 
 
 def query(scenario, tab=None):

@@ -148,14 +148,54 @@ def error_map(d, title, quantity="3-D position error (m)", clim=None, size=DESIG
         cmap="viridis_r", logz=True, clim=clim or error_clim(d, quantity), colorbar=True,
         clabel=f"CRLB {quantity}, log scale", tools=["hover"], clipping_colors={"NaN": "white"},
         **to_scale(d.plane.u, d.plane.v, size), framewise=True, title=title)
-    return img * veil(d.errors.observable | np.isnan(d.errors.position), d.plane) * runaway_layer(d)
+    return img * veil(~veiled(d), d.plane) * runaway_layer(d)
+
+
+def veiled(d):
+    """Where a design's map is veiled grey (bool (n, n), rows along y): rank-deficient Γ, with a
+    finite position error."""
+    return ~(d.errors.observable | np.isnan(d.errors.position))
+
+
+def runaway_marks(d, k=1):
+    """Where a design's map gets a white dot (bool (k n, k n)): the 3-D position CRLB exceeds
+    RUNAWAY_LIMIT × the range to the nearest station (:func:`app.compute.runaway`), each point
+    repeated k × k times (a coarse preview's marks on a finer grid), on the dots' pattern."""
+    far = _finer(compute.runaway(d.plane, d.stations, d.errors.position, d.errors.observable), k)
+    return far & runaway_dots(far.shape)
+
+
+def _finer(mask, k):
+    return np.repeat(np.repeat(mask, k, axis=0), k, axis=1) if k > 1 else mask
+
+
+#: Colours of :func:`preview_arrays`' marks 0, 1, 2: none, the veil, a runaway dot (the
+#: layers' colours at their alphas, 0.55 and 0.7).
+MARK_COLOURS = ("#ffffff00", VEIL + "8c", "#ffffffb3")
+
+
+def preview_arrays(d, quantity, fine=None):
+    """A design's map as the Layout design tab's preview layers draw it, colour-mapped in the
+    browser (app/design_live.py): (error image data, marks image data, colour range). The error
+    is float32 (NaN where infinite), the marks uint8 (0 none, 1 veil, 2 runaway dot; the
+    veil and the dots never overlap: a dot needs a full rank); rows along y from the bottom,
+    as Bokeh's Image draws them. ``fine``: the exact map's points per side: the marks are
+    drawn on a grid about as fine (each preview point k × k times), so that the dots are the
+    exact map's size (on the preview's grid, 40 × 40, they were 45 m squares)."""
+    err = _errors(d, quantity).astype(np.float32)
+    k = max(1, int(round(fine / d.plane.n))) if fine else 1
+    marks = np.zeros((err.shape[0] * k, err.shape[1] * k), dtype=np.uint8)
+    marks[_finer(veiled(d), k)] = 1
+    marks[runaway_marks(d, k)] = 2
+    x0, y0, x1, y1 = _bounds(d.plane)
+    where = dict(x=[x0], y=[y0], dw=[x1 - x0], dh=[y1 - y0])
+    return dict(image=[err], **where), dict(image=[marks], **where), error_clim(d, quantity)
 
 
 def runaway_layer(d):
     """White dots where the design's 3-D position CRLB exceeds RUNAWAY_LIMIT × the range to
-    the nearest station (:func:`app.compute.runaway`; the same marks as the Maps tab's)."""
-    far = compute.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
-    hatch = far & runaway_dots(far.shape)
+    the nearest station (:func:`runaway_marks`; the same marks as the Maps tab's)."""
+    hatch = runaway_marks(d)
     label = f"CRLB > {RUNAWAY_LIMIT:.0%} of range"
     return hv.Image(np.flipud(hatch.astype(float)), bounds=_bounds(d.plane), kdims=list(axes(d.plane)),
                     vdims=[hv.Dimension("runaway", label=label)]).opts(

@@ -27,7 +27,7 @@ Honesty checks, per change: the P_h text box shows a new value; all three maps' 
 new and map A's values differ from before; the final value was never used before; the page is left
 alone until its websocket has been quiet for ``--quiet-ms`` so no later image is missed (the
 *last* image of each plot counts, stale intermediate ones never do); and the drawn map A is
-compared with an in-process ``app.compute.compute`` of the slider's exact value. The in-process
+compared with an in-process ``app.compute.compute`` of the slider's exact value, and so is map B. The in-process
 compute time of the default scenario (median of 10) is the baseline for the ratio.
 """
 
@@ -161,12 +161,14 @@ PH_VALUE_JS = """(name) => { name = name || 'Ph';
   return null;
 }"""
 
-#: Sum of the finite values of map A's image as drawn.
-MAP_A_SUM_JS = """() => { const v = window.__bench.views()[0];
+#: Sum of the finite values of map ``which``'s image as drawn (0 A, 1 B).
+MAP_SUM_JS = """(which) => { const v = window.__bench.views()[which || 0];
   const r = v.model.renderers.find(r => r.data_source && r.data_source.data.image);
   const a = r.data_source.data.image[0]; let s = 0, n = 0;
   for (let i = 0; i < a.length; i++) if (!isNaN(a[i])) { s += a[i]; n++; }
   return [s, n, String(a.dtype || a.constructor.name) + ' (' + a.BYTES_PER_ELEMENT + ' B)']; }"""
+#: Map A's (bench/bench_floor.py, tests/test_floor_apps.py).
+MAP_A_SUM_JS = MAP_SUM_JS
 
 
 def fractions(count):
@@ -188,16 +190,26 @@ def compute_baseline(repeat=10):
     return statistics.median(times) * 1e3
 
 
-def expected_map_a_sum(ph):
-    """Sum and count of the finite values of map A's image as the server sends it (float32,
-    normalised to its colour range: app/map_figures.py), computed here in-process."""
+def expected_map_sums(ph):
+    """[(sum, count)] of the finite values of maps A and B's images as the server sends them
+    (float32, normalised to their colour range: app/map_figures.py), computed here in-process.
+    Both: a map may have no value at all (A, one station, on the CRLB measure: unobservable
+    everywhere), and one that is round-off (A on log10|det Γ|) differs with the last bit of P_h."""
     from app import map_data
     from app.compute import Snapshot, compute
 
     p = compute(Snapshot.of(scenario(**{SLIDER['name']: ph})))
-    low, high, _ = map_data.ranges(p)[0]
-    a = map_data.normalised(p.shown(0), low, high).astype(float)
-    return float(np.nansum(np.where(np.isfinite(a), a, np.nan))), int(np.isfinite(a).sum())
+    out = []
+    for which in (0, 1):
+        low, high, _ = map_data.ranges(p)[which]
+        a = map_data.normalised(p.shown(which), low, high).astype(float)
+        out.append((float(np.nansum(np.where(np.isfinite(a), a, np.nan))), int(np.isfinite(a).sum())))
+    return out
+
+
+def expected_map_a_sum(ph):
+    """Map A's (sum, count) of :func:`expected_map_sums`."""
+    return expected_map_sums(ph)[0]
 
 
 def server_update_inprocess(repeat=5):
@@ -388,7 +400,7 @@ def main(argv=None):
             for k, frac in enumerate(positions):
                 warm = k < args.warmup
                 before_text = page.locator(f".w-{SLIDER['name']} input").first.input_value()
-                sum_before = page.evaluate(MAP_A_SUM_JS)[0]
+                sums_before = [page.evaluate(MAP_SUM_JS, w)[0] for w in (0, 1)]
                 before_tags = page.evaluate(RESET_JS)
                 drag_to(page, frac)
                 text = wait_settled(page, before_tags, before_text, args.quiet_ms)
@@ -396,18 +408,21 @@ def main(argv=None):
                 if log["up"] is None:
                     raise RuntimeError("no pointerup/mouseup seen by the page")
                 ph = page.evaluate(PH_VALUE_JS, SLIDER['name'])
-                drawn_sum, drawn_n, kind = page.evaluate(MAP_A_SUM_JS)
-                exp_sum, exp_n = expected_map_a_sum(ph)
+                drawn = [page.evaluate(MAP_SUM_JS, w) for w in (0, 1)]
+                kind = drawn[0][2]
                 # the image travels as float32 normalised to its colour range (6e-8 relative), and
                 # the server's kernels (loaded from numba's cache) and these (compiled here) differ
                 # in the last bits: 9e-8 relative seen on a magnetic map A; a stale image is the
                 # map of another value, ≥ 5 % of the slider's range away, which moves it far more
-                ok = drawn_n == exp_n and abs(drawn_sum - exp_sum) <= 1e-6 * max(1.0, abs(exp_sum))
-                if not ok:
-                    raise AssertionError(f"drawn map A (sum {drawn_sum}, n {drawn_n}) is not P_h = {ph} "
-                                         f"(expected sum {exp_sum}, n {exp_n}): a stale image?")
-                if drawn_sum == sum_before:
-                    raise AssertionError("map A did not change")
+                for which, ((drawn_sum, drawn_n, _), (exp_sum, exp_n)) in enumerate(zip(drawn, expected_map_sums(ph))):
+                    ok = drawn_n == exp_n and abs(drawn_sum - exp_sum) <= 1e-6 * max(1.0, abs(exp_sum))
+                    if not ok:
+                        raise AssertionError(f"drawn map {'AB'[which]} (sum {drawn_sum}, n {drawn_n}) is not "
+                                             f"{SLIDER['name']} = {ph} (expected sum {exp_sum}, n {exp_n}): "
+                                             "a stale image?")
+                # a map with no value (A, one station, on the CRLB measure) cannot change
+                if all(d[0] == b for d, b in zip(drawn, sums_before) if d[1]) or not any(d[1] for d in drawn):
+                    raise AssertionError("maps A and B did not change")
                 if ph in values:
                     raise AssertionError(f"P_h = {ph} was used before (the server cache could answer)")
                 values.append(ph)

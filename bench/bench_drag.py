@@ -2,6 +2,7 @@
 
     python -m bench.bench_drag [--seconds 4] [--runs 2] [--sessions 1,2,3,4] [--loops closed,open]
                                [--out drag.json]
+    python -m bench.bench_drag --design [--seconds 4] [--drags 3] [--screenshot design.png]
 
 Part 1, one analyst, in Debian's headless Chromium: the P_h slider's handle is pressed, moved to
 and fro over the track every ~16 ms (a closed loop: the next move does not wait for a redraw)
@@ -33,6 +34,15 @@ server's pace (the page's former throttle); meanwhile another session's cheap ev
 value: a message, no maps) is timed, and the server's RSS before the drags and after (5 s after
 the last release). Redraws per second per session are the previews the server sent it; the
 load average at the end of each case is printed beside it.
+
+Part 3, ``--design`` (instead of parts 1 and 2): a station dragged on the Layout design map
+(app/design_live.py) in Chromium, a closed loop as in part 1 (a mouse move every ~16 ms, station 2
+circling over the map, then the release at once). Measured in the page's clock
+(support/drag.py's DESIGN_INSTALL_JS): previews painted per second while dragging; input →
+preview painted, p50 and p95 (each preview knows the layout it shows: the Drag's ``ready`` in
+the message that brought it; the layout left the page at a known time, and the input is the
+last pointer move before that, which made it); drop → exact map painted (checked equal to an
+in-process computation); websocket bytes received per preview.
 
 Targets: ≥ 10 redraws/s of all three maps (aim 20); input → preview painted p95 ≤ 200 ms;
 release → exact maps painted ≤ 1.3× the minimal Panel app; ≤ 150 KB per preview; with 3
@@ -238,9 +248,8 @@ def multi(url, proc, sessions, seconds, loop="closed"):
 
             super().__init__(url)
             models = list(self.doc.models)
-            # the maps' (a page opens on the Maps tab: the Layout design tab's is made on its visit)
+            # a page opens on the Maps tab (the Layout design tab's drag model is made on its visit)
             self.drag = next(m for m in models if type(m).__name__ == "Drag")
-            self.previews = {m.id for m in models if getattr(m, "name", None) == "map-preview"}
 
         def drag_for(self, index, seconds, out):
             from bokeh.document.events import ModelChangedEvent
@@ -263,7 +272,11 @@ def multi(url, proc, sessions, seconds, loop="closed"):
                     self._pump(lambda: False, rest)
                 k += 1
             dt = time.perf_counter() - t0
-            got = [mid for attr, mid, _ in self.events[start:] if attr == "data" and mid in self.previews]
+            # the preview layers are made on a page's first preview (app/map_figures.add_previews):
+            # their sources are read after the drag (the first preview, in the new layers, is not
+            # a data change: one fewer per map on a page's first drag)
+            previews = {m.id for m in self.doc.models if getattr(m, "name", None) == "map-preview"}
+            got = [mid for attr, mid, _ in self.events[start:] if attr == "data" and mid in previews]
             final = round(500.0 + index * 3.3 + time.time() % 1, 2)
             n0 = len(self.events)
             t1 = time.perf_counter()
@@ -306,6 +319,119 @@ def multi(url, proc, sessions, seconds, loop="closed"):
     return {"sessions": sessions, "loop": loop, "seconds": seconds, "load": os.getloadavg()[0],
             "per_session": [out[i] for i in range(sessions)],
             "cheap_ms": [1e3 * x for x in cheap], "rss_before": before, "rss_after": after}
+
+
+# ----------------------------------------------------------------------------- part 3
+def design_drag(browser, url, seconds, drags, screenshot=None):
+    """Part 3: a station dragged on the Layout design map (module docstring)."""
+    from support.drag import (DESIGN_COLLECT_JS, DESIGN_INSTALL_JS, DESIGN_XY_JS, design_settled,
+                              station_path)
+
+    page = browser.new_page(viewport={"width": 1600, "height": 1000})
+    errors = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.add_init_script(INIT_JS)
+    page.goto(url + "?tab=Layout+design")
+    page.wait_for_function("""() => window.Bokeh && Bokeh.documents.length > 0 &&
+        Array.from(Bokeh.documents[0].all_models).some(m => m.title && m.title.text
+        && m.title.text.startsWith('Custom layout'))""", timeout=120_000)
+    time.sleep(3.0)
+    assert page.evaluate(DESIGN_INSTALL_JS) == 2, "the design map has no preview layer"
+    results = []
+    start = (15.0, 0.0)
+    for k in range(drags):
+        page.evaluate("() => { const l = window.__design; for (const a of [l.exact, l.previews, l.sends,"
+                      " l.pointer]) a.length = 0; window.__ws.length = 0; }")
+        # pressed 4 m right of the station (on its marker, off station 1 at (0, 0)), then
+        # circles of 70 m about (110, 90) m, ~2 s a turn
+        (sx, sy), _ = station_path(page, (start[0] + 4.0, start[1]), (110.0, 90.0), 1)
+        page.mouse.move(sx, sy)
+        page.mouse.down()
+        ox, oy = page.evaluate(DESIGN_XY_JS, [110.0, 90.0])
+        ex, _ = page.evaluate(DESIGN_XY_JS, [180.0, 90.0])
+        r = ex - ox
+        page.mouse.move(sx + 8, sy - 8)  # past the 5 px pan threshold at once
+        t0, i = time.perf_counter(), 0
+        while time.perf_counter() - t0 < seconds:
+            a = 2 * math.pi * i * 0.016 / 2.0 + 0.37 * k
+            page.mouse.move(ox + r * math.cos(a), oy - r * math.sin(a))
+            time.sleep(0.016)
+            i += 1
+        page.mouse.up()
+        log = design_settled(page, timeout=120.0)
+        ws = page.evaluate("() => window.__ws.map(m => [m[0], m[1], m[2]])")
+        results.append(design_analyse(log, ws))
+        start = (log["x"][1], log["y"][1])
+        r_ = results[-1]
+        print(f"  design drag {k + 1}: {r_['redraws_per_s']:.1f} previews/s, input→painted p50 "
+              f"{pct(r_['latency_ms'], 50):.0f} p95 {pct(r_['latency_ms'], 95):.0f} ms "
+              f"({len(r_['latency_ms'])} matched, {r_['unmatched']} not), grid {r_['grid']}, "
+              f"drop→exact painted {r_['drop_ms']:.0f} ms, exact {r_['final_exact']}, "
+              f"{r_['payload_bytes'] / 1e3:.0f} KB/preview", flush=True)
+    if screenshot:
+        (sx, sy), moves = station_path(page, (start[0] + 4.0, start[1]), (60.0, -80.0), 30)
+        page.mouse.move(sx, sy)
+        page.mouse.down()
+        for x, y in moves:
+            page.mouse.move(x, y)
+            time.sleep(0.04)
+        time.sleep(0.6)
+        page.screenshot(path=str(screenshot))
+        page.mouse.up()
+        time.sleep(1.0)
+    page.close()
+    return {"drags": results, "errors": errors}
+
+
+def design_analyse(log, ws):
+    """Part 3's figures from one station drag's page log and websocket log."""
+    from app import views
+    from app.compute import Snapshot
+    from app.design_compute import ERROR_MAP_READS, design
+    from app.scenario import Scenario
+
+    down = next(t for t, kind in log["pointer"] if kind == "pointerdown")
+    up = next(t for t, kind in log["pointer"] if kind == "pointerup")
+    seconds = (up - down) / 1e3
+    during = [c for c in log["previews"] if down < c[0] <= up and c[1] is not None]
+    sent = {seq: t for t, seq in log["sends"]}
+    moves = [t for t, kind in log["pointer"] if kind == "pointermove"]
+    lat, unmatched = [], 0
+    for c in during:
+        t_send = sent.get(c[5])
+        before = [t for t in moves if t_send is not None and t <= t_send]
+        if not before:
+            unmatched += 1
+            continue
+        lat.append(c[1] - before[-1])
+    sc = Scenario()
+    sc.stations.stations = [[0.0, 0.0, sc.stations.h], [log["x"][1], log["y"][1], sc.stations.h]]
+    values = views._errors(design(Snapshot.of(sc, ERROR_MAP_READS)), sc.design.error_quantity)
+    finite = values[np.isfinite(values)]
+    final = log["exact"][-1] if log["exact"] else None
+    exact = (final is not None and final[0] > up and final[3] == finite.size
+             and abs(final[2] - float(finite.sum())) <= 1e-9 * abs(float(finite.sum())))
+    ws_in = [m for m in ws if m[1] == "in" and down < m[0] <= up]
+    return {"seconds": seconds, "redraws_per_s": len(during) / seconds, "latency_ms": lat,
+            "unmatched": unmatched, "drop_ms": (final[1] - up) if final else float("nan"),
+            "final_exact": exact, "payload_bytes": sum(m[2] for m in ws_in) / max(len(during), 1),
+            "grid": sorted({math.isqrt(c[4]) for c in during}), "previews": len(during),
+            "sends": len([s for s in log["sends"] if down < s[0] <= up])}
+
+
+def design_table(res):
+    drags = res["drags"]
+    lat = [x for d in drags for x in d["latency_ms"]]
+    rows = [("previews painted per second while dragging (median of drags)",
+             f"{statistics.median(d['redraws_per_s'] for d in drags):.1f}"),
+            ("input → preview painted p50 / p95 (ms)", f"{pct(lat, 50):.0f} / {pct(lat, 95):.0f} ({len(lat)} previews)"),
+            ("preview grid", ", ".join(sorted({f'{g} × {g}' for d in drags for g in d['grid']}))),
+            ("drop → exact map painted, median (ms)", f"{statistics.median(d['drop_ms'] for d in drags):.0f}"),
+            ("exact map equals the in-process computation", "yes" if all(d["final_exact"] for d in drags) else "NO"),
+            ("websocket bytes received per preview (KB)",
+             f"{statistics.median(d['payload_bytes'] for d in drags) / 1e3:.0f}")]
+    return "\n".join(["| station drag, Layout design map | |", "|---|---|"] + [f"| {a} | {b} |" for a, b in rows])
 
 
 # ----------------------------------------------------------------------------- report
@@ -379,7 +505,23 @@ def main(argv=None):
                          "after each answer; open: every THROTTLE_MS)")
     ap.add_argument("--screenshot", default=None, help="a PNG of the page taken mid-drag (project)")
     ap.add_argument("--out", default=None, help="raw values and summary as JSON")
+    ap.add_argument("--design", action="store_true",
+                    help="part 3 only: a station dragged on the Layout design map")
     args = ap.parse_args(argv)
+    if args.design:
+        load = [os.getloadavg()]
+        with chromium_browser() as browser, served_app() as (url, _):
+            res = design_drag(browser, url + "/app", args.seconds, args.drags, args.screenshot)
+        load.append(os.getloadavg())
+        print()
+        print(design_table(res))
+        if res["errors"]:
+            print(f"page errors: {res['errors']}")
+        print("load average (1, 5, 15 min) at start and end: " + "; ".join(
+            " ".join(f"{x:.2f}" for x in avg) for avg in load))
+        if args.out:
+            Path(args.out).write_text(json.dumps({"args": vars(args), "load": load, "design": res}, indent=1))
+        return 0
     load, apps, raw = started_on(APPS, args.apps)
     multi_results = []
     with chromium_browser() as browser:

@@ -55,10 +55,13 @@ from bokeh.document.events import MessageSentEvent, ModelChangedEvent
 from bokeh.events import DocumentReady
 from bokeh.models import ColumnDataSource
 
+from app import timings
+from app.applies import MAPS_TAB, applies
 from app.cluster import Cluster
 from app.compute import Snapshot, compute
 from app.dashboard import SECTIONS
 from app.scenario import MEASURE_LABELS, Scenario
+from app.url import read_link
 from support.server import served_app
 
 SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "3000")
@@ -69,9 +72,20 @@ CONNECT_TIMEOUT = 300.0
 #: (``--think 5``, ~4 updates/s), through nginx. (Issue 15 asked 0.3 / 0.1 s at ``--think 2``.)
 UPDATE_P95, CHEAP_P95, NEWCOMER_MAX = 1.0, 0.300, 3.0
 MEASURES = list(MEASURE_LABELS)
-#: Every input of the sidebar's open cards (the page is complete when each has reached the
-#: client; a collapsed card's inputs are built when it is opened).
-SIDEBAR_INPUTS = [name for _, names, collapsed in SECTIONS if not collapsed for name in names]
+#: Every input of the sidebar's open cards that applies to the page as it opens (the page is
+#: complete when each has reached the client; a collapsed card's inputs are built when it is
+#: opened, another input when it first applies).
+def sidebar_inputs(arguments=None):
+    """The inputs of the sidebar's open cards that apply to the page a link (``arguments``, as
+    URL arguments) opens."""
+    scenario = Scenario()
+    if arguments:
+        read_link(scenario, {k: [str(v)] for k, v in arguments.items()})
+    return [name for _, names, collapsed in SECTIONS if not collapsed for name in names
+            if applies(name, scenario.snapshot(), MAPS_TAB)]
+
+
+SIDEBAR_INPUTS = sidebar_inputs()
 
 
 def pct(values, q):
@@ -84,6 +98,7 @@ class Client:
     """One browser-like session: a pulled document whose widgets are changed from here."""
 
     def __init__(self, url, arguments=None, timeout=ANSWER_TIMEOUT):
+        self.inputs = sidebar_inputs(arguments)  # what its page must show to be complete
         self.session = pull_session(url=url + "/app", arguments=arguments)
         self.conn = self.session._connection
         self.conn._socket._socket.protocol.set_nodelay(True)  # as a browser's socket: no Nagle delay
@@ -107,7 +122,7 @@ class Client:
         """Whether the page is whole: the three maps' images and every sidebar input."""
         present = {c for m in self.doc.models for c in (getattr(m, "css_classes", None) or [])}
         images = sum(isinstance(m, ColumnDataSource) and m.name == "map-image" for m in self.doc.models)
-        return images == 3 and all(f"w-{name}" in present for name in SIDEBAR_INPUTS)
+        return images == 3 and all(f"w-{name}" in present for name in self.inputs)
 
     def _record(self, ev):
         attr, new = getattr(ev, "attr", None), getattr(ev, "new", None)
@@ -142,7 +157,7 @@ class Client:
         Returns the round-trip time in seconds, or None if not answered in time.
         """
         start = len(self.events)
-        t0 = time.perf_counter()
+        t0 = self.sent_at = time.perf_counter()  # CLOCK_MONOTONIC: the server's timings' clock too
         self._send(ModelChangedEvent(self.doc, model, attr, value))
         ok = self._pump(lambda: done(self.events[start:]), timeout)
         return time.perf_counter() - t0 if ok else None
@@ -173,7 +188,7 @@ class Client:
 def hammer(client, index, stop_at, out, think=0.0, start=0.0):
     """After ``start`` seconds, change parameters until ``stop_at``, ``think`` seconds apart after
     each answer; record (sent, answered, latencies, unanswered)."""
-    sent, latencies, i, lost = 0, [], 0, []
+    sent, latencies, i, lost, timeline = 0, [], 0, [], []
     time.sleep(start)
     while time.perf_counter() < stop_at and client.conn.connected:
         i += 1
@@ -187,8 +202,11 @@ def hammer(client, index, stop_at, out, think=0.0, start=0.0):
             latencies.append(dt)
         else:
             lost.append(f"session {index} update {i}: {attr} = {value!r}")
+        # (session id, input, value, sent, answered or None): matched to the server's timings
+        timeline.append((client.session.id, "measure" if model is client.measure else "Ph", value,
+                         client.sent_at, None if dt is None else client.sent_at + dt))
         time.sleep(think)
-    out[index] = (sent, len(latencies), latencies, lost)
+    out[index] = (sent, len(latencies), latencies, lost, timeline)
 
 
 class RssMonitor(threading.Thread):
@@ -286,6 +304,94 @@ def poll_liveness(url, stop, out, every=0.05):
         time.sleep(every)
 
 
+#: An update's legs as reported (from, to, what), between the client's own ``send`` and
+#: ``answer`` and the server's timestamps (app/timings.py: one clock, CLOCK_MONOTONIC).
+SPLIT = (
+    ("send", "arrived", "client -> change applied on the server's loop (network, loop busy)"),
+    ("arrived", "handler", "-> maps' handler runs (Panel's 50 ms debounce, loop, a Panel thread)"),
+    ("handler", "submitted", "-> handed to the maps' pool"),
+    ("submitted", "started", "-> a pool thread starts it"),
+    ("started", "locked", "-> kernel lock held (other sessions' kernels)"),
+    ("locked", "unlocked", "kernels (A and B)"),
+    ("unlocked", "computed", "rest of the maps, arrays to send"),
+    ("computed", "resumed", "-> the loop resumes the draw (loop busy)"),
+    ("resumed", "drawn", "Bokeh model updates (draw)"),
+    ("drawn", "sent", "patch serialised and written"),
+    ("sent", "answer", "-> the client has all three images"),
+)
+
+
+def match_timings(records, timeline):
+    """Pair every update a client made (its timeline entries: session id, input, value, send,
+    answer or None) with the server's records of that session's maps made between its send and
+    its answer (a minute later for an unanswered one). Returns [(entry, stamps or None, records)]:
+    ``stamps``, the legs of the record that sent the maps (with the client's ``send`` and
+    ``answer``), None when no record sent them."""
+    by_session = {}
+    for r in records:
+        by_session.setdefault(r["session"], []).append(r)
+    out = []
+    for entry in timeline:
+        sid, _name, _value, t_send, t_answer = entry
+        end = t_answer if t_answer is not None else t_send + ANSWER_TIMEOUT
+        mine = [r for r in by_session.get(sid, ()) if t_send <= r.get("arrived", r["handler"]) <= end
+                or t_send <= r["handler"] <= end]
+        done = [r for r in mine if r["outcome"] == "sent" and r["sent"] <= end]
+        stamps = None
+        if done and t_answer is not None:
+            stamps = dict(done[-1], send=t_send, answer=t_answer)
+        out.append((entry, stamps, mine))
+    return out
+
+
+def report_timings(matched):
+    """Print the per-leg split of the answered updates: median, p95, the mean over the slowest
+    5 % of updates (where a missed target's time goes), and the medians of the P_h and the
+    measure changes apart."""
+    full = [(e, st) for e, st, _ in matched
+            if st is not None and all(k in st for leg in SPLIT for k in leg[:2])]
+    if not full:
+        print("server timings: no complete record matched (APP_TIMINGS off, or none recorded)")
+        return
+    total = [st["answer"] - st["send"] for _, st in full]
+    cut = sorted(total)[max(0, int(len(total) * 0.95) - 1)]
+    tail = [st for (_, st), t in zip(full, total) if t >= cut]
+    kinds = {name: [st for e, st in full if e[1] == name] for name in ("Ph", "measure")}
+    print(f"where an update's time goes (server timestamps, app/timings.py; {len(full)} of "
+          f"{len(matched)} updates matched; ms):")
+    print(f"  {'leg':<72} {'median':>7} {'p95':>7} {'slowest':>7} {'P_h':>7} {'measure':>7}")
+    print(f"  {'':<72} {'':>7} {'':>7} {'5% mean':>7} {'median':>7} {'median':>7}")
+
+    def med(sts, a, b):
+        return f"{statistics.median([st[b] - st[a] for st in sts]) * 1e3:7.1f}" if sts else f"{'-':>7}"
+
+    for a, b, what in SPLIT + (("send", "answer", "total (client send -> answer)"),):
+        xs = [st[b] - st[a] for _, st in full]
+        print(f"  {what:<72} {statistics.median(xs) * 1e3:7.1f} {pct(xs, 95) * 1e3:7.1f} "
+              f"{statistics.mean([st[b] - st[a] for st in tail]) * 1e3:7.1f} "
+              f"{med(kinds['Ph'], a, b)} {med(kinds['measure'], a, b)}")
+    for name, sts in kinds.items():
+        xs = [st["answer"] - st["send"] for st in sts]
+        if xs:
+            print(f"  {name} changes: n={len(xs)}, median {statistics.median(xs) * 1e3:.0f} ms, "
+                  f"p95 {pct(xs, 95) * 1e3:.0f} ms, in the slowest 5 %: "
+                  f"{sum(1 for st in tail if any(st is t for t in sts))}")
+    others = [r["outcome"] for _, _, mine in matched for r in mine if r["outcome"] != "sent"]
+    if others:
+        counts = {o: others.count(o) for o in sorted(set(others))}
+        print(f"  other records in the updates' windows: {counts}")
+    for (sid, name, value, t_send, t_answer), st, mine in matched:
+        if t_answer is None:
+            seen = "; ".join(f"{r['outcome']} (changed {r['changed']}, last leg "
+                             f"{max((leg for leg in r if leg in LEG_ORDER), key=LEG_ORDER.get)})"
+                             for r in mine) or "no record: the maps' handler never ran for it"
+            print(f"  unanswered {name} = {value!r} (session {sid[:8]}): {seen}")
+
+
+#: app/timings.py's legs in order, for "how far an update got".
+LEG_ORDER = {leg: i for i, leg in enumerate(timings.LEGS)}
+
+
 def map_time(repeat=7):
     """Median wall time of one default scenario's maps (A and B, 200 × 200), computed here."""
     s = Scenario()
@@ -329,6 +435,8 @@ def main(argv=None):
     ap.add_argument("--cleanup", type=float, default=30.0, help="seconds to wait for memory to return")
     ap.add_argument("--newcomers", type=int, default=3,
                     help="new sessions opened during the load, evenly spread (0-10)")
+    ap.add_argument("--no-timings", action="store_true",
+                    help="leave the server's per-update timestamps off (app/timings.py; on by default)")
     ap.add_argument("--replicas", type=int, default=0,
                     help="N ≥ 1: N replicas behind nginx (app.cluster), the load through the proxy; "
                          "0: one panel serve, directly")
@@ -338,9 +446,17 @@ def main(argv=None):
     if not 0 <= args.replicas <= 8 or not 0 <= args.newcomers <= 10:
         ap.error("--replicas must be 0–8 and --newcomers 0–10")
 
+    load0 = os.getloadavg()
+    print(f"machine: {os.cpu_count()} cores, load average {load0[0]:.2f} {load0[1]:.2f} {load0[2]:.2f} at start")
     one_map = map_time()
     print(f"one map computation (A and B, 200×200, in-process, idle): median {one_map * 1e3:.0f} ms")
     os.environ.setdefault("QUIET_SERVER", "1")
+    timings_dir = None
+    if not args.no_timings:  # the server's per-update timestamps (app/timings.py), in a file of ours
+        import tempfile
+
+        timings_dir = tempfile.TemporaryDirectory(prefix="load-timings-")
+        os.environ[timings.ENV] = os.path.join(timings_dir.name, "updates.jsonl")
     failures = []
 
     def verdict(ok, text):
@@ -436,6 +552,12 @@ def main(argv=None):
         mon.stop()
         time.sleep(0)
 
+    load1 = os.getloadavg()
+    matched = []
+    if timings_dir is not None:
+        timeline = [e for r in results.values() for e in r[4]]
+        matched = match_timings(timings.read(os.environ.pop(timings.ENV)), timeline)
+        timings_dir.cleanup()
     sent = sum(r[0] for r in results.values())
     answered = sum(r[1] for r in results.values())
     lat = [x for r in results.values() for x in r[2]]
@@ -475,6 +597,10 @@ def main(argv=None):
               f"{statistics.median(probe.event) * 1e3:.0f} ms, p95 {pct(probe.event, 95) * 1e3:.0f} ms "
               f"(n={len(probe.event)})")
     print(f"one map computation (idle): {one_map * 1e3:.0f} ms; session connect phase {connect_time:.1f} s")
+    if matched:
+        report_timings(matched)
+    print(f"load average {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f} at the end of the load "
+          f"(machine's, incl. this test)")
     print()
     verdict(len(live) == args.sessions, f"all sessions connected ({len(live)}/{args.sessions})")
     verdict(sent > 0 and answered == sent, f"every update answered ({answered}/{sent})")

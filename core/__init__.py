@@ -4,6 +4,8 @@ The public API of the spec (§6) is :func:`gamma`, :func:`log10_abs_det_gamma` a
 :func:`observable_rank`; the rest builds on them. No web stack is imported here.
 """
 
+import inspect as _inspect
+
 from . import kernel_cache  # noqa: F401  (first: it refreshes the kernels' cache on import)
 from .calibration import (
     CAL_RANK_RTOL,
@@ -115,42 +117,6 @@ from .tracking.unscented import (
     ukf_update,
 )
 
-__all__ = [
-    "DEFAULT_NOISE", "DEFAULT_STEPS", "MAX_RESOLUTION", "MEASURES", "MODELS",
-    "RANK_RTOL", "STATE_NAMES", "STATE_UNITS", "FisherMeasures", "MapResult", "Plane",
-    "dipole_field", "dual_station", "evaluate_map", "field_jacobian", "fisher_information",
-    "fisher_measures", "gamma", "log10_abs_det_gamma", "log10_positive_difference",
-    "log10_ratio", "observability_index", "observable_rank", "single_station",
-    "unobservable_direction", "velocity_from_heading",
-    # magnetic sensing (core.model.magnetic, spec §11)
-    "MAGNETIC_STATE_NAMES", "MAGNETIC_STATE_UNITS", "TensorInvariants", "euler_locate",
-    "gradient_tensor", "magnetic_field", "magnetic_jacobian", "tensor_invariants",
-    # the layered sea (core.model.sea)
-    "Sea",
-    # the measurement model (core.model.sensors)
-    "KINDS", "MAGNETIC_NOISE", "Sensor",
-    # sensor-layout design (core.observability.crlb, .layouts, .design)
-    "CRITERIA", "LAYOUTS", "MAX_STATIONS", "CriterionResult", "CrlbErrors", "LayoutProblem",
-    "LayoutResult",
-    "SpacingResult", "best_spacing", "crlb_covariance", "crlb_maps", "horizontal_error_ellipse",
-    "layout_criterion", "optimise_layout", "spacing_curve", "station_layout",
-    # tracking (core.tracking.motion, core.model.measurement, core.pcrlb, core.tracking.filters, core.tracking.bank)
-    "AXES", "BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "FilterRun",
-    "PcrlbResult", "SensorModel", "bank_hypotheses", "dwna_model", "ekf_predict", "ekf_update",
-    "linearisation_breaks", "pcrlb", "run_bank", "run_filters", "sample_tracks", "start_range",
-    "straight_track",
-    # unscented filters, generic over f and h (core.tracking.unscented; seed 003's NHUKF)
-    "UkfRun", "huber_weights", "run_ukf", "sigma_points", "ukf_predict", "ukf_update",
-]
-
-# Ship magnetometer calibration, seed 004 (core.calibration, a package whose CLI module is
-# imported only by `python -m core.calibration`).
-__all__ += [
-    "CAL_RANK_RTOL", "COEFFICIENTS", "CONVENTIONS", "SEED004_SIMULATION", "SEED004_TABLE1",
-    "CalibrationObservability", "FitDiagnosis", "GeomagneticError", "KalmanResult", "LsqResult",
-    "attitude_matrix", "calibration_covariance", "calibration_crlb", "calibration_gamma",
-    "calibration_observability", "convergence_iteration", "design_rows", "fit_diagnosis", "geomagnetic_error",
-    "geomagnetic_solution", "heading_manoeuvre", "kalman_calibrate", "level_headings",
-    "lsq_calibrate", "parse_attitude_csv", "random_attitudes", "read_attitude_csv",
-    "seed004_table1", "ship_field", "simulate_ship_data",
-]
+#: The public API: every name imported above (not the subpackages).
+__all__ = sorted(k for k, v in globals().items()
+                 if not k.startswith("_") and not _inspect.ismodule(v))

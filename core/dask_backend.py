@@ -1,36 +1,27 @@
-"""Optional Dask backend: independent evaluations on a ``dask.distributed`` cluster.
+"""Where independent evaluations run: here, in local worker processes, or on a
+``dask.distributed`` cluster.
 
-The sweep (:func:`core.sweep.run`) and the layout search (:func:`core.spacing_curve`,
-:func:`core.best_spacing`, :func:`core.optimise_layout`) evaluate many independent cells or
-candidates. Given a ``client`` they hand them to the cluster through this module; without one
-they run locally as before.
+The sweep (:func:`core.sweep.run`), the Monte-Carlo tracking (:func:`core.tracking.montecarlo.monte_carlo`)
+and the layout search (:func:`core.spacing_curve`, :func:`core.best_spacing`,
+:func:`core.optimise_layout`) evaluate many independent cells, chunks or candidates through
+:func:`run_calls` (or :func:`map_ordered`). Given a ``client`` they go to the cluster; without
+one they run here or in spawned processes with one numba thread each.
 
 ``dask`` and ``distributed`` are an optional dependency (``pip install '.[dask]'``), imported
 only inside these functions, so ``import core`` never loads them.
 
-Workers
--------
-- Every worker must import this package, the same version as the client: functions travel by
-  reference to their module (cloudpickle), closures by value.
-- In each worker process the evaluations run **one at a time** (a process-wide lock): numba's
-  ``workqueue`` threading layer aborts when ``parallel=True`` kernels are launched from several
-  threads at once, and the others would oversubscribe the cores. A worker with several threads
-  therefore runs one evaluation at a time, and numba's own threads use the cores.
-- So the efficient set-up is one single-threaded worker process per core with one numba thread,
-  as the local process pool of :mod:`core.sweep` does:
-  ``NUMBA_NUM_THREADS=1 dask worker tcp://HOST:8786 --nworkers N --nthreads 1``.
-
-Results equal the serial ones bit for bit on workers of the same machine type and the same
-package versions: every cell or candidate is computed by the same code, point by point (no
-reduction depends on how work is split). numba compiles for each host's CPU, so workers on a
-different CPU type may differ in the last bits (round-off, ~1e-15 relative).
+In each worker process the evaluations run one at a time (a process-wide lock: numba's
+``workqueue`` layer aborts when ``parallel=True`` kernels are launched from several threads);
+worker set-up, failures and why the results equal the serial ones bit for bit: docs/dask.md.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import threading
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
-__all__ = ["DEFAULT_TIMEOUT", "check_client", "connect", "map_ordered", "map_unordered"]
+__all__ = ["DEFAULT_TIMEOUT", "check_client", "connect", "map_ordered", "map_unordered", "run_calls"]
 
 #: Seconds to wait for a scheduler (and for its first worker) before giving up.
 DEFAULT_TIMEOUT = 10.0
@@ -166,3 +157,29 @@ def map_ordered(client, fn, values):
     for i, result in map_unordered(client, fn, [(v,) for v in values]):
         out[i] = result
     return out
+
+
+def _one_numba_thread():
+    """A local worker process's initializer: the pool supplies the parallelism."""
+    import numba
+
+    numba.set_num_threads(1)
+
+
+def run_calls(fn, calls, *, workers=1, client=None):
+    """Yield ``(i, fn(*calls[i]))`` in completion order: on the cluster of ``client``
+    (:func:`map_unordered`), else here (``workers`` 1) or in ``workers`` spawned processes, each
+    with one numba thread so that the two levels of parallelism do not oversubscribe the cores
+    (spawn, not fork: forking a process whose numba thread pool runs is unsafe)."""
+    calls = list(calls)
+    if client is not None:
+        yield from map_unordered(check_client(client), fn, calls)
+    elif workers == 1:
+        for i, args in enumerate(calls):
+            yield i, fn(*args)
+    else:
+        with ProcessPoolExecutor(max_workers=workers, initializer=_one_numba_thread,
+                                 mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = {pool.submit(fn, *args): i for i, args in enumerate(calls)}
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()

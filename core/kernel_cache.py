@@ -1,27 +1,15 @@
-"""Keep numba's on-disk kernel cache in step with the kernels' sources.
+"""Keep numba's on-disk kernel cache in step with the kernels' sources (docs/measurement-model.md,
+*A kernel cache that cannot go stale*).
 
-numba reuses a cached kernel while *its own* source file is unchanged (numba 0.68 keys the
-index by that file's contents; older versions by its modification time and size). Our cached
-kernels inline functions and constants from other files (:mod:`core.kernels.gamma` inlines
-:mod:`core.kernels.electric` and :mod:`core.kernels.sea`), so an edit to the physics in one file left kernels
-cached from another file returning the old result until the cache files were deleted by hand.
-
-:func:`refresh` keys the whole cache by the sources instead: it hashes every file that holds
-compiled kernels (:data:`KERNEL_SOURCES`, plus numba's version) and, when the hash differs from
-the one recorded at the last refresh, removes the cache files (``*.nbi``, ``*.nbc``) of those
-modules, so that every kernel recompiles on its next call and caches itself again. Importing
-this module calls it, and ``core/__init__.py`` imports it first, before any kernel is even
-defined (numba reads a kernel's cache index when it is decorated).
-
-Where the cache cannot be written (a read-only install, e.g. the container image, whose sources
-never change after its build compiled the cache) it does nothing.
-
-A stamp speaks for one cache location only, the one numba uses in this process: the
-``__pycache__`` directories beside the sources, or, when ``NUMBA_CACHE_DIR`` is set, that
-directory (numba then neither reads nor writes ``__pycache__``). A process started with a new
-``NUMBA_CACHE_DIR`` therefore never removes the install's own compiled kernels: it once did
-(no stamp in the new directory, so every cache it could find went, ``__pycache__`` included),
-and the next ordinary start recompiled for minutes.
+numba reuses a cached kernel while its own source file is unchanged, but our kernels inline code
+from other files. :func:`refresh` hashes every file that holds compiled kernels
+(:data:`KERNEL_SOURCES`, plus numba's version) and, when the hash differs from the one recorded
+at the last refresh, removes those modules' cache files (``*.nbi``, ``*.nbc``), so that every
+kernel recompiles on its next call. Importing this module calls it; ``core/__init__.py`` imports
+it first, before any kernel is decorated. Where the cache cannot be written (a read-only
+install) it does nothing. A stamp speaks for the one cache location numba uses in this process
+(``__pycache__`` beside the sources, or ``NUMBA_CACHE_DIR``): a process with a new
+``NUMBA_CACHE_DIR`` never removes the install's own compiled kernels.
 """
 
 from __future__ import annotations

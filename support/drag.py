@@ -4,7 +4,8 @@ tests/test_drag_browser.py and bench/bench_drag.py, for the dashboard and the fl
 
 The page is watched through BokehJS's public model API only: every image data source of the
 page (the maps' ``map-image`` and ``map-preview`` sources; the floor apps' images) is connected
-(``connect(source.properties.data.change, …)``) and each change is logged in the page's clock
+(``connect(source.properties.data.change, …)``; a map's preview layer when it is added to the
+map, on the page's first preview, its first data logged as a change) and each change is logged in the page's clock
 (``performance.now()``) with a fingerprint of the new array (sum and count of its finite values,
 dtype, byte size) and the time of the animation frame after it: BokehJS repaints a changed plot
 in an animation frame it requested while handling the change, before this one (requested after
@@ -29,20 +30,30 @@ INSTALL_JS = """(css) => {
     return [s, n, String(a.constructor.name), a.byteLength || 0]; };
 """ + PLOTS_WALK + """
   let n = 0;
-  plots.forEach((p, i) => { for (const r of p.renderers) {
+  const hooked = new Set();
+  // a layer made after the page (the maps' preview layers, made on the first preview:
+  // app/map_figures.add_previews) is hooked when it arrives, its first data logged as a change
+  const hook = (p, i, r, arriving) => {
     const src = r.data_source;
-    if (!src || !src.data || !('image' in src.data || 'pv' in src.data)) continue;
+    if (!src || !src.data || !('image' in src.data || 'pv' in src.data) || hooked.has(src)) return;
+    hooked.add(src);
     const column = 'pv' in src.data ? 'pv' : 'image';
     const layer = src.name || 'unnamed';
     n++;
-    src.connect(src.properties.data.change, () => {
+    const changed = () => {
       const t = performance.now();
       const a = src.data[column][0];
       const entry = [t, null, layer, i, ...fingerprint(a)];
       log.changes.push(entry);
       requestAnimationFrame(() => { entry[1] = performance.now(); });
-    });
-  } });
+    };
+    src.connect(src.properties.data.change, changed);
+    if (arriving) changed();
+  };
+  plots.forEach((p, i) => {
+    for (const r of p.renderers) hook(p, i, r, false);
+    p.connect(p.properties.renderers.change, () => { for (const r of p.renderers) hook(p, i, r, true); });
+  });
   const holder = models.find(m => (m.css_classes || []).includes(css));
   let slider = null; const stack = holder ? [holder] : models;
   while (stack.length && slider === null) {
@@ -121,3 +132,94 @@ def settled(page, quiet_ms=800.0, timeout=60.0, check=None):
         if time.time() > deadline:
             raise TimeoutError(f"the page did not settle: {len(log['changes'])} changes")
         time.sleep(0.1)
+
+
+# ----------------------------------------------------------------------------- a dragged station
+#: Installs the Layout design map's log (``window.__design``): every change of its HoloViews
+#: image (the exact map) and of its preview layer (app/design_live.py) as [time, animation frame
+#: after it, sum and count of the finite values, length, and for a preview the sequence number
+#: of the layout it shows: the design Drag's ``ready`` at the end of the message that brought
+#: it]; the layouts the page sent ([time, sequence number]); pointer events. Returns the number
+#: of stations drawn, or null when the map has no preview layer.
+DESIGN_INSTALL_JS = """() => {
+""" + PLOTS_WALK + """
+  const pv = views.find(v => v.model.title && v.model.title.text.startsWith('Custom layout'));
+  const fig = pv.model;
+  const withData = (r) => r.data_source && r.data_source.data;
+  const exact = fig.renderers.find(r => withData(r) && 'image' in r.data_source.data
+                                        && !String(r.name || '').startsWith('design-preview'));
+  const preview = fig.renderers.find(r => r.name === 'design-preview');
+  const points = fig.renderers.find(r => withData(r) && 'z' in r.data_source.data && 'x' in r.data_source.data);
+  const log = window.__design = {exact: [], previews: [], sends: [], pointer: [], view: pv,
+                                 exactLayer: exact, previewLayer: preview, points: points.data_source,
+                                 drag: null};
+  const fingerprint = (a) => { let s = 0, n = 0;
+    for (let i = 0; i < a.length; i++) { const v = a[i]; if (Number.isFinite(v)) { s += v; n++; } }
+    return [s, n, a.length]; };
+  const watch = (layer, into, seq) => {
+    const src = layer.data_source;
+    src.connect(src.properties.data.change, () => {
+      const a = src.data.image[0];
+      if (!a || !a.length) return;
+      const entry = [performance.now(), null, ...fingerprint(a), null];
+      into.push(entry);
+      if (seq) queueMicrotask(() => { entry[5] = log.drag ? log.drag.ready : null; });
+      requestAnimationFrame(() => { entry[1] = performance.now(); });
+    });
+  };
+  watch(exact, log.exact, false);
+  if (preview === undefined) return null;
+  watch(preview, log.previews, true);
+  for (const m of Bokeh.documents[0].all_models)
+    if (m.properties && m.properties.ready && m.properties.state)  // app.live.Drag models
+      m.connect(m.properties.state.change, () => {
+        if (m.state[0] !== 'stations') return;
+        log.drag = m;
+        log.sends.push([performance.now(), m.state[2]]);
+      });
+  for (const kind of ['pointerdown', 'pointermove', 'pointerup'])
+    document.addEventListener(kind, (e) => log.pointer.push([performance.now(), kind]), true);
+  return points.data_source.data.x.length;
+}"""
+#: Page coordinates of the design map's point (x, y), m.
+DESIGN_XY_JS = """([x, y]) => { const pv = window.__design.view, f = pv.frame;
+  const r = pv.el.getBoundingClientRect();
+  return [r.left + f.x_scale.compute(x), r.top + f.y_scale.compute(y)]; }"""
+#: What the design log holds, with the stations, the preview's state, the label over it, the
+#: colour bar's range and the title now.
+DESIGN_COLLECT_JS = """() => { const l = window.__design, d = l.points.data, fig = l.view.model;
+  const label = fig.center.find(m => m.name === 'design-preview-label');
+  const mapper = l.exactLayer.glyph.color_mapper;
+  return {exact: l.exact, previews: l.previews, sends: l.sends, pointer: l.pointer,
+          now: performance.now(), x: Array.from(d.x), y: Array.from(d.y),
+          preview_shown: l.previewLayer.visible, label: label ? [label.visible, label.text] : null,
+          low: mapper.low, high: mapper.high, title: fig.title.text}; }"""
+
+
+def design_settled(page, quiet_ms=1000.0, timeout=60.0):
+    """The design log once neither layer has changed for ``quiet_ms``, every change painted and
+    no preview shown."""
+    deadline = time.time() + timeout
+    while True:
+        log = page.evaluate(DESIGN_COLLECT_JS)
+        changes = log["exact"] + log["previews"]
+        last = max((c[0] for c in changes), default=-1e12)
+        if (log["now"] - last >= quiet_ms and all(c[1] is not None for c in changes)
+                and not log["preview_shown"]):
+            return log
+        if time.time() > deadline:
+            raise TimeoutError(f"the design map did not settle: preview shown {log['preview_shown']}")
+        time.sleep(0.2)
+
+
+def station_path(page, start, end, moves):
+    """Page coordinates: the press (``start``, m, on a station's marker), then ``moves`` steps
+    to ``end`` (m), the first one past BokehJS's 5 px pan threshold at once (a press held
+    300 ms without moving is a "press", not a pan, and a loaded machine can take that long
+    between two of Playwright's moves)."""
+    sx, sy = page.evaluate(DESIGN_XY_JS, list(start))
+    tx, ty = page.evaluate(DESIGN_XY_JS, list(end))
+    length = max(((tx - sx) ** 2 + (ty - sy) ** 2) ** 0.5, 1e-9)
+    first = (sx + (tx - sx) * 8 / length, sy + (ty - sy) * 8 / length)
+    return (sx, sy), [first] + [(sx + (tx - sx) * k / moves, sy + (ty - sy) * k / moves)
+                                for k in range(1, moves + 1)]

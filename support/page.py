@@ -71,7 +71,7 @@ PLOTS_WALK = """
 #: a fingerprint of what is drawn, read from the live Bokeh views.
 MAPS_JS = """() => {""" + PLOTS_WALK + """
   return plots.map(p => [p.title ? p.title.text : "",
-    p.renderers.filter(r => r.data_source && r.data_source.data.image).map(r => {
+    p.renderers.filter(r => r.data_source && r.data_source.data.image && r.data_source.data.image.length).map(r => {
       let s = 0; const a = r.data_source.data.image[0];
       for (let i = 0; i < a.length; i++) if (!isNaN(a[i])) s += a[i];
       return s; })]);

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import os
 import socket
 import subprocess
@@ -108,3 +109,33 @@ def close_client(client):
     """Close a bench.load_test.Client (call with :func:`on_thread`)."""
     asyncio.set_event_loop(client.conn._loop.asyncio_loop)  # the client's own, for its last writes
     client.close()
+
+
+#: The line on which a probe (a test module run as ``python -m tests.NAME``, serving the app in
+#: a process of its own) prints its result as JSON.
+PROBE = "probe "
+
+
+def report(out):
+    """Print a probe's result ``out`` (a dict with ``complete``) for :func:`run_probe`."""
+    print(PROBE + json.dumps(out), flush=True)
+
+
+def probe_main(probe):
+    """A probe module's ``__main__``: run ``probe()``, then leave at once (the served app's
+    server thread is not a daemon, and would keep the process)."""
+    probe()
+    sys.stdout.flush()
+    os._exit(0)
+
+
+def run_probe(module, timeout=900):
+    """Run the probe ``python -m module`` at the repository root; its result (the last probe
+    line), which must say it completed."""
+    run = subprocess.run([sys.executable, "-m", module], cwd=ROOT, capture_output=True, text=True,
+                         timeout=timeout)
+    lines = [line for line in run.stdout.splitlines() if line.startswith(PROBE)]
+    assert lines, run.stdout + run.stderr[-3000:]
+    out = json.loads(lines[-1].removeprefix(PROBE))
+    assert out["complete"], run.stderr[-3000:]
+    return out

@@ -73,6 +73,12 @@ def pytest_collection_modifyitems(config, items):
         by_fixture = set().union(*(MARKERS_OF_FIXTURE.get(f, set()) for f in used))
         for name in sorted(markers_of_file(str(item.path)) | by_fixture):
             item.add_marker(name)
+        # ``serial``: a file that measures time, threads or memory of a server, or runs processes
+        # that must not share the machine with another worker, says so with ``SERIAL = "why"``.
+        # The rest can run on two workers (``pytest -n 2 --dist loadfile -m "not serial"``), then
+        # ``pytest -m serial`` alone (docs/architecture.md, Testing).
+        if getattr(item.module, "SERIAL", None):
+            item.add_marker("serial")
 
 
 # --------------------------------------------------------------------------- served and driven

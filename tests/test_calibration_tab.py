@@ -238,3 +238,14 @@ def test_table1_shows_seed_004s_printed_solution_beside_the_tabs():
     # a simulated case has its truth, and no printed column (the paper's attitudes are not these)
     sim = ac.coefficient_table(ac.compute(values("Seed 004 simulation")))
     assert "truth" in sim and "(Kalman − truth)/σ" in sim and "seed 004 (printed)" not in sim
+
+
+def test_the_newest_of_two_uploaded_files_is_the_one_used():
+    # CI: a second log sent under another name (without the browser's delete of the first) was
+    # ignored: FileDropper's value keeps both, the tab took the first, and nothing was computed
+    upload = ac.upload_widget()
+    assert ac.uploaded_bytes(upload) is None
+    upload.value = {"first.csv": "B1\n1\n"}
+    assert ac.uploaded_bytes(upload) == b"B1\n1\n"
+    upload.value = {"first.csv": "B1\n1\n", "second.csv": b"B1\n2\n"}  # as Panel adds a file
+    assert ac.uploaded_bytes(upload) == b"B1\n2\n"

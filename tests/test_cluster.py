@@ -28,6 +28,9 @@ from bench.load_test import Client
 from support.page import chromium_browser
 from support.server import ROOT, close_client, free_port, on_thread
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it runs nginx and replicas and kills one"
+
 
 class Running:
     """The cluster started by ``python -m app.cluster``, as it describes itself on stdout."""

@@ -29,6 +29,9 @@ import pytest
 
 from support.server import SERVER_ENV
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it builds and runs the container image"
+
 pytestmark = pytest.mark.container
 
 REPO = Path(__file__).resolve().parents[1]

@@ -26,6 +26,9 @@ import core
 from core import dask_backend, sweep
 from core.cli import sweep as sweep_cli
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it runs a Dask scheduler and workers and kills one"
+
 START_TIMEOUT = 60.0  # s: scheduler up and both workers registered (usually 3–6 s here)
 
 

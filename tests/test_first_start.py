@@ -18,6 +18,9 @@ from app.warmup import STAGES, WARMING_MARK, Warmup
 from support.page import chromium_browser
 from support.server import ROOT, SERVER_ENV, free_port, stop
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it times starts of the server (compiles and warm-ups) against the page's polls"
+
 #: Seconds within which a cold server must answer /app (issue 29's bar: 15 s on this machine).
 ANSWER_WITHIN_S = 15.0
 

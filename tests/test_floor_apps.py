@@ -9,6 +9,9 @@ from bench.bench_browser import INSTALL_JS, MAP_A_SUM_JS, PH_VALUE_JS, RESET_JS,
 from bench.bench_floor import MODELS_JS, expected_sum, open_page, served_floor, settle
 from support.page import chromium_browser
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it compares the floor apps' redraws with the dashboard's"
+
 
 @pytest.mark.parametrize("kind", ["bokeh", "panel"])
 def test_a_floor_app_draws_three_maps_and_its_slider_redraws_them(kind):

@@ -30,6 +30,9 @@ from app.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
 pytestmark = pytest.mark.filterwarnings(
     "ignore:.*deprecated and will be removed in version 2.0:PendingDeprecationWarning")
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it bounds the seconds each extreme value takes to compute"
+
 #: Seconds an extreme may take to compute, on the 2-core development machine shared with other
 #: work (measured at load 4-5, the slowest extreme of each tab: the maps 2.5 s, a magnetometer +
 #: gradiometer pair of 200 × 200 maps, 0.2 s for the electric 400 × 400 with 20 instants; a track

@@ -22,6 +22,9 @@ import pytest
 import core
 from core import kernel_cache
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it edits and recompiles kernels of a copy of core/ and reads the install's cache"
+
 CORE = Path(core.__file__).resolve().parent
 
 PROBE = (

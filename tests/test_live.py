@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from app import live, maps
+from app import live, map_figures, maps
 from app.cache import SHARED
 from app.compute import Snapshot
 from app.scenario import Scenario
@@ -25,8 +25,12 @@ def drag(lv, name, value, seq, released=False):
 def test_a_dragged_value_is_previewed_and_its_release_draws_the_exact_maps(tab):
     scenario, t = tab
     figs, lv = t.figures, t.live
+    assert figs.preview_layers == ()  # made by the first preview (app/map_figures.add_previews)
     drag(lv, "Ph", 150.0, 1)
     assert lv.drawn == 1 and scenario.target.Ph == 100.0  # the scenario keeps its value until release
+    # each map's preview layer over its map and under its veil
+    assert [f.renderers[1] for f in figs.figures] == list(figs.preview_layers)
+    assert [f.renderers[2].data_source for f in figs.figures] == list(figs.veils)
     assert all(layer.visible for layer in figs.preview_layers)
     pv = figs.previews[1].data["pv"][0]
     assert pv.dtype == np.uint8 and pv.shape == (lv.preview_n,) * 2
@@ -43,6 +47,8 @@ def test_a_release_where_nothing_changes_still_replaces_the_previews(tab):
     drag(t.live, "Ph", 333.0, 1)
     drag(t.live, "Ph", 100.0, 2, released=True)  # the hand came back: the scenario does not change
     assert scenario.target.Ph == 100.0
+    # made by the first preview (app/map_figures.add_previews), hidden by the release
+    assert len(t.figures.preview_layers) == 3
     assert not any(layer.visible for layer in t.figures.preview_layers)
 
 
@@ -91,7 +97,8 @@ def test_magnetic_maps_follow_the_drag_on_a_grid_their_compute_allows():
     assert lv.drawn == 2 and live.PREVIEW_MIN_N <= n <= live.PREVIEW_N
     assert f"grid {n} × {n}" in t.figures.captions[0].text.replace("\n", " ")
     drag(lv, "mx", 70.0, 3, released=True)
-    assert scenario.target.mx == 70.0 and not any(layer.visible for layer in t.figures.preview_layers)
+    assert scenario.target.mx == 70.0 and len(t.figures.preview_layers) == 3
+    assert not any(layer.visible for layer in t.figures.preview_layers)
 
 
 def test_the_page_is_answered_for_every_value_it_sends(tab):
@@ -113,3 +120,45 @@ def test_the_page_is_answered_for_every_value_it_sends(tab):
     assert lv.drag.ready == 5
     # the answer reaches the page's loop through a browser-side callback of Drag.ready
     assert [cb.code for cb in lv.drag.js_property_callbacks["change:ready"]] == [live.READY_JS]
+
+
+def test_a_number_input_holding_a_whole_number_keeps_a_dragged_values_decimals(tab):
+    # A link's ?Ph=150 and a drag released on 151 arrive as JSON integers, so a Number input can
+    # hold an int: the next drag's value 263.2 was rounded to 263 (previews and release), then
+    # Panel's own release set 263.2, and the page ended with the maps at 263.2, the handle at 263
+    scenario, t = tab
+    scenario.target.Ph = 151
+    drag(t.live, "Ph", 263.2, 1)
+    assert "P = (263.2, 20)" in t.figures.captions[0].text  # the preview is of the hand's value
+    drag(t.live, "Ph", 263.2, 2, released=True)
+    assert scenario.target.Ph == 263.2
+    assert "P = (263.2, 20)" in t.figures.captions[0].text and "preview" not in t.figures.figures[0].title.text
+    drag(t.live, "resolution", 150.4, 3, released=True)  # an Integer input: a whole number
+    assert scenario.value("resolution") == 150 and isinstance(scenario.value("resolution"), int)
+
+
+def test_a_uniform_veil_is_not_resent_by_a_preview_or_its_release(tab):
+    """A veil that is clear or striped everywhere shows the same at any grid: neither the drag's
+    coarser veil nor the exact one after its release is sent again (each release re-sent three
+    200² veils)."""
+    scenario, t = tab
+    figs, lv = t.figures, t.live
+    before = [v.data["image"][0] for v in figs.veils]
+    # the default scenario: A and the difference unobservable everywhere, B observable everywhere
+    assert [map_figures.uniform_veil(v) for v in before] == ["striped", "clear", "striped"]
+    sent = []
+    for i, v in enumerate(figs.veils):
+        v.on_change("data", lambda _a, _o, _n, i=i: sent.append(i))
+    drag(lv, "Ph", 150.0, 1)
+    drag(lv, "Ph", 150.0, 2, released=True)
+    assert lv.drawn == 1 and scenario.target.Ph == 150.0
+    assert "P = (150, 20)" in figs.captions[0].text  # the exact maps were drawn
+    assert sent == []
+
+
+def test_a_veil_that_differs_by_place_is_not_uniform():
+    mixed = np.zeros((4, 4), np.uint8)
+    mixed[:2] = 1
+    assert map_figures.uniform_veil(mixed) is None  # a preview sends such a veil when it changes
+    assert map_figures.uniform_veil(np.full((3, 3), 3, np.uint8)) == "clear"
+    assert map_figures.uniform_veil(np.array([[1, 2], [2, 1]], np.uint8)) == "striped"

@@ -9,6 +9,9 @@ import sys
 
 from support import ROOT
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it measures the CPU an idle OpenMP pool burns"
+
 PROBE = """
 import os
 import app.compute as c

@@ -49,8 +49,8 @@ def test_the_hover_of_a_hatched_point_says_the_bound_does_not_predict_there():
     p = c.compute(Snapshot.of(Scenario(resolution=21, measure=CRLB)))
     figs = map_figures.build()
     map_figures.fill(figs, p)
-    assert "far-field runaway" in figs.formatters[1].args["texts"]["runaway"]
-    assert "runaway" in figs.formatters[2].args["texts"]["runaway"]
+    assert "far-field runaway" in figs.formatters[1].args["texts"].runaway
+    assert "runaway" in figs.formatters[2].args["texts"].runaway
     assert "value >= 4" in figs.formatters[1].code  # the text is added only on hatched codes
 
 

@@ -352,12 +352,12 @@ def test_crlb_maps_are_coloured_by_log10_metres_and_say_why_a_value_is_missing()
     map_figures.fill(figs, p)
     for which in range(2):
         fmt = figs.formatters[which].args
-        assert fmt["log"] and (fmt["bar"].low, fmt["bar"].high) == p.clim
+        assert fmt["texts"].log and (fmt["bar"].low, fmt["bar"].high) == p.clim
         assert "log scale" in figs.colorbars[which].title
         assert figs.colorbars[which].formatter.args["log"]  # ticks in metres
     assert not figs.colorbars[2].formatter.args["log"]
-    assert figs.formatters[0].args["texts"]["unobservable"].startswith("unobservable (rank 6)")
-    assert "unobservable" in figs.formatters[2].args["texts"]["unobservable"]
+    assert figs.formatters[0].args["texts"].unobservable.startswith("unobservable (rank 6)")
+    assert "unobservable" in figs.formatters[2].args["texts"].unobservable
     # the same kind of scale as the design tab: low error is the good end (reversed viridis)
     assert map_data.ranges(p)[0][2][0] == map_data.Viridis256[-1]
     # the difference map's title is short enough to fit; the explanation is on its colour bar
@@ -690,3 +690,30 @@ def test_one_map_exports_alone_at_a_useful_resolution():
         img = Image.open(export.to_png(p, (which,)))
         assert img.size == (export.MAP_WIDTH_PX, round(1.4 * export.MAP_WIDTH_PX)), img.size
     assert Image.open(export.to_png(p)).size[0] == export.WIDTH_PX  # the three, as before
+
+
+def test_a_restore_on_one_thread_does_not_skip_the_check_of_a_value_set_on_another():
+    # Panel runs two inputs' watchers on two of its threads at once. The flag that turns the
+    # checks off while values are restored or moved was one for the whole scenario: a value set
+    # on another thread during a restore went unchecked and stayed (α = -1 kept on Track).
+    import threading
+
+    sc = Scenario()
+    inside, go_on = threading.Event(), threading.Event()
+
+    def held(_event):  # thread A, inside a restore: waits there until B has set its value
+        inside.set()
+        assert go_on.wait(30)
+
+    watcher = sc.target.param.watch(held, ["Pv"])
+    a = threading.Thread(target=lambda: sc._quietly(Pv=sc.target.Pv + 1.0))
+    a.start()
+    assert inside.wait(30)
+    try:
+        sc.target.Ph = 1e9  # thread B: outside the accepted range
+        assert sc.target.Ph == 100.0, "the check of another thread's value was skipped"
+        assert "outside the accepted range" in sc.message
+    finally:
+        go_on.set()
+        a.join(30)
+        sc.target.param.unwatch(watcher)

@@ -17,6 +17,9 @@ import pytest
 from bench.load_test import Client
 from support.server import close_client, on_thread, served_app
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it measures how long one session's event waits behind another's work"
+
 SLOW = {"measure": "CRLB position error (m)", "resolution": "400", "steps": "20"}  # as URL arguments
 
 

@@ -16,6 +16,9 @@ import time
 
 from support import ROOT
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it measures the server's resident memory across sessions"
+
 SESSIONS = 4
 
 
@@ -61,8 +64,6 @@ def test_closed_sessions_are_freed():
 
 
 if __name__ == "__main__":
-    probe()
-    sys.stdout.flush()
-    import os
+    from support.server import probe_main
 
-    os._exit(0)  # the server thread is not a daemon
+    probe_main(probe)

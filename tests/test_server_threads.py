@@ -4,6 +4,9 @@ import sys
 
 from app import server_threads
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it counts the threads of the serving process"
+
 
 def test_switch_interval_is_short():
     before = sys.getswitchinterval()

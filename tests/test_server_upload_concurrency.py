@@ -31,6 +31,9 @@ from bench.load_test import Client
 from core import calibration as cal
 from support.server import close_client, on_thread, served_app
 
+#: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
+SERIAL = "it measures how long a session waits behind another's upload"
+
 #: Readings in the uploaded log (issue 28's size).
 READINGS = 50_000
 #: B's slider change must be answered (its three maps received) within this (s), as the issue says.

@@ -71,7 +71,8 @@ def _until(fn, what, timeout=30.0):
         if got:
             return got
         if time.time() > deadline:
-            raise AssertionError(f"{what}: not reached in {timeout:g} s")
+            said = what() if callable(what) else what  # a callable says the state at the end
+            raise AssertionError(f"{said}: not reached in {timeout:g} s")
         time.sleep(0.2)
 
 
@@ -92,17 +93,18 @@ def test_the_track_inputs_take_typed_values_and_say_a_refusal(chromium, app_url)
                            ("abc", "is not a number")):
             type_value(pg, "track_alpha", typed)
             said = _until(lambda: why in _text(pg, "w-message-track") and _text(pg, "w-message-track"),
-                          f"the refusal of α = {typed}", 10)
+                          f"the refusal of α = {typed}")
             assert "α" in said, said
-            _until(lambda: value_of(pg, "track_alpha") == "0.002", "α back to its last good value", 10)
+            _until(lambda: value_of(pg, "track_alpha") == "0.002",
+                   lambda: f"α back to its last good value 0.002 (the box shows {value_of(pg, 'track_alpha')!r})")
         # and Optimise: stations N on the Layout design tab
         pg.get_by_text("Layout design", exact=True).first.click()
         pg.locator(".w-n_stations input").first.wait_for(timeout=60_000)
         type_value(pg, "n_stations", "6")
         _until(lambda: "n_stations=6" in pg.evaluate("() => window.location.search"), "n_stations=6")
         type_value(pg, "n_stations", "9")
-        _until(lambda: "outside the accepted range" in _text(pg, "w-design-message"), "N = 9 refused", 10)
-        _until(lambda: value_of(pg, "n_stations") == "6", "N back to 6", 10)
+        _until(lambda: "outside the accepted range" in _text(pg, "w-design-message"), "N = 9 refused")
+        _until(lambda: value_of(pg, "n_stations") == "6", "N back to 6")
     finally:
         pg.close()
     assert errors == [], errors
@@ -186,19 +188,19 @@ def test_a_refused_table_edit_is_reverted_at_once_and_the_next_one_kept(chromium
         wait_count(rows, 2, timeout=60)
         start = time.time()
         _edit(pg, rows, 1, "z (m)", "-5")
-        _until(lambda: "above the sea surface" in _text(pg, "w-design-message"), "the refusal said", 10)
-        _until(lambda: _cells(rows, "z (m)") == ["100.0", "100.0"], "z reverted", 10)
+        _until(lambda: "above the sea surface" in _text(pg, "w-design-message"), "the refusal said")
+        _until(lambda: _cells(rows, "z (m)") == ["100.0", "100.0"], "z reverted")
         assert time.time() - start < 10  # "at once": it was 16 s (generous for a busy machine)
         _edit(pg, rows, 1, "y (m)", "130")
-        _until(lambda: _cells(rows, "y (m)") == ["0.0", "130.0"], "y = 130 shown", 10)
+        _until(lambda: _cells(rows, "y (m)") == ["0.0", "130.0"], "y = 130 shown")
         # taken by the server: its map's station layer is redrawn with it
         _until(lambda: pg.evaluate(STATION_AT_JS, 130.0), "y = 130 on the map", 15)
         time.sleep(2.0)  # and it stays
         assert _cells(rows, "y (m)") == ["0.0", "130.0"]
         assert "above the sea surface" not in _text(pg, "w-design-message")
         _edit(pg, rows, 0, "y (m)", "6000")  # beyond the region's limits: refused as well
-        _until(lambda: "6000" in _text(pg, "w-design-message"), "y = 6000 refused", 10)
-        _until(lambda: _cells(rows, "y (m)") == ["0.0", "130.0"], "y = 6000 reverted", 10)
+        _until(lambda: "6000" in _text(pg, "w-design-message"), "y = 6000 refused")
+        _until(lambda: _cells(rows, "y (m)") == ["0.0", "130.0"], "y = 6000 reverted")
     finally:
         pg.close()
     assert errors == [], errors
@@ -218,7 +220,7 @@ def test_the_station_depth_h_moves_the_design_and_track_stations(chromium, app_u
             pg.mouse.click(box["x"] + box["width"] * fx, box["y"] + box["height"] * fy)
             wait_count(rows, n)
             time.sleep(1.5)  # the server's answer to this edit, before the next click
-        _until(lambda: _cells(rows, "z (m)") == ["120.0"] * 5, "five stations at 120 m", 10)
+        _until(lambda: _cells(rows, "z (m)") == ["120.0"] * 5, "five stations at 120 m")
         pg.get_by_text("Track", exact=True).first.click()
         # the Track tab tracks over these five stations, at 120 m (its plan's station layer)
         _until(lambda: pg.evaluate("""() => Array.from(Bokeh.documents[0].all_models).some(

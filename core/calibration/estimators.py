@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.validation import integer
 from .model import design_rows
 from .observability import CAL_RANK_RTOL
 from .validation import (
@@ -17,7 +18,6 @@ from .validation import (
     _readings,
     _square4,
     checked_be,
-    checked_count,
     checked_noise,
 )
 
@@ -52,12 +52,8 @@ def lsq_calibrate(B, attitudes, be, *, convention="seed004"):
     ----------
     B : array_like, shape (..., N, 3)
         Readings (nT).
-    attitudes : array_like, shape (..., N, 3)
-        ψ, θ, φ (rad), N ≥ 4; the leading axes of B and attitudes must match.
-    be : array_like, shape (3,)
-        Geomagnetic field (nT).
-    convention : str
-        See :func:`attitude_matrix`.
+    attitudes, be, convention
+        As for :func:`ship_field`; N ≥ 4, the leading axes of B and attitudes must match.
 
     Returns
     -------
@@ -155,7 +151,7 @@ def default_iterations(n_readings):
     >>> default_iterations(12), default_iterations(5000), default_iterations(1_000_000)
     (600, 60000, 1000000)
     """
-    n = checked_count("n_readings", n_readings, 1)
+    n = integer("n_readings", n_readings, 1)
     return n * max(1, min(50, KALMAN_STEP_BUDGET // n))
 
 
@@ -167,10 +163,8 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
     ----------
     B : array_like, shape (..., N, 3)
         Readings (nT).
-    attitudes : array_like, shape (..., N, 3)
-        ψ, θ, φ (rad).
-    be : array_like, shape (3,)
-        Geomagnetic field (nT).
+    attitudes, be, convention
+        As for :func:`ship_field`.
     sigma_nt : float
         Observation noise standard deviation σ (nT), > 0 (seed 004's σ²).
     iterations : int, optional
@@ -184,8 +178,6 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
         :data:`DEFAULT_P0_DIAG`.
     Q : array_like, shape (4,) or (4, 4) or float, optional
         Random-walk process noise per step (same units as P); default 0 (constant coefficients).
-    convention : str
-        See :func:`attitude_matrix`.
 
     Returns
     -------
@@ -207,7 +199,7 @@ def kalman_calibrate(B, attitudes, be, *, sigma_nt, iterations=None, x0=None, P0
     be = checked_be(be)
     sigma2 = checked_noise("sigma_nt", sigma_nt) ** 2
     N = att.shape[-2]
-    M = checked_count("iterations", N if iterations is None else iterations, 1, MAX_KALMAN_ITERATIONS,
+    M = integer("iterations", N if iterations is None else iterations, 1, MAX_KALMAN_ITERATIONS,
                " (filter steps)")
     P = _square4("P0", DEFAULT_P0_DIAG if P0 is None else P0, allow_zero=False)
     Qm = _square4("Q", 0.0 if Q is None else Q, allow_zero=True)

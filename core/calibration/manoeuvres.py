@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from .model import ship_field
-from .validation import _array, _attitudes, _positive
+from ..model.validation import integer, positive
+from .validation import _array, _attitudes
 
 
 def _angles_deg(name, value):
@@ -70,9 +71,7 @@ def heading_manoeuvre(headings_deg=(0.0, 90.0, 180.0, 270.0), *, roll_deg=10.0, 
         a = _array(name, v, "degrees")
         if a.shape != () or abs(float(a)) > 90:
             raise ValueError(f"{name} must be one amplitude in degrees with |{name}| ≤ 90; got {v!r}")
-    if isinstance(n_attitudes, bool) or not isinstance(n_attitudes, (int, np.integer)) or n_attitudes < 1:
-        raise ValueError(f"n_attitudes must be an integer ≥ 1; got {n_attitudes!r}")
-    n = np.arange(n_attitudes)
+    n = np.arange(integer("n_attitudes", n_attitudes, 1))
     t = 2.0 * np.pi * n / n_attitudes
     return np.stack([np.deg2rad(h[n % h.size]), np.deg2rad(float(roll_deg)) * np.cos(t),
                      np.deg2rad(float(pitch_deg)) * np.sin(t)], axis=-1)
@@ -97,8 +96,7 @@ def random_attitudes(n_attitudes, rng, *, heading_deg=(0.0, 360.0), roll_deg=(-2
     ndarray, shape size + (N, 3)
         ψ, θ, φ (rad); headings above 180° are returned as ψ − 360° so that |ψ| ≤ π.
     """
-    if isinstance(n_attitudes, bool) or not isinstance(n_attitudes, (int, np.integer)) or n_attitudes < 1:
-        raise ValueError(f"n_attitudes must be an integer ≥ 1; got {n_attitudes!r}")
+    integer("n_attitudes", n_attitudes, 1)
     cols = []
     for name, r in (("heading_deg", heading_deg), ("roll_deg", roll_deg), ("pitch_deg", pitch_deg)):
         lo, hi = _array(name, r, "(low, high) degrees")
@@ -135,8 +133,8 @@ def simulate_ship_data(K, Bp, attitudes, be, rng, *, noise_nt=0.0, angle_noise_d
         Recorded attitudes (rad).
     """
     att = _attitudes(attitudes)
-    sb = _positive("noise_nt", noise_nt, "nT", allow_zero=True)
-    sa = np.deg2rad(_positive("angle_noise_deg", angle_noise_deg, "deg", allow_zero=True))
+    sb = positive("noise_nt", noise_nt, "nT", zero=True)
+    sa = np.deg2rad(positive("angle_noise_deg", angle_noise_deg, "deg", zero=True))
     if distribution == "uniform":
         draw = lambda s: rng.uniform(-s, s, size=att.shape)
     elif distribution == "gaussian":

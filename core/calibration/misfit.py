@@ -174,9 +174,7 @@ def fit_diagnosis(B, attitudes, be, *, noise_nt, angle_noise_rad=0.0, convention
     >>> core.fit_diagnosis(B + 1.0, att, [34000, 2000, 35000], noise_nt=100).level
     'note'
     """
-    att = _attitudes(attitudes)
-    if att.ndim != 2:
-        raise ValueError(f"attitudes must have shape (N, 3) for one log; got {att.shape}")
+    att = _attitudes(attitudes, one="log")
     _min_attitudes(att)
     B = _readings(B, att)
     be = checked_be(be)

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import CHUNK, _attitude, _convention, design_rows
-from .validation import _K, _attitudes, _positive, checked_angle_noise, checked_be, checked_noise
+from ..model.validation import positive
+from .validation import _K, _attitudes, checked_angle_noise, checked_be, checked_noise
 
 #: Γ (columns scaled to unit norm) has rank r when r singular values exceed CAL_RANK_RTOL times
 #: the largest. Exactly confounded coefficients (level headings) give ≤ 1e-15 (round-off); a
@@ -138,12 +139,8 @@ def calibration_observability(attitudes, be, *, convention="seed004", rtol=CAL_R
 
     Parameters
     ----------
-    attitudes : array_like, shape (N, 3)
-        ψ, θ, φ (rad).
-    be : array_like, shape (3,)
-        Geomagnetic field (nT).
-    convention : str
-        See :func:`attitude_matrix`.
+    attitudes, be, convention
+        As for :func:`ship_field`, for one manoeuvre: attitudes (N, 3).
     rtol : float
         Relative singular-value tolerance of the column-scaled Γ (default :data:`CAL_RANK_RTOL`).
 
@@ -165,10 +162,8 @@ def calibration_observability(attitudes, be, *, convention="seed004", rtol=CAL_R
     >>> o.descriptions[0].split(":")[0]
     "K's third column and Bp cannot be told apart"
     """
-    att = _attitudes(attitudes)
-    if att.ndim != 2:
-        raise ValueError(f"attitudes must have shape (N, 3) for one manoeuvre; got {att.shape}")
-    rtol = _positive("rtol", rtol, "relative")
+    att = _attitudes(attitudes, one="manoeuvre")
+    rtol = positive("rtol", rtol, "relative")
     C = design_rows(att, checked_be(be), convention=convention)  # (N, 4)
     scale, s, Vt, crank = _thin_svd(C, rtol)
     rank = 3 * crank
@@ -209,10 +204,8 @@ def calibration_covariance(attitudes, be, *, noise_nt, angle_noise_rad=0.0, K=No
 
     Parameters
     ----------
-    attitudes : array_like, shape (N, 3)
-        ψ, θ, φ (rad).
-    be : array_like, shape (3,)
-        Geomagnetic field (nT).
+    attitudes, be, convention
+        As for :func:`ship_field`, for one manoeuvre: attitudes (N, 3).
     noise_nt : float
         Standard deviation of each reading's noise (nT), > 0, independent across axes and
         attitudes.
@@ -221,8 +214,6 @@ def calibration_covariance(attitudes, be, *, noise_nt, angle_noise_rad=0.0, K=No
         it adds ``J Σ_a Jᵀ`` to attitude n's 3 × 3 reading covariance, J = K ∂(A Be)/∂(ψ, θ, φ).
     K : array_like, shape (3, 3), optional
         Where J is evaluated (default the identity); irrelevant when ``angle_noise_rad = 0``.
-    convention : str
-        See :func:`attitude_matrix`.
     estimator : {"crlb", "lsq"}
         ``"crlb"``: the inverse Fisher information (Γᵀ Σ⁻¹ Γ)⁻¹ for Gaussian errors of these
         standard deviations. ``"lsq"``: the covariance of the unweighted least-squares estimate
@@ -242,9 +233,7 @@ def calibration_covariance(attitudes, be, *, noise_nt, angle_noise_rad=0.0, K=No
     Gauss–Markov bound, the smallest covariance any *linear* unbiased estimator (least squares,
     seed 004's filter) can reach.
     """
-    att = _attitudes(attitudes)
-    if att.ndim != 2:
-        raise ValueError(f"attitudes must have shape (N, 3) for one manoeuvre; got {att.shape}")
+    att = _attitudes(attitudes, one="manoeuvre")
     be = checked_be(be)
     sb = checked_noise("noise_nt", noise_nt)
     sa = checked_angle_noise("angle_noise_rad", angle_noise_rad)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.validation import positive
+
 #: Largest |angle| accepted (rad). A heading of 90 means degrees were given by mistake.
 ANGLE_LIMIT = 2.0 * np.pi
 #: Accepted reading noise σ (nT): from 1 fT (below any magnetometer's) to 1 mT (the field
@@ -31,7 +33,8 @@ def _array(name, value, what):
     return arr
 
 
-def _attitudes(value, name="attitudes"):
+def _attitudes(value, name="attitudes", one=None):
+    """Checked attitudes (..., N, 3); ``one`` ("manoeuvre", "log"): exactly one, (N, 3)."""
     arr = _array(name, value, "shape (..., N, 3): heading ψ, roll θ, pitch φ in rad")
     if arr.ndim < 2 or arr.shape[-1] != 3 or arr.shape[-2] < 1:
         raise ValueError(f"{name} must have shape (..., N, 3) with N ≥ 1 rows of [ψ, θ, φ] in rad; "
@@ -40,6 +43,8 @@ def _attitudes(value, name="attitudes"):
     if big.any():
         raise ValueError(f"{name} must be in radians with |angle| ≤ 2π; got {arr[big].flat[0]:g} "
                          "(degrees given by mistake? multiply by π/180)")
+    if one is not None and arr.ndim != 2:
+        raise ValueError(f"{name} must have shape (N, 3) for one {one}; got {arr.shape}")
     return arr
 
 
@@ -64,7 +69,7 @@ def checked_be(value):
 
 def checked_noise(name, value):
     """A reading-noise σ in :data:`NOISE_RANGE_NT` (nT)."""
-    v = _positive(name, value, "nT")
+    v = positive(name, value, "nT")
     lo, hi = NOISE_RANGE_NT
     if not lo <= v <= hi:
         raise ValueError(f"{name} must be from {lo:g} to {hi:g} nT; got {value!r}")
@@ -73,7 +78,7 @@ def checked_noise(name, value):
 
 def checked_angle_noise(name, value, unit="rad"):
     """An angle-error σ ≥ 0, at most :data:`ANGLE_NOISE_MAX_RAD` (given in ``unit``)."""
-    v = _positive(name, value, unit, allow_zero=True)
+    v = positive(name, value, unit, zero=True)
     hi = ANGLE_NOISE_MAX_RAD if unit == "rad" else float(np.rad2deg(ANGLE_NOISE_MAX_RAD))
     if v > hi:
         raise ValueError(f"{name} must be from 0 to {hi:.3g} {unit} (angle errors are linearised); "
@@ -94,28 +99,6 @@ def _readings(B, attitudes):
         raise ValueError(f"B must have shape (..., N, 3) in nT with one row per attitude "
                          f"(N = {attitudes.shape[-2]}); got shape {B.shape}")
     return B
-
-
-def _positive(name, value, unit, allow_zero=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number {'≥' if allow_zero else '>'} 0 ({unit}); "
-                         f"got {value!r}") from None
-    if not (np.isfinite(v) and (v >= 0 if allow_zero else v > 0)):
-        raise ValueError(f"{name} must be a finite number {'≥' if allow_zero else '>'} 0 ({unit}); "
-                         f"got {value!r}")
-    return v
-
-
-
-def checked_count(name, value, low, high=None, what=""):
-    """An integer in [low, high] (high None: no upper limit), or ValueError naming the range."""
-    ok = not isinstance(value, bool) and isinstance(value, (int, np.integer))
-    if not ok or value < low or (high is not None and value > high):
-        rng = f"≥ {low}" if high is None else f"from {low} to {high:,}".replace(",", " ")
-        raise ValueError(f"{name} must be an integer {rng}{what}; got {value!r}")
-    return int(value)
 
 
 def _square4(name, value, allow_zero):

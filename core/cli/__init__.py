@@ -11,7 +11,7 @@ option before a missing required one.
 import argparse
 import sys
 
-__all__ = ["ArgumentParser"]
+__all__ = ["ArgumentParser", "figure", "save"]
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -46,3 +46,23 @@ class ArgumentParser(argparse.ArgumentParser):
         if extras:
             self.error(f"unrecognized arguments: {' '.join(extras)}")
         return super().parse_args(args, namespace)
+
+
+def figure(*args, **kwargs):
+    """``matplotlib.pyplot.subplots(*args, **kwargs)`` on the Agg backend (matplotlib is imported
+    here, only when a tool draws)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(*args, **kwargs)
+
+
+def save(fig, path, **kwargs):
+    """Lay out, write and close a :func:`figure`."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, **kwargs)
+    plt.close(fig)

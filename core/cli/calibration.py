@@ -30,9 +30,9 @@ from ..calibration.validation import (
     NOISE_RANGE_NT,
     checked_angle_noise,
     checked_be,
-    checked_count,
     checked_noise,
 )
+from ..model.validation import integer
 from . import ArgumentParser
 
 PROG = "python -m core.calibration"
@@ -199,7 +199,7 @@ def main(argv=None):
         sigma = checked_noise("--sigma-nt", a.sigma_nt)
         angle_sigma = checked_angle_noise("--angle-sigma-deg", a.angle_sigma_deg, unit="deg")
         if a.iterations is not None:
-            checked_count("--iterations", a.iterations, 1, MAX_KALMAN_ITERATIONS)
+            integer("--iterations", a.iterations, 1, MAX_KALMAN_ITERATIONS)
         B, att = read_attitude_csv(a.csv)
         iters = default_iterations(att.shape[0]) if a.iterations is None else a.iterations
         r = _cli_result(B, att, be, sigma_nt=sigma, angle_sigma_deg=angle_sigma,

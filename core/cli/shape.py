@@ -1,47 +1,10 @@
 """``python -m core.shape --case CASE [--runs N] [--seed S] [--lag N] [--offset Y] [--above Z]
-[--noise σ] [--speed V] [--rate F] [--cpa-sweep LO:HI:N] --out DIR``.
-
-Runs a case of seed 003 (:data:`core.shape.cases.CASES`) with ``runs`` Monte-Carlo passes
-(1 to :data:`MAX_RUNS`: each run keeps ~0.3 MB of tracks and covariances in memory) and writes
-into DIR:
-
-- ``summary.json``: the case's truth and, per row of the case (Tables have several), per
-  estimator ("euler", "ukf", "nhukf" and the batch fit "fit") ``centroid_error_m``,
-  ``peak_error_m`` (not the fit: one estimate per pass), ``main_scale_m`` (span read),
-  ``spread_scale_m`` (second-moment read), ``main_scale_error_m``, ``axis_error_deg``, ``kind``,
-  ``nees`` (medians over runs; the metrics of :mod:`core.shape.experiment`: ``kind`` is the
-  majority verdict or ``"tie"``, ``main_scale_m`` the median over the runs of the majority kind,
-  null on a tie; the fit's ``nees_band`` is its two-sided 99 % band); per row also ``bound``
-  (:class:`core.shape.bound.ShapeBound`: the main scale's σ in both reads and the rigid line's,
-  m), ``sizable`` (whether the read that sizes best has σ ≤ 10 % of the true main scale) and
-  ``sizing`` (that read). The top-level ``filters``, ``bound`` and ``sizable`` are the first
-  row's;
-- ``errors_rowI.png``: position error along the pass for each filter (run 0), outliers marked;
-- ``shape_rowI.png``: run 0's final dipoles and PCA axes over the target's outline, plan (x–y)
-  and side (x–z) views.
-
-The pass runs along +x from x = −40 to +40 m (80 m) at a lateral offset ``--offset Y`` and a
-height ``--above Z`` above the target's centre (z down: the track's z is −Z), as the Shape tab's
-inputs; ``--speed`` (m/s) and ``--rate`` (Hz) set the samples (80 · rate / speed + 1; seed 003:
-5 m/s, 5 Hz, 81). Each is refused with a message outside its limits (:data:`LIMITS`; at most
-:data:`MAX_SAMPLES` samples, and a track at least 1 m from the target's nearest cell). Defaults:
-the case's own (seed 003: 5 m, 5 m, 0.01 nT/m, 5 m/s, 5 Hz).
-
-The filter update is the case's own (:mod:`core.shape.cases`): seed 003's window of lag 5, and
-for Figs. 4 and 5 a second row with the one-sample update beside it (``"comparison": true``);
-``--lag N`` sets one update for every row (0: one sample) and drops the comparison rows, with
-2N below the pass's sample count (81 samples: N ≤ 40). The summary's ``description`` names the
-update each row ran.
-
-``--cpa-sweep LO:HI:N`` also moves the first row's pass to N closest approaches from LO to HI m
-(geometric; the direction of the offset kept) and writes ``cpa_sweep.csv`` and
-``cpa_sweep.png``: the bound of the main scale (both reads, rigid line) and the Monte-Carlo
-errors of the filters and the fit against the closest approach, and prints how close the pass
-must be to size the target to ``--size-to`` metres (default 10 % of its main scale).
-
-A row the pass cannot size prints a WARNING line: its main scales and kinds mean nothing; an
-estimator whose line / plane verdict is not the target's prints a CAUTION line.
-Every bad input prints one line ``python -m core.shape: error: …`` and exits with status 2.
+[--noise σ] [--speed V] [--rate F] [--cpa-sweep LO:HI:N [--size-to X]] --out DIR``: seed 003's
+Monte-Carlo passes of a case (:data:`core.shape.cases.CASES`), written to DIR as ``summary.json``
+(:func:`run`), ``errors_rowI.png`` and ``shape_rowI.png`` per row and, with ``--cpa-sweep``,
+``cpa_sweep.csv`` and ``.png`` (:func:`cpa_sweep`). Options, limits (:data:`LIMITS`), outputs,
+warnings: docs/shape.md, *Command line*. Every bad input prints one line
+``python -m core.shape: error: …`` and exits with status 2.
 """
 
 from __future__ import annotations
@@ -218,8 +181,8 @@ def check_lag(case, lag, **geo):
 
 
 def _json_safe(v):
-    """NaN → None (strict JSON: null), recursively."""
-    if isinstance(v, float) and math.isnan(v):
+    """NaN and ±inf → None (strict JSON: null), recursively."""
+    if isinstance(v, float) and not math.isfinite(v):
         return None
     if isinstance(v, dict):
         return {k: _json_safe(x) for k, x in v.items()}
@@ -396,17 +359,12 @@ def main(argv=None):
         if a.size_to is not None and a.cpa_sweep is None:
             raise ValueError("--size-to needs --cpa-sweep")
         _check_out(a.out)
+        sw = None if a.cpa_sweep is None else cpa_sweep(
+            a.case, *a.cpa_sweep, runs=a.runs, seed=a.seed, lag=a.lag, out=a.out,
+            size_to=a.size_to, **geo)
     except ValueError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         sys.exit(2)
-    sw = None
-    if a.cpa_sweep is not None:
-        try:
-            sw = cpa_sweep(a.case, *a.cpa_sweep, runs=a.runs, seed=a.seed, lag=a.lag, out=a.out,
-                           size_to=a.size_to, **geo)
-        except ValueError as exc:
-            print(f"{PROG}: error: {exc}", file=sys.stderr)
-            sys.exit(2)
     s = run(a.case, runs=a.runs, seed=a.seed, lag=a.lag, out=a.out, **geo)
     for row in s["rows"]:
         f = row["filters"]
@@ -433,8 +391,6 @@ def main(argv=None):
     if sw is not None:
         s["cpa_sweep"] = _json_safe({k: v for k, v in sw.items() if k != "records"}
                                     | {"csv": "cpa_sweep.csv", "png": "cpa_sweep.png"})
-        s["cpa_sweep"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
-                          for k, v in s["cpa_sweep"].items()}
         with open(os.path.join(a.out, "summary.json"), "w", encoding="utf-8") as fh:
             json.dump(s, fh, indent=1, allow_nan=False)
         print(sweep_answer(sw))

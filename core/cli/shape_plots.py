@@ -7,16 +7,14 @@ import math
 
 import numpy as np
 
+from . import figure, save
+
 __all__ = ["plot_errors", "plot_shape", "plot_sweep"]
 
 
 def plot_errors(res, path):
     """errors_rowI.png: position error along the pass for each filter (run 0), outliers marked."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = figure(figsize=(7, 4))
     for name, style in (("euler", ":"), ("ukf", "-"), ("nhukf", "--")):
         if name in res.errors:
             ax.semilogy(res.platform_x, res.errors[name][0], style, label=name.upper())
@@ -29,18 +27,12 @@ def plot_errors(res, path):
     ax.set_title(f"{res.case.name}: error along the pass (run 0)")
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save(fig, path, dpi=90)
 
 
 def plot_shape(res, path):
     """shape_rowI.png: run 0's final dipoles and PCA axes over the target's outline, plan and side."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4.2))
+    fig, axes = figure(1, 2, figsize=(9, 4.2))
     t = res.case.target
     for ax, (i, j, lab) in zip(axes, ((0, 1, "plan: x–y"), (0, 2, "side: x–z"))):
         for ln in t.outline():
@@ -62,20 +54,14 @@ def plot_shape(res, path):
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle(f"{res.case.name}: dipoles and PCA axes (±2√λ) over the outline")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save(fig, path, dpi=90)
 
 
 def plot_sweep(sw, row, path):
     """cpa_sweep.png: the bounds and the Monte-Carlo errors against the closest approach."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     rec = sw["records"]
     c = [r["closest_approach_m"] for r in rec]
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    fig, ax = figure(figsize=(7.5, 4.8))
     ax.loglog(c, [r["bound_span_m"] for r in rec], "-", color="#9467bd", label="bound: span read")
     ax.loglog(c, [r["bound_second_moment_m"] for r in rec], "-", lw=2.5, color="#17becf",
               label="bound: second-moment read")
@@ -95,6 +81,4 @@ def plot_sweep(sw, row, path):
     ax.set_title(f"{row.name}: how close must the pass be? ({sw['runs']} passes per point)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save(fig, path, dpi=90)

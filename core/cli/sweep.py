@@ -27,16 +27,10 @@ Writes ``DIR/sweep.csv`` (one row per (x, y) cell: both parameters and the measu
 ``-inf`` where unobservable, ``nan`` where undefined, e.g. a target on a station),
 ``DIR/sweep.png`` (heatmap; grey cells are not finite) and ``DIR/sweep.json`` (the settings).
 
-Both cores are used by processes, not threads: rows of the grid go to a
-``concurrent.futures.ProcessPoolExecutor`` (``--workers``, default 2), and each worker pins
-numba to one thread so the two levels of parallelism do not oversubscribe the cores.
-
-Beyond one machine, ``--scheduler tcp://HOST:8786`` sends the rows to a ``dask.distributed``
-cluster instead (``--workers`` is then unused; see :mod:`core.dask_backend` and docs/dask.md).
-Without it the local process pool stays the default: it starts in a fraction of a second, needs
-no optional dependency (dask is never imported), and on one machine a ``LocalCluster`` would
-run the same rows in the same number of processes, after seconds of start-up. The values are
-the same bit for bit either way (each cell is computed by the same code).
+Rows of the grid go to ``--workers`` processes (default 2) with one numba thread each, or, with
+``--scheduler tcp://HOST:8786``, to a ``dask.distributed`` cluster (:func:`core.dask_backend.run_calls`;
+why the local pool stays the default: docs/dask.md). The values are the same bit for bit
+either way.
 """
 
 from __future__ import annotations
@@ -56,7 +50,7 @@ import core
 from .. import dask_backend
 from ..sweep import (DEPTHS, PARAMETERS, POSITIVE, SENSORS, SWEEP_MEASURES, default_noise,
                      evaluate, parse_axis, parse_region, run, unused_parameters)
-from . import ArgumentParser
+from . import ArgumentParser, figure, save
 
 def write_csv(path, xname, xvals, yname, yvals, measure, values):
     """Tidy table: one row per cell, columns (xname, yname, measure)."""
@@ -75,13 +69,8 @@ def _axis_label(name):
 
 def write_heatmap(path, xname, xvals, yname, yvals, measure, values, title):
     """Heatmap PNG (matplotlib Agg); non-finite cells grey."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     label, unit, _ = SWEEP_MEASURES[measure]
-    fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
+    fig, ax = figure(figsize=(7, 5), dpi=110)
     ax.set_facecolor("0.8")  # shows through masked (non-finite) cells
     masked = np.ma.masked_invalid(values)
     if masked.count():
@@ -95,9 +84,7 @@ def write_heatmap(path, xname, xvals, yname, yvals, measure, values, title):
         ax.set_yscale("log")
     ax.set_title("\n".join(textwrap.wrap(title, 95, replace_whitespace=False))
                  + "\ngrey: not finite (unobservable or on a station)", fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    save(fig, path)
 
 
 def build_parser():

@@ -2,18 +2,10 @@
 
 ``python -m core.track --case seed001-sim|seed001-trial [--sensor E|B|G|BG]
 [--filter ekf|puekf|bank] [--runs N] [--seed S] [--n-pu N] [--workers W] [--scheduler ADDR]
-[--truth-noise] --out DIR`` runs :func:`core.tracking.montecarlo.monte_carlo` (the method is in its
-module notes, the cases in :mod:`core.tracking.cases`; ``--sensor`` other than E measures the
-case with a magnetic sensor, :func:`core.tracking.cases.case_for_sensor`) and writes
-
-- ``DIR/trmse.csv``: ``step, time_s, trmse_m, pcrlb_m`` (TRMSE_k of seed 001 eq. (18): the RMS
-  over runs of the 3-D position error of the reported estimate at step k);
-- ``DIR/summary.json``: runs, diverged (share of runs whose final position error exceeds
-  max(5 × final PCRLB, 10 m); null, with the reason in diverged_rule, where the final bound is
-  beyond its linearisation limit and predicts nothing), winners (how often each bank hypothesis
-  is the final ML choice), nees (mean NEES of the reported filter over runs and steps, 7 states),
-  nees_band (its 99 % χ² band for a consistent filter), nees_consistent, and more;
-- ``DIR/trmse.png``: TRMSE and PCRLB against time.
+[--truth-noise] --out DIR`` runs :func:`core.tracking.montecarlo.monte_carlo` (``--sensor`` other
+than E: :func:`core.tracking.cases.case_for_sensor`) and writes ``DIR/trmse.csv`` (``step,
+time_s, trmse_m, pcrlb_m``; TRMSE_k of seed 001 eq. (18)), ``DIR/summary.json`` (what its
+flags mean: docs/tracking.md, *What the summary flags*) and ``DIR/trmse.png``.
 """
 
 from __future__ import annotations

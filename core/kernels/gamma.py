@@ -33,7 +33,7 @@ from .electric import (
     _local_jacobian,
     _store_rows,
 )
-from .sea import PAIR_ROWS, SEA_ROWS, _load, layered_lanes, station_rows
+from .sea import PAIR_ROWS, SEA_ROWS, _load, _store, layered_lanes, station_rows
 
 _BLOCK = 256
 #: State columns of the horizontal velocity (vx, vy): Φ^i adds i·T·∂/∂(x, y) to them.
@@ -112,6 +112,19 @@ _PSC = _PBAD + 1
 _POINT_ROWS = _PSC + mk.LANE_SCRATCH
 
 
+@nb.njit(inline="always", **JIT)
+def _magnetic_point(wm, x, dt, stations, s, model, medium):
+    """The magnetic rows (:func:`core.kernels.magnetic.rows_lanes`, one lane) of station ``s``
+    at time offset ``dt`` for the state ``x`` into wm[_PJ…]; False if the target is within the
+    kind's ``near``."""
+    for k in range(mk.N_STATE):
+        wm[_PX + k, 0] = x[k]
+    wm[_PBAD, 0] = 0.0
+    mk.rows_lanes(wm, _PX, _PJ, _PSC, _PBAD, 1, dt, stations[s, 0], stations[s, 1],
+                  stations[s, 2], model, medium)
+    return wm[_PBAD, 0] == 0.0
+
+
 @nb.njit(**JIT)
 def _station_point(x, dt, stations, s, kappa, model, medium, jac, w, wm):
     """Jacobian rows of station ``s`` at time offset ``dt`` for the state ``x`` into
@@ -121,15 +134,11 @@ def _station_point(x, dt, stations, s, kappa, model, medium, jac, w, wm):
     py = x[1] + dt * x[4]
     rx, ry, rz = px - stations[s, 0], py - stations[s, 1], x[2] - stations[s, 2]
     if model >= mk.CODE_B:
-        for k in range(mk.N_STATE):
-            wm[_PX + k, 0] = x[k]
-        wm[_PBAD, 0] = 0.0
-        mk.rows_lanes(wm, _PX, _PJ, _PSC, _PBAD, 1, dt, stations[s, 0], stations[s, 1],
-                      stations[s, 2], model, medium)
+        ok = _magnetic_point(wm, x, dt, stations, s, model, medium)
         for comp in range(mk.n_components(model)):
             for k in range(mk.N_STATE):
                 jac[comp, k] = wm[_PJ + mk.LANE_ROW * comp + 1 + k, 0]
-        return wm[_PBAD, 0] == 0.0
+        return ok
     if rx * rx + ry * ry + rz * rz < ON_STATION * ON_STATION:
         return False
     rows = station_rows(w, rx, ry, x[2], stations[s, 2], x[3], x[4], x[5], x[6], kappa, model,
@@ -141,17 +150,13 @@ def _station_point(x, dt, stations, s, kappa, model, medium, jac, w, wm):
 
 
 @nb.njit(nogil=True, **JIT)
-def _magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, lo, hi):
-    """:func:`magnetic_rows` for the points lo ≤ p < hi, one lane at a time."""
+def magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, lo, hi):
+    """:func:`magnetic_rows` for the points lo ≤ p < hi, one lane at a time, on the calling thread
+    (the front's path for at most ``core.kernels.magnetic.BLOCK`` points)."""
     wm = np.empty((_POINT_ROWS, 1))
     for p in range(lo, hi):
         for s in range(stations.shape[0]):
-            for k in range(mk.N_STATE):
-                wm[_PX + k, 0] = states[p, k]
-            wm[_PBAD, 0] = 0.0
-            mk.rows_lanes(wm, _PX, _PJ, _PSC, _PBAD, 1, dt, stations[s, 0], stations[s, 1],
-                          stations[s, 2], model, medium)
-            on = wm[_PBAD, 0] != 0.0
+            on = not _magnetic_point(wm, states[p], dt, stations, s, model, medium)
             for c in range(h_out.shape[2]):
                 r0 = _PJ + mk.LANE_ROW * c
                 h_out[p, s, c] = np.nan if on else wm[r0, 0]
@@ -170,14 +175,8 @@ def magnetic_rows(states, stations, dt, model, medium, h_out, j_out):
     NaN where a target is within ``near`` of a station."""
     npts = states.shape[0]
     for b in nb.prange((npts + _BLOCK - 1) // _BLOCK):
-        _magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, b * _BLOCK,
+        magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, b * _BLOCK,
                              min(npts, (b + 1) * _BLOCK))
-
-
-@nb.njit(nogil=True, **JIT)
-def magnetic_rows_serial(states, stations, dt, model, medium, h_out, j_out):
-    """:func:`magnetic_rows` on the calling thread (for at most ``_BLOCK`` points)."""
-    _magnetic_rows_block(states, stations, dt, model, medium, h_out, j_out, 0, states.shape[0])
 
 
 @nb.njit(**JIT)
@@ -261,13 +260,6 @@ ROWS = SCRATCH + max(SEA_ROWS, mk.LANE_SCRATCH)
 
 
 @nb.njit(inline="always", **JIT)
-def _put_row(w, r0, lane, row):
-    """w[r0 : r0 + ROW, lane] = row (one component's (E_i, ∂E_i/∂X))."""
-    w[r0, lane], w[r0 + 1, lane], w[r0 + 2, lane], w[r0 + 3, lane] = row[0], row[1], row[2], row[3]
-    w[r0 + 4, lane], w[r0 + 5, lane], w[r0 + 6, lane], w[r0 + 7, lane] = row[4], row[5], row[6], row[7]
-
-
-@nb.njit(inline="always", **JIT)
 def rows_lanes(w, dt, stations, s, kappa, model, medium):
     """Rows (value, Jacobian) of station ``s`` at time offset ``dt`` for the LANES states in
     w[X:X+NX], into w[J…] (stride :func:`row_stride`). w[BAD] = 1 where a target comes
@@ -303,9 +295,7 @@ def rows_lanes(w, dt, stations, s, kappa, model, medium):
         w[BAD, lane] = 1.0 if near else w[BAD, lane]
         rows = _local_jacobian(1.0 if near else rx, ry, rz, w[X + 3, lane], w[X + 4, lane],
                                w[X + 5, lane], w[X + 6, lane], kappa, model)
-        _put_row(w, J, lane, rows[0])
-        _put_row(w, J + ROW, lane, rows[1])
-        _put_row(w, J + 2 * ROW, lane, rows[2])
+        _store(w, J, lane, rows)
 
 
 @nb.njit(inline="always", **JIT)

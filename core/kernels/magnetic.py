@@ -41,9 +41,10 @@ ON_STATION = 1e-6
 G_PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2))
 
 JIT = dict(cache=True, error_model="numpy")
-#: Points per parallel work item. A call with at most this many points runs the serial twin of a
-#: kernel (``*_serial``): a parallel launch on one block only wakes numba's threads (seed 003's
-#: filter calls the tensor ~160 times per pass on 31 sigma points × 4 dipoles).
+#: Points per parallel work item. A call with at most this many points runs one block on the
+#: calling thread (``tensor_block``, ``magnetic_rows_block``): a parallel launch on one block
+#: only wakes numba's threads (seed 003's filter calls the tensor ~160 times per pass on 31
+#: sigma points × 4 dipoles).
 BLOCK = 256
 
 
@@ -115,8 +116,9 @@ def baseline_point(r, m, baseline, g, dg_dx, dg_dm, rr, bb, gg, dd):
 
 
 @nb.njit(nogil=True, **JIT)
-def _tensor_block(states, stations, baseline, b_out, g_out, lo, hi):
-    """:func:`field_and_tensor` for the points lo ≤ p < hi."""
+def tensor_block(states, stations, baseline, b_out, g_out, lo, hi):
+    """:func:`field_and_tensor` for the points lo ≤ p < hi, on the calling thread (the front's
+    path for at most :data:`BLOCK` points)."""
     r, m, rr, bb = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     b, db_dm = np.empty(3), np.empty((3, 3))
     gg, dd = np.empty((3, 3)), np.empty((3, 3))
@@ -140,14 +142,8 @@ def field_and_tensor(states, stations, baseline, b_out, g_out):
     ``baseline`` = 0, else the magnetometer differences) for states (P, 8), stations (S, 3)."""
     npts = states.shape[0]
     for blk in nb.prange((npts + BLOCK - 1) // BLOCK):
-        _tensor_block(states, stations, baseline, b_out, g_out, blk * BLOCK,
+        tensor_block(states, stations, baseline, b_out, g_out, blk * BLOCK,
                       min(npts, (blk + 1) * BLOCK))
-
-
-@nb.njit(nogil=True, **JIT)
-def field_and_tensor_serial(states, stations, baseline, b_out, g_out):
-    """:func:`field_and_tensor` on the calling thread (for at most :data:`BLOCK` points)."""
-    _tensor_block(states, stations, baseline, b_out, g_out, 0, states.shape[0])
 
 
 # --- Rows for the map kernels (core.kernels.gamma), LANES states side by side ------------------

@@ -126,9 +126,8 @@ def _log10_rcond(frob2, n):
 def _square_groups(states, first, last, stations, step, kappa, model, medium, free, log_det,
                    log_eta, log_rcond):
     """:func:`square_measures` for the groups of LANES points ``first`` … ``last − 1``. The
-    workspace is allocated here once, with a shape known at compile time so that LLVM sees its
-    row stride (and not per group: freeing it each time let malloc hand the pages back to the
-    OS and fault them in again: a 40k-point map took 20–48 ms inside the server, 5–16 ms now)."""
+    workspace is allocated here once (not per group, whose pages malloc would hand back to the
+    OS and fault in again), with a shape known at compile time so that LLVM sees its stride."""
     n = free.shape[0]
     w = np.empty((ROWS, LANES))
     for group in range(first, last):

@@ -1,6 +1,6 @@
 """The compiled image series of a layered sea (spec §7): the sums of a target–station pair's
-images, in lanes of targets summed side by side. The physics, the truncation and the tail are
-described in :mod:`core.model.sea`, the validated front (:class:`core.Sea`, ``image_counts``).
+images, in lanes of targets summed side by side. The physics, the truncation and the tail are in
+docs/sea.md; the validated front is :mod:`core.model.sea` (:class:`core.Sea`, ``image_counts``).
 A leaf, as every module of :mod:`core.kernels`: math, numpy, numba and its sibling kernels.
 """
 
@@ -34,11 +34,7 @@ def _gauss_legendre01(n):
 # Gauss–Legendre rules on [0, 1] for the tail integral, (nodes, weights) padded to 8 columns:
 # 4, 5 and 8 nodes, the rule chosen by the geometric tail estimate τ = |G_M| η/(1 − η)/|E|
 # (largest over the lanes summed together): 4 nodes where τ ≤ 10 tol, 5 where τ ≤ 100 tol,
-# else 8. Measured in numpy over 3400 random geometries (D 5–500 m, σb 0.003–4 S/m, ranges
-# 0.03–30 D, a third of the receivers on the seabed) against sums of up to 60000 groups: the
-# largest error with τ ≤ 1e-5 was 3.4e-7 with 4 nodes (2.5e-7 with 8), with τ ≤ 1e-4 5.0e-7
-# with 5 nodes (5.5e-7 with 8). (An earlier 4-node rule for τ ≤ 1e-3 missed the tolerance,
-# 2e-6 to 4e-6 at η = 0.82, ρ = 30 D, where τ = 2.5e-4: that case takes 8 nodes here.)
+# else 8 (the measurements behind the thresholds: docs/sea.md, *Truncation tolerance*).
 _TAIL_N = np.array([4, 5, 8])
 _TAIL_TAU = np.array([10.0, 100.0])  # × tol: the largest τ of the 4- and 5-node rules
 _TAIL_U = np.zeros((3, 8))
@@ -66,13 +62,8 @@ PAIR_ROWS = SEA_ROWS + STATION_ROWS
 
 
 @nb.njit(inline="always", **JIT)
-def _inputs(w, r_in, lane):
-    return (w[r_in, lane], w[r_in + 1, lane], w[r_in + 2, lane], w[r_in + 3, lane],
-            w[r_in + 4, lane], w[r_in + 5, lane], w[r_in + 6, lane], w[r_in + 7, lane])
-
-
-@nb.njit(inline="always", **JIT)
 def _load_row(w, r0, lane):
+    """w[r0 : r0 + 8, lane]: one row (E_i, ∂E_i/∂X), or a pair's inputs."""
     return (w[r0, lane], w[r0 + 1, lane], w[r0 + 2, lane], w[r0 + 3, lane],
             w[r0 + 4, lane], w[r0 + 5, lane], w[r0 + 6, lane], w[r0 + 7, lane])
 
@@ -118,7 +109,7 @@ def _store_sums(w, r0, lane, t):
 def _sums_to_rows(w, r_in, r_out, n):
     """Replace the image sums at w[r_out : r_out + 13] by the rows (E_i, ∂E_i/∂X) (24)."""
     for lane in range(n):
-        rx, ry, _, _, cos, sin, ph, pv = _inputs(w, r_in, lane)
+        rx, ry, _, _, cos, sin, ph, pv = _load_row(w, r_in, lane)
         _store(w, r_out, lane, sums_rows(_load_sums(w, r_out, lane), rx, ry, ph, pv, cos, sin,
                                          w[r_in + 11, lane]))
 
@@ -126,7 +117,7 @@ def _sums_to_rows(w, r_in, r_out, n):
 @nb.njit(inline="always", **JIT)
 def _field_of(w, r_in, lane, sums):
     """E (3 components) of image sums of the pair in ``lane``."""
-    rx, ry, _, _, cos, sin, ph, pv = _inputs(w, r_in, lane)
+    rx, ry, _, _, cos, sin, ph, pv = _load_row(w, r_in, lane)
     return sums_field(sums, rx, ry, ph, pv, cos, sin)
 
 
@@ -147,7 +138,7 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
     Assumes valid input (both in the water column, not on the station).
 
     The groups m = 1, 2, … run in lockstep: all lanes take group m, until one M at which every
-    lane's stop rule holds (module notes); then all close the tail from the same M. A lane run
+    lane's stop rule holds (docs/sea.md); then all close the tail from the same M. A lane run
     past its own stop only sums more of its exact series (and its stop rule holds at M too), so
     it is at least as accurate. The image positions and tail nodes depend on M and η only,
     and M is locally constant, so the Jacobian stays the exact derivative of the field.
@@ -155,7 +146,7 @@ def layered_lanes(w, r_in, r_out, n, kappa, depth, eta, tol):
     prev, rinv = r_in + 8, r_in + 11
     # 1. m = 0: the source and its surface image; vx, vy give way to cos θ, sin θ and 1/|v|
     for lane in range(n):
-        rx, ry, z, sz, vx, vy, ph, pv = _inputs(w, r_in, lane)
+        rx, ry, z, sz, vx, vy, ph, pv = _load_row(w, r_in, lane)
         inv_speed = 1.0 / math.sqrt(vx * vx + vy * vy)
         w[r_in + 4, lane], w[r_in + 5, lane], w[rinv, lane] = vx * inv_speed, vy * inv_speed, inv_speed
         rho2 = rx * rx + ry * ry

@@ -68,16 +68,27 @@ def check_distances(flat, stations, baseline):
         )
 
 
-def _field_and_tensor(states_value, stations_value, baseline):
+def _checked(states_value, stations_value, baseline, dt=0.0):
+    """Validated states (P, 8), their leading shape, stations (S, 3) and baseline (m): no target
+    within the gradiometer's array (or on a station) at time offset ``dt``."""
     flat, lead = states(states_value)
     stations = validation.stations(stations_value)
     baseline = baseline_value(baseline)
-    check_distances(flat, stations, baseline)
+    moved = flat.copy()
+    moved[:, :2] += dt * flat[:, 3:5]
+    check_distances(moved, stations, baseline)
+    return flat, lead, stations, baseline
+
+
+def _field_and_tensor(states_value, stations_value, baseline):
+    flat, lead, stations, baseline = _checked(states_value, stations_value, baseline)
     n_s = stations.shape[0]
     b = np.empty((flat.shape[0], n_s, 3))
     g = np.empty((flat.shape[0], n_s, 3, 3))
-    kernel = mk.field_and_tensor if flat.shape[0] > mk.BLOCK else mk.field_and_tensor_serial
-    kernel(flat, stations, baseline, b, g)
+    if flat.shape[0] > mk.BLOCK:
+        mk.field_and_tensor(flat, stations, baseline, b, g)
+    else:  # one block: on this thread (a parallel launch only wakes numba's threads)
+        mk.tensor_block(flat, stations, baseline, b, g, 0, flat.shape[0])
     return b.reshape(lead + (n_s, 3)), g.reshape(lead + (n_s, 3, 3))
 
 
@@ -181,31 +192,22 @@ def magnetic_jacobian(states, stations, *, sensor="B", baseline=None):
     return measurement_rows(states, stations, sensor, baseline, 0.0)
 
 
-def sensor_flags(sensor):
-    """(with_b, with_g) of a magnetic kind name."""
-    if sensor not in MAGNETIC_COMPONENTS:
-        raise ValueError(f"magnetic sensor kind must be one of {list(MAGNETIC_COMPONENTS)}; got {sensor!r}")
-    return "B" in sensor, "G" in sensor
-
-
 def measurement_rows(states_value, stations_value, sensor, baseline, dt):
     """Validated :func:`core.kernels.gamma.magnetic_rows` at time offset ``dt`` (s·T): the rows
     of the map kernels, unwhitened."""
-    sensor_flags(sensor)
-    flat, lead = states(states_value)
-    stations = validation.stations(stations_value)
+    if sensor not in MAGNETIC_COMPONENTS:
+        raise ValueError(f"magnetic sensor kind must be one of {list(MAGNETIC_COMPONENTS)}; got {sensor!r}")
     baseline = baseline_value(baseline)
-    moved = flat.copy()
-    moved[:, 0] += dt * flat[:, 3]
-    moved[:, 1] += dt * flat[:, 4]
-    check_distances(moved, stations, baseline if "G" in sensor else 0.0)
+    flat, lead, stations, _ = _checked(states_value, stations_value, baseline * ("G" in sensor), dt)
     n_s, n_c = stations.shape[0], len(MAGNETIC_COMPONENTS[sensor])
     h = np.empty((flat.shape[0], n_s, n_c))
     jac = np.empty((flat.shape[0], n_s, n_c, mk.N_STATE))
     code = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}[sensor]
     params = np.array([validation.ON_STATION, baseline, 1.0, 1.0])
-    kernel = gk.magnetic_rows if flat.shape[0] > mk.BLOCK else gk.magnetic_rows_serial
-    kernel(flat, stations, float(dt), code, params, h, jac)
+    if flat.shape[0] > mk.BLOCK:
+        gk.magnetic_rows(flat, stations, float(dt), code, params, h, jac)
+    else:  # one block: on this thread
+        gk.magnetic_rows_block(flat, stations, float(dt), code, params, h, jac, 0, flat.shape[0])
     return h.reshape(lead + (n_s, n_c)), jac.reshape(lead + (n_s, n_c, mk.N_STATE))
 
 

@@ -36,21 +36,9 @@ class SensorModel:
         Station positions (m), z the depth (positive down when ``sea`` is given, spec §7).
     axes : {3, 2}
         Field components each station reports: 3 = (Ex, Ey, Ez), 2 = horizontal (Ex, Ey).
-    noise : float or (float, float) or None
-        Noise standard deviation per component, > 0: V/m (electric), nT (B), nT/m (G), a pair
-        (nT, nT/m) for BG; R = diag(noise²). None: the kind's default (1e-7 V/m electric).
-    sigma : float
-        Sea conductivity (S/m), > 0.
-    sea : core.Sea or None
-        Layered sea (air / water / seabed, spec §7), passed straight to the core's field;
-        None is the homogeneous whole space.
-    model : {"exact", "paper"}
-        Field model of :func:`core.dipole_field`.
-    kind : {"E", "B", "G", "BG"}
-        Sensor kind of :class:`core.Sensor`: the magnetic kinds take states (..., 8) and noise
-        in nT (B), nT/m (G) or a pair (BG); they report all their components (``axes`` = 3).
-    baseline : float or None
-        A gradiometer's baseline (m), as for :func:`core.gradient_tensor`.
+    noise, sigma, sea, model, kind, baseline
+        The fields of :class:`core.Sensor` (R = diag(noise²); a magnetic ``kind`` takes states
+        (..., 8) and reports all its components, ``axes`` = 3).
     sensor : core.Sensor or str or None
         The measurement model as one object (or a kind name with its defaults). Given, it is
         the source of kind, noise, medium and baseline, and those keywords must be left at

@@ -1,38 +1,11 @@
 """A real sea: insulating air above, seawater, a conducting seabed below (spec §7).
 
 Frame: z is depth, positive down; the sea surface is z = 0 and the seabed z = D. Seawater has
-conductivity σ (the ``sigma`` of every public function), the seabed σb ≥ 0, the air none.
-
-Image series (derived in ``docs/sea.md``)
------------------------------------------
-For a point current source at depth z0 in the water, the Hankel-domain potential is
-``e^{−k|z−z0|} + a e^{−kz} + b e^{−k(D−z)}``. The insulating surface reflects with +1
-(∂φ/∂z = 0 at z = 0); the seabed with η = (σ − σb)/(σ + σb) (continuity of φ and σ ∂φ/∂z at
-z = D). Solving for a and b and expanding 1 / (1 − η e^{−2kD}) as a geometric series gives a
-sum of terms ``e^{−k c}``, each the transform of ``1 / sqrt(ρ² + c²)``: a free-space source at
-depth z' with c = |z − z'|. All the images are
-
-    z'(ε, m) = ε·z0 + 2 m D,   weight η^|m|,   ε = ±1, m ∈ ℤ,
-
-and c = |z − z'| holds for every receiver depth 0 ≤ z ≤ D, so the image positions do not depend
-on the receiver. A dipole is the limit of two opposite sources, so its images are dipoles at
-the same positions with the vertical moment multiplied by ε. (ε, m) = (+1, 0) is the source,
-(−1, 0) its surface image; η = 0 (σb = σ) leaves these two: the half-space.
-
-Truncation and tail
--------------------
-Per target–station pair, the images are summed in groups G_m (the four images with |m| = m)
-until the Euler–Maclaurin error estimate of closing the rest with an integral,
-``|G_m − η G_{m−1}| / 24``, is at most ``tol / 2`` times the running total field. The rest,
-Σ_{m > M} G_m, is then closed in closed form as the integral over a continuous image index t
-from M + ½ to ∞ (the images become a line-like sum), times κ = (α/2)/sinh(α/2), α = −ln η,
-which makes the midpoint rule exact for the geometric weight; the integral is a 4-, 5- or
-8-node Gauss–Legendre rule (by the size of the tail, ``_TAIL_N``) on t = M + ½ + b u/(1 − u),
-b = min(M + ½, 1/α). Every node is a virtual image at a non-integer t,
-added to the same image sums (``core.kernels.electric.image_sums``; the compiled series is
-:mod:`core.kernels.sea`), so the Jacobian of the truncated
-field, tail included, is exact by the chain rule. A conductive seabed (η < 0) gives an
-alternating series: it is summed until |G_m| ≤ tol (1 − |η|) |E|, no tail.
+conductivity σ (the ``sigma`` of every public function), the seabed σb ≥ 0, the air none. The
+field is a sum of free-space images at depths ε·z0 + 2 m D (ε = ±1, m ∈ ℤ) with weights η^|m|,
+η = (σ − σb)/(σ + σb), summed per pair until a tolerance and closed by an integral (η > 0);
+the derivation, truncation and tail are in docs/sea.md, the compiled series in
+:mod:`core.kernels.sea`.
 """
 
 from __future__ import annotations
@@ -171,9 +144,7 @@ def _series(states, stations, sea, sigma, lanes):
     sigma = validation.positive("sigma", sigma, "S/m")
     if not isinstance(sea, Sea):
         raise ValueError(f"sea must be a core.Sea; got {type(sea).__name__}")
-    if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or not (
-            1 <= lanes <= kernels.LANES):
-        raise ValueError(f"lanes must be an integer in [1, {kernels.LANES}]; got {lanes!r}")
+    validation.integer("lanes", lanes, 1, kernels.LANES)
     check_column(sea, states, stations, "exact")
     validation.no_target_on_station(states, stations)
     p, n_s = states.shape[0], stations.shape[0]

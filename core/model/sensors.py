@@ -2,21 +2,11 @@
 
 One object, :class:`Sensor`, describes what a station measures: the kind (``"E"`` electric,
 ``"B"`` 3-axis magnetometer, ``"G"`` gradiometer, ``"BG"`` both), the noise per kind, the
-electric field formula (``exact`` / ``paper``), the medium (conductivity σ, or a
-:class:`core.Sea`) and a gradiometer's baseline. Γ, its rank, the unobservable direction,
-Fisher, CRLB, maps and CRLB maps take it as ``sensor=`` (a kind name builds one with the
-defaults). The spec's stable trio (:func:`core.gamma`, :func:`core.log10_abs_det_gamma`,
-:func:`core.observable_rank`) also takes the electric medium as ``sigma``, ``model``, ``sea``
-(spec §6); elsewhere those keywords are a deprecated convenience that warns and builds the same
-Sensor (:func:`sensor_model`).
-
-Every kind goes through the same compiled pipeline (:mod:`core.kernels.gamma` for Γ's rows,
-:mod:`core.kernels.measures` for the QR, the rank test and the measures): a kind only picks its
-rows, in :meth:`Sensor.kernel_rows` here and in the kernels' rows dispatch. Γ is the same for
-every kind (time-major, then station, then component), and so is the rank criterion
-(column-scaled, :data:`core.RANK_RTOL`); the magnetic rows come whitened by the noise of each
-component (B in nT, G in nT/m, so that B + G rows are commensurate). The paper's square-Γ rule
-is the electric paper's and is refused for magnetic kinds.
+electric field formula, the medium (σ, or a :class:`core.Sea`) and a gradiometer's baseline
+(docs/measurement-model.md). Every kind goes through the same compiled pipeline: a kind only
+picks its rows, in :meth:`Sensor.kernel_rows` here and in the kernels' rows dispatch. The
+medium keywords ``sigma``, ``model``, ``sea`` beside ``sensor=`` are a deprecated convenience
+that builds the same Sensor (:func:`sensor_model`), except on the spec's stable trio.
 """
 
 from __future__ import annotations

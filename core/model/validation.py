@@ -83,11 +83,18 @@ def model_code(model, models):
     return models.index(model)
 
 
+def integer(name, value, low, high=None, what=""):
+    """An integer in [low, high] (high None: no upper limit), or ValueError naming the range."""
+    if (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low
+            or (high is not None and value > high)):
+        rng = f"≥ {low}" if high is None else f"from {low} to {high:,}".replace(",", " ")
+        raise ValueError(f"{name} must be an integer {rng}{what}; got {value!r}")
+    return int(value)
+
+
 def steps(value, minimum):
     """Number of instants N: an int ≥ ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"steps must be an integer ≥ {minimum} (number of instants); got {value!r}")
-    return int(value)
+    return integer("steps", value, minimum, what=" (number of instants)")
 
 
 def free_columns(known, names=STATE_NAMES):

@@ -109,10 +109,8 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
     region : core.Plane
         ``"xy"``: rectangle of target positions at depth ``fixed`` (m); ``"xz"``: x–z band of
         depths at y = ``fixed``.
-    velocity : (vx, vy)
-        Target velocity (m/s), the same at every region point.
-    moments : (Ph, Pv) or (mx, my, mz)
-        Dipole moments: (Ph, Pv) A·m electric, the moment vector A·m² for magnetic kinds.
+    velocity, moments
+        As for :func:`core.evaluate_map`, the same at every region point.
     criterion : {"mean_dopt", "worst_dopt", "area_crlb"}
         ``"mean_dopt"``: mean D-optimal measure over the region's points; ``"worst_dopt"``: its
         minimum; ``"area_crlb"``: fraction of the points whose CRLB position error

@@ -67,17 +67,9 @@ def crlb_covariance(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
 
     Parameters
     ----------
-    states : array_like, shape (..., 7)
-        ``[x, y, z, vx, vy, Ph, Pv]`` in m, m/s, A·m (speed > 0).
-    stations : array_like, shape (S, 3)
-        Station positions (m).
-    noise : float
-        Sensor noise standard deviation (V/m) on every field component, > 0.
-    steps : int
-        Number of instants N ≥ 1 (all rows of all stations).
-    T, known, sensor
-        As for :func:`core.gamma` (``sensor``: the measurement model with its medium, whose
-        magnetic kinds take 8 states and noise in nT, nT/m).
+    states, stations, noise, steps, T, known, sensor
+        As for :func:`core.fisher_measures` (``sensor``: the measurement model with its medium,
+        whose magnetic kinds take 8 states and noise in nT, nT/m).
     sigma, model, sea
         Deprecated (a DeprecationWarning): the electric medium beside ``sensor=``; pass
         ``sensor=core.Sensor("E", noise, sigma, sea, model)``, which they build.
@@ -177,11 +169,7 @@ def horizontal_error_ellipse(states, stations, *, noise=None, steps=DEFAULT_STEP
 
     Parameters
     ----------
-    states : array_like, shape (..., 7)
-        ``[x, y, z, vx, vy, Ph, Pv]`` in m, m/s, A·m (speed > 0).
-    stations : array_like, shape (S, 3)
-        Station positions (m).
-    noise, steps, T, sigma, model, sea, known, sensor
+    states, stations, noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`. A known state has zero error.
 
     Returns
@@ -247,13 +235,8 @@ def crlb_maps(plane, stations, *, velocity, moments, noise=None, steps=DEFAULT_S
 
     Parameters
     ----------
-    plane : core.Plane
-    stations : array_like, shape (S, 3)
-        Station positions (m).
-    velocity : (vx, vy)
-        Target velocity (m/s), speed > 0.
-    moments : (Ph, Pv) or (mx, my, mz)
-        Dipole moments: (Ph, Pv) A·m for the electric kind, the moment vector A·m² for magnetic.
+    plane, stations, velocity, moments
+        As for :func:`core.evaluate_map`.
     noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`.
 

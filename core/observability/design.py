@@ -14,7 +14,7 @@ The criteria live in :mod:`.criteria` (how unobservable points count: its notes)
 search in :mod:`.spacing`, the optimiser in :mod:`.optimiser`; this module gathers them.
 """
 
-from __future__ import annotations
+import inspect as _inspect
 
 from .criteria import CRITERIA, CriterionResult, layout_criterion
 from .crlb import CrlbErrors, crlb_covariance, crlb_maps, horizontal_error_ellipse
@@ -22,21 +22,6 @@ from .layouts import LAYOUTS, MAX_STATIONS, station_layout
 from .optimiser import LayoutProblem, LayoutResult, optimise_layout
 from .spacing import SpacingResult, best_spacing, spacing_curve
 
-__all__ = [
-    "CRITERIA",
-    "LAYOUTS",
-    "MAX_STATIONS",
-    "CriterionResult",
-    "CrlbErrors",
-    "LayoutProblem",
-    "LayoutResult",
-    "SpacingResult",
-    "best_spacing",
-    "crlb_covariance",
-    "crlb_maps",
-    "horizontal_error_ellipse",
-    "layout_criterion",
-    "optimise_layout",
-    "spacing_curve",
-    "station_layout",
-]
+#: Every name imported above (not the modules).
+__all__ = sorted(k for k, v in globals().items()
+                 if not k.startswith("_") and not _inspect.ismodule(v))

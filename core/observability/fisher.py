@@ -61,7 +61,7 @@ def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
 
     Parameters
     ----------
-    states, stations, T, known
+    states, stations, T, known, sensor
         As for :func:`core.gamma`.
     sigma, model, sea
         Deprecated, as for :func:`core.crlb_covariance`.
@@ -70,8 +70,6 @@ def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
         :data:`DEFAULT_NOISE`), nT (B), nT/m (G), (nT, nT/m) (BG). None: the sensor's own.
     steps : int
         Number of instants N ≥ 1 (all rows of all stations).
-    sensor : {"E", "B", "G", "BG"} or core.Sensor or None
-        The measurement model, as for :func:`core.gamma`.
 
     Returns
     -------
@@ -89,14 +87,8 @@ def fisher_measures(states, stations, *, noise=None, steps=DEFAULT_STEPS, T=1.0,
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     args, n_rows, lead, scale = _prepare(states, stations, T, sensor, known, steps)
     m = _fisher_from_kernel(args[0], args[1:], n_rows, scale, sensor.state_names)
-    return FisherMeasures(
-        d_optimal=m.d_optimal.reshape(lead),
-        log10_eta=m.log10_eta.reshape(lead),
-        observable=m.observable.reshape(lead),
-        std=m.std.reshape(lead + (m.std.shape[-1],)),
-        position_std=m.position_std.reshape(lead),
-        free=m.free,
-    )
+    return FisherMeasures(**{k: v if k == "free" else v.reshape(lead + v.shape[1:])
+                             for k, v in vars(m).items()})
 
 
 def _fisher_from_kernel(states, options, n_rows, noise, names):

@@ -11,19 +11,11 @@ Structural rank is decided on the column-scaled Γ, never on |det Γ| itself: on
 scale symmetry (spec §4) that makes Γ exactly singular, and float64 then returns
 ``|det Γ| ≈ 1e-20 · Π‖Γ_j‖`` of pure round-off.
 
-One criterion
--------------
-Γ has full rank where the column-scaled Γ_s has ``σ_min > RANK_RTOL · σ_max``
-(:data:`RANK_RTOL`). :func:`observable_rank` counts the singular values above that line, and
-every ``observable`` flag (:func:`core.evaluate_map`, :func:`core.fisher_measures` and all that
-builds on them, the app's grey veil included) is ``observable_rank == n`` at the same point, by
-construction (:func:`_full_rank`). The observability index η = Π σ_i is a *measure*, not a rank
-test: it multiplies n singular values, so it can be tiny where every one of them is resolved.
-At ``X = [6000, 8000, 150, 2, 2, 100, 20]`` with stations 2 m apart, 50-digit arithmetic gives
-σ_min/σ_max = 1.9e-5 and log10 η = −15.8, and float64 reproduces both to ~1e-10
-(tests/test_observability.py): the point is observable, and its η is no round-off. What float64
-cannot resolve is a singular value below ~1e-15 · σ_max (the backward error of the SVD and QR),
-which the ratio test, unlike η, reads directly.
+One criterion (docs/rank-criterion.md): Γ has full rank where the column-scaled Γ_s has
+``σ_min > RANK_RTOL · σ_max`` (:data:`RANK_RTOL`). :func:`observable_rank` counts the singular
+values above that line, and every ``observable`` flag of :mod:`core` is ``observable_rank == n``
+at the same point, by construction (:func:`_full_rank`). The observability index η = Π σ_i is a
+*measure*, not a rank test: it can be tiny where every singular value is resolved.
 """
 
 from __future__ import annotations
@@ -246,13 +238,6 @@ def _full_rank(log_rcond, states, options, n_rows):
     return out
 
 
-def _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor, warn=True):
-    """Γ of the electric kind (one noise for every row: whitening changes nothing), or R^-½ Γ
-    of a magnetic kind (its rows in nT and nT/m made commensurate by their noise)."""
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, warn=warn)
-    return _gamma(states, stations, T, sensor, steps, known)
-
-
 def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=None, steps=None,
                     known=(), sensor=None):
     """Structural rank of Γ from the SVD of the column-scaled Γ.
@@ -274,8 +259,8 @@ def observable_rank(states, stations, *, T=1.0, sigma=4.0, model="exact", sea=No
     >>> int(core.observable_rank([30, 40, 120, 2, 2, 100, 20], [[0, 0, 100], [15, 0, 100]]))
     7
     """
-    g = _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor, warn=False)
-    return _svd_rank(g)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, warn=False)
+    return _svd_rank(_gamma(states, stations, T, sensor, steps, known))  # R^-½ Γ if magnetic
 
 
 def unobservable_direction(states, stations, *, T=1.0, sigma=None, model=None, sea=None, steps=None,
@@ -293,8 +278,8 @@ def unobservable_direction(states, stations, *, T=1.0, sigma=None, model=None, s
     -------
     ndarray, shape (..., n)
     """
-    g = _whitened_gamma(states, stations, T, sigma, model, sea, steps, known, sensor)
-    (_, _, vt), norms = _scaled_svd(g)
+    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea)
+    (_, _, vt), norms = _scaled_svd(_gamma(states, stations, T, sensor, steps, known))
     v = vt[..., -1, :] / norms[..., 0, :]  # back from scaled coordinates to state units
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)
     big = np.take_along_axis(v, np.argmax(np.abs(v), axis=-1)[..., None], axis=-1)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernels import gamma as kernels
+from ..model import validation
 
 __all__ = ["Plane", "dual_station", "single_station", "velocity_from_heading"]
 
@@ -48,10 +49,7 @@ class Plane:
     def __post_init__(self):
         if self.kind not in ("xy", "xz"):
             raise ValueError(f"plane kind must be 'xy' or 'xz'; got {self.kind!r}")
-        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or not (
-            2 <= self.n <= MAX_RESOLUTION
-        ):
-            raise ValueError(f"grid resolution n must be an integer in [2, {MAX_RESOLUTION}]; got {self.n!r}")
+        validation.integer("grid resolution n", self.n, 2, MAX_RESOLUTION)
         for name, rng in (("u", self.u), ("v", self.v)):
             lo, hi = (float(a) for a in rng)
             if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):

@@ -19,11 +19,7 @@ MAX_STATIONS = 8
 
 
 def _n_stations(n_stations):
-    if isinstance(n_stations, bool) or not isinstance(n_stations, (int, np.integer)) or not (
-        1 <= n_stations <= MAX_STATIONS
-    ):
-        raise ValueError(f"n_stations must be an integer in [1, {MAX_STATIONS}]; got {n_stations!r}")
-    return int(n_stations)
+    return validation.integer("n_stations", n_stations, 1, MAX_STATIONS)
 
 
 def station_layout(kind, n_stations=2, *, d=15.0, h=100.0, positions=None):

@@ -13,7 +13,7 @@ from .crlb import _pair
 from .criteria import _check_criterion, _criterion, _region_states
 from .fisher import DEFAULT_STEPS
 from .layouts import LAYOUTS, _n_stations, station_layout
-from .spacing import _map
+from .spacing import _d_grid, _refine
 
 __all__ = ["LayoutProblem", "LayoutResult", "optimise_layout"]
 
@@ -125,21 +125,12 @@ def _largest_spacing(kind, n, box):
 def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None):
     """Best d of the centred layout: coarse curve over d_range, then bounded Brent on the
     bracket of its best point (as :func:`best_spacing`). Returns (d, value, nfev, at_bound)."""
-    lo, hi = d_range
-    if isinstance(n_curve, bool) or not isinstance(n_curve, (int, np.integer)) or n_curve < 3:
-        raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
-    d = np.linspace(lo, hi, int(n_curve))
-    f = lambda v: objective(_centred_layout(kind, n, v, h, box))
-    curve = _map(f, d, client)  # the coarse curve: here, or on a Dask cluster
-    i = int(np.argmax(curve))
-    res = optimize.minimize_scalar(lambda v: -f(v), bounds=(d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]),
-                                   method="bounded", options={"xatol": _LAYOUT_XATOL})
-    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
+    d = _d_grid(d_range, n_curve)
+    best_d, best_v, _, _, nfev = _refine(
+        lambda v: objective(_centred_layout(kind, n, v, h, box)), d, client, _LAYOUT_XATOL)
     tol = 2.0 * _LAYOUT_XATOL  # Brent stops within ~⅔ xatol of a minimiser on a bound
-    at_bound = (("d_min",) if best_d - lo <= tol else ()) + (("d_max",) if hi - best_d <= tol else ())
-    if n == 1:
-        at_bound = ()  # one station: d plays no part
-    return float(best_d), float(best_v), int(d.size + res.nfev), at_bound
+    at_bound = (("d_min",) if best_d - d[0] <= tol else ()) + (("d_max",) if d[-1] - best_d <= tol else ())
+    return best_d, best_v, nfev, at_bound if n > 1 else ()  # one station: d plays no part
 
 
 def _same(a, b):
@@ -222,38 +213,32 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
     sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    common = {"h": h, "velocity": velocity, "moments": moments, "criterion": criterion,
-              "threshold": threshold, "steps": steps, "T": T, "known": known,
-              "sensor": sensor}
     n = _n_stations(n_stations)
-    if isinstance(maxfev, bool) or not isinstance(maxfev, (int, np.integer)) or maxfev < 1:
-        raise ValueError(f"maxfev must be an integer ≥ 1; got {maxfev!r}")
+    validation.integer("maxfev", maxfev, 1)
     states = _region_states(region, velocity, moments, sensor)
+    threshold = _check_criterion(criterion, threshold)
+    h = station_layout("line", 1, h=h)[0, 2]  # validates h
     (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
         _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
     if not (xlo < xhi and ylo < yhi):
         raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
     box = np.array([[xlo, xhi], [ylo, yhi]])
+
+    def value(st):
+        return _criterion(states, st, criterion, threshold, steps, T, known, sensor).value
+
     if kind != "free":
         if d_range is None:
             fit = _largest_spacing(kind, n, box)
             d_range = (min(2.0, 0.5 * fit), fit)
-        lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
-        if not lo < hi:
-            raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
-        threshold = _check_criterion(criterion, threshold)
-        h = station_layout("line", 1, h=h)[0, 2]  # validates h
-
-        def objective(st):
-            return _criterion(states, st, criterion, threshold, steps, T, known, sensor).value
-
-        d, value, nfev, at_bound = _optimise_spacing(kind, n, h, box, (lo, hi), n_curve, objective,
-                                                    client)
-        return LayoutResult(_centred_layout(kind, n, d, h, box), value, kind, d, nfev, at_bound)
+        d, best, nfev, at_bound = _optimise_spacing(kind, n, h, box, d_range, n_curve, value, client)
+        return LayoutResult(_centred_layout(kind, n, d, h, box), best, kind, d, nfev, at_bound)
     nfev = 0
     if x0 is None:
-        start = optimise_layout("square", n, region, d_range=d_range, n_curve=n_curve,
-                                bounds=((xlo, xhi), (ylo, yhi)), client=client, **common)
+        start = optimise_layout("square", n, region, h=h, velocity=velocity, moments=moments,
+                                criterion=criterion, threshold=threshold, steps=steps, T=T,
+                                known=known, sensor=sensor, d_range=d_range, n_curve=n_curve,
+                                bounds=((xlo, xhi), (ylo, yhi)), client=client)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
         xy = validation.as_array("x0", x0)
@@ -261,21 +246,17 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
             raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
                              f"got shape {xy.shape}")
     xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
-    threshold = _check_criterion(criterion, threshold)
-    station_layout("line", 1, h=h)  # validates h
 
     def objective(p):
-        st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
-        return -_criterion(states, st, criterion, threshold, steps, T, known, sensor).value
+        return -value(np.column_stack([p.reshape(n, 2), np.full(n, h)]))
 
     res = optimize.minimize(objective, xy.ravel(), method="Powell",
                             bounds=[(xlo, xhi), (ylo, yhi)] * n,
                             options={"maxfev": int(maxfev), "xtol": 1e-2, "ftol": 1e-6})
     p = res.x if res.fun <= objective(xy.ravel()) else xy.ravel()
-    value = -objective(p)
-    st = np.column_stack([p.reshape(n, 2), np.full(n, float(h))])
+    st = np.column_stack([p.reshape(n, 2), np.full(n, h)])
     near = _BOX_TOUCH * np.diff(box, axis=1)[:, 0]
     at_bound = tuple(name for name, hit in (
         ("x_min", np.any(st[:, 0] - xlo <= near[0])), ("x_max", np.any(xhi - st[:, 0] <= near[0])),
         ("y_min", np.any(st[:, 1] - ylo <= near[1])), ("y_max", np.any(yhi - st[:, 1] <= near[1]))) if hit)
-    return LayoutResult(st, float(value), kind, None, int(nfev + res.nfev + 2), at_bound)
+    return LayoutResult(st, float(-objective(p)), kind, None, int(nfev + res.nfev + 2), at_bound)

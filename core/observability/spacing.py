@@ -49,6 +49,27 @@ def _map(f, values, client):
     return np.array(dask_backend.map_ordered(dask_backend.check_client(client), f, values))
 
 
+def _d_grid(d_range, n_curve):
+    """The coarse curve's spacings: ``n_curve`` (≥ 3) points evenly over ``d_range`` (min, max),
+    0 < min < max (m)."""
+    lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
+    if not lo < hi:
+        raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
+    return np.linspace(lo, hi, validation.integer("n_curve", n_curve, 3))
+
+
+def _refine(f, d, client, xatol):
+    """The coarse curve f(d), then bounded Brent on the bracket of its best point (clipped to the
+    curve's ends), keeping the better of the two (:func:`best_spacing`'s notes). Returns (best d,
+    its value, the curve, the best grid index, evaluations)."""
+    curve = _map(f, d, client)
+    i = int(np.argmax(curve))
+    res = optimize.minimize_scalar(lambda v: -f(v), method="bounded", options={"xatol": xatol},
+                                   bounds=(d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]))
+    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
+    return float(best_d), float(best_v), curve, i, int(d.size + res.nfev)
+
+
 def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
                   moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
                   noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None,
@@ -168,12 +189,7 @@ model, sea, known
     True
     """
     if d_values is None:
-        lo, hi = (validation.positive("d_range", v, "m") for v in _pair("d_range", d_range))
-        if not lo < hi:
-            raise ValueError(f"d_range must be (min, max) with 0 < min < max (m); got {d_range!r}")
-        if isinstance(n_curve, bool) or not isinstance(n_curve, (int, np.integer)) or n_curve < 3:
-            raise ValueError(f"n_curve must be an integer ≥ 3; got {n_curve!r}")
-        d = np.linspace(lo, hi, int(n_curve))
+        d = _d_grid(d_range, n_curve)
     else:
         d = np.unique(_d_values(d_values))
         if d.size < 3:
@@ -181,11 +197,6 @@ model, sea, known
     xatol = validation.positive("xatol", xatol, "m")
     f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
                                  threshold, noise, steps, T, sigma, model, sea, known, sensor)
-    curve = _map(f, d, client)
-    i = int(np.argmax(curve))
-    lo, hi = d[max(i - 1, 0)], d[min(i + 1, d.size - 1)]
-    res = optimize.minimize_scalar(lambda v: -f(v), bounds=(lo, hi), method="bounded",
-                                   options={"xatol": xatol})
-    best_d, best_v = (float(res.x), float(-res.fun)) if -res.fun >= curve[i] else (d[i], curve[i])
-    return SpacingResult(d=float(best_d), value=float(best_v), d_values=d, curve=curve,
-                         at_bound=i in (0, d.size - 1), nfev=int(d.size + res.nfev))
+    best_d, best_v, curve, i, nfev = _refine(f, d, client, xatol)
+    return SpacingResult(d=best_d, value=best_v, d_values=d, curve=curve,
+                         at_bound=i in (0, d.size - 1), nfev=nfev)

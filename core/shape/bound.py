@@ -14,24 +14,12 @@ delta method (central differences of the PCA read, step 1e-6 m) the standard dev
 - the axis angle (degrees: RMS angle of the perturbed u1, or of u3 for a plane).
 
 This is the best any unbiased estimator of that model can do from noise alone: errors far above
-it come from the model (4 dipoles for a continuum), not the noise. The two reads differ by
-orders of magnitude far out: the span hangs on the two end dipoles' spacing, a fourth-order term
-of the field (σ ∝ CPA^7.6–8.8 on seed 003's pass), the second moment on all four (∝ CPA^5.5–6).
-
-**Sizable.** A pass can size the target when the read that sizes best (the smaller of the two
-σ) is at most :data:`SIZABLE_FRACTION` of the true main scale: ``ShapeBound.sizable``. The rule
-is checked against the Monte-Carlo of the filters and of the batch fit (tests/test_shape_sizable.py,
-``python -m core.shape --cpa-sweep``): where it says sizable they size the target within 10 %,
-where it says not they do not.
-
-Beside it, the *point-dipole* bound: the position σ (3-D RMS, m) of one dipole of the target's
-total moment at its centroid, position and moment free (6 parameters), same sensor and pass —
-what a point locator could reach if the target were a point (seed 003's pass: ~22 µm, the
-spec's "~20 µm"). And the *rigid-line* bound (a line target only): the same dipoles constrained to a
-rigid evenly spaced line, 9 parameters (centroid, axis azimuth and elevation, length L, moment),
-which is what an estimator that knew the target is a rod would face. The free 15-state model
-also has to find the dipoles' spacing along and across the axis, and far from the target those
-directions are nearly unobservable: its bound grows much faster with the closest approach.
+it come from the model (4 dipoles for a continuum), not the noise. **Sizable**: the read that
+sizes best has σ ≤ :data:`SIZABLE_FRACTION` of the true main scale (``ShapeBound.sizable``,
+checked against the Monte-Carlo). Beside it, the *point-dipole* bound (one dipole of the total
+moment at the centroid, 6 parameters) and the *rigid-line* bound (the dipoles on a rigid evenly
+spaced line, 9 parameters). How the reads and bounds grow with the closest approach:
+docs/shape.md, *Findings*.
 """
 
 from __future__ import annotations

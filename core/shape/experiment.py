@@ -5,24 +5,13 @@ Monte Carlo: the truth (target, pass) is fixed; each run draws its own noise (an
 outliers), so its Euler start, and hence the filters' start, differ. Run r uses
 ``numpy.random.default_rng([seed, r])``: results do not depend on how runs are batched.
 
-Metrics (per filter; "position" is the centroid of the N dipoles, or Euler's point):
-- ``centroid_error_m``: |centroid − true centroid| at the last sample;
-- ``peak_error_m``: the largest position error after the first :data:`SETTLE` samples;
-- ``main_scale_m`` / ``main_scale_error_m`` / ``axis_error_deg`` / ``kind``: the PCA of the final
-  dipoles (:func:`core.shape.pca_shape`) against the target's H (or 2R) and axis. Over runs,
-  ``kind`` is the majority verdict (``"tie"`` if line and plane have as many runs: see
-  ``kind_share``), ``main_scale_m`` the median over the runs of that kind (a length and a
-  diameter do not mix; NaN on a tie; ``main_scale_by_kind_m`` gives each kind's median), and
-  ``main_scale_error_m`` the median over all runs of |main scale − truth|;
-- the batch fit (``"fit"``) has one estimate per pass, not a track: its ``centroid_error_m`` and
-  ``nees`` are the final ones, it has no ``peak_error_m``, and ``nees_band`` gives the two-sided
-  99 % band of the mean NEES over the runs (chi-square, 3 × runs degrees of freedom);
-  ``misfit`` is the median variance factor of its residuals;
-- ``spread_scale_m``: the second-moment read of the main scale (median over runs, :mod:`.pca`);
-- ``nees``: mean over runs and samples after :data:`SETTLE` of the centroid's NEES
-  (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true), 3 degrees of freedom (A averages the dipole positions):
-  3 for a consistent filter; the true target is not a 4-dipole state, so only the centroid has
-  a truth to compare with.
+Metrics (per filter; "position" is the centroid of the N dipoles, or Euler's point; what each
+field of the summary means: docs/shape.md, *Command line*): errors of the centroid at the last
+sample and at their peak after :data:`SETTLE` samples, the PCA of the final dipoles against the
+target's main scale and axis, and the centroid's NEES (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true),
+3 degrees of freedom (A averages the dipole positions: the true target is not a 4-dipole state,
+so only the centroid has a truth to compare with). The batch fit (``"fit"``) has one estimate
+per pass, not a track.
 """
 
 from __future__ import annotations
@@ -196,6 +185,18 @@ def run_case(case, runs=1, seed=0, filters=("ukf", "nhukf"), fit=True):
     A = np.zeros((3, 3 * n + 3))
     for j in range(n):
         A[:, 3 * j: 3 * j + 3] = np.eye(3) / n
+
+    def score(name, xs, Ps):
+        """Centroid errors and NEES (R, K), final dipoles and shape of states xs (R, K, 3N + 3)
+        with covariances Ps (R, K, 3N + 3, 3N + 3)."""
+        pos = xs[..., : 3 * n].reshape(xs.shape[:2] + (n, 3))
+        e = pos.mean(axis=2) - truth_c
+        errors[name] = np.linalg.norm(e, axis=-1)
+        Pc = A @ Ps @ A.T  # (R, K, 3, 3)
+        nees[name] = np.einsum("rki,rki->rk", e, np.linalg.solve(Pc, e[..., None])[..., 0])
+        dipoles[name] = pos[:, -1]
+        final[name] = _final(pca_shape(pos[:, -1]), xs[:, -1, 3 * n:], case)
+
     # all filters in one stack (one tensor call a step): rows f·R … f·R + R − 1 are filter f
     mdl = md.DipoleModel(st, lag=case.lag)
     zs = mdl.window_measurements(zg)
@@ -206,30 +207,16 @@ def run_case(case, runs=1, seed=0, filters=("ukf", "nhukf"), fit=True):
         res = uk.run_ukf(np.tile(x0, (nf, 1)), np.tile(P0, (nf, 1, 1)), np.tile(zs, (nf, 1, 1)),
                          mdl.hx, R, Q=Q, u=u)
     for f, name in enumerate(filters):
-        xs, Ps = res.x[f * runs:(f + 1) * runs], res.P[f * runs:(f + 1) * runs]
-        pos = xs[..., : 3 * n].reshape(runs, K, n, 3)
-        c = pos.mean(axis=2)
-        errors[name] = np.linalg.norm(c - truth_c, axis=-1)
-        Pc = A @ Ps @ A.T  # (R, K, 3, 3)
-        e = c - truth_c
-        nees[name] = np.einsum("rki,rki->rk", e, np.linalg.solve(Pc, e[..., None])[..., 0])
-        dipoles[name] = pos[:, -1]
-        final[name] = _final(pca_shape(pos[:, -1]), xs[:, -1, 3 * n:], case)
+        score(name, res.x[f * runs:(f + 1) * runs], res.P[f * runs:(f + 1) * runs])
     if fit:
         ends = res.x[:, -1].reshape(nf, runs, -1)
         fits = [fit_pass(zg[r], st, ends[:, r], case.noise_g, baseline=case.baseline, u=case.huber_u)
                 for r in range(runs)]
         X = np.stack([f.x for f in fits])
-        pos = X[:, : 3 * n].reshape(runs, n, 3)
-        e = pos.mean(axis=1) - truth_c
-        Pc = A @ np.stack([f.cov for f in fits]) @ A.T
-        errors["fit"] = np.linalg.norm(e, axis=-1)[:, None]
-        nees["fit"] = np.einsum("ri,ri->r", e, np.linalg.solve(Pc, e[..., None])[..., 0])[:, None]
-        dipoles["fit"] = pos
-        final["fit"] = _final(pca_shape(pos), X[:, 3 * n:], case)
+        cov = np.stack([f.cov for f in fits])
+        score("fit", X[:, None], cov[:, None])  # one estimate per pass: K = 1
         final["fit"].update(misfit=np.array([f.misfit for f in fits]),
-                            converged=np.array([f.converged for f in fits]),
-                            covariance=np.stack([f.cov for f in fits]), state=X)
+                            converged=np.array([f.converged for f in fits]), covariance=cov, state=X)
     out = CaseResult(case=case, runs=runs, times=trk.times, platform_x=st[:, 0],
                      outlier_samples=hit, errors=errors, final=final, dipoles=dipoles,
                      euler_cond=cond, nees=nees)

@@ -1,23 +1,14 @@
 """A batch estimate of seed 003's 4-dipole model: a robust (Huber) maximum-likelihood fit over
-the whole pass.
+the whole pass, every reading once (docs/shape.md, *Batch fit*).
 
-A survey is processed after the pass, so every reading can be used at once, each exactly once.
 The fit minimises Σ ρ(e) over the 5K whitened residuals e = (z − h(X)) / σ of the one-sample
-model (:meth:`core.shape.model.DipoleModel.pass_jacobian`, the one magnetic measurement model),
-with Huber's ρ (quadratic inside ±u, linear outside; u = :data:`core.tracking.unscented.HUBER_U`,
-as the NHUKF), by iteratively reweighted Levenberg–Marquardt (Marquardt's diagonal damping, so
-metres and A·m² need no hand scaling). It starts from each given state (the filters' end
-states) and keeps the lowest cost: a start on the wrong side of a nearly flat direction (the
-one-sample filter's plane for a line) then costs nothing.
-
-Covariance: the inverse Fisher information at the fit, (Jᵀ J / σ²)⁻¹, times the M-estimate's
-variance factor, the larger of Huber's efficiency factor E[ψ²] / E[ψ']² at the Gaussian (1.05 for
-u = 1.345) and its value on the fit's own residuals, s² = [Σ ψ(e)² / (m − p)] / [Σ ψ'(e) / m]²
-(Huber's sandwich; m residuals, p = 3N + 3 parameters). With residuals that are noise alone the
-two agree; where the 4 dipoles do not fit the continuum of 0.1 m cells, the residuals are wider
-than σ and s² grows, so the covariance says so instead of being optimistic. Outliers enter s²
-with their bounded ψ = ±u only. The summary reports the NEES this covariance gives (3 degrees of
-freedom for the centroid) with its 99 % band.
+model (:meth:`core.shape.model.DipoleModel.pass_jacobian`), Huber's ρ with u =
+:data:`core.tracking.unscented.HUBER_U`, by iteratively reweighted Levenberg–Marquardt
+(Marquardt's diagonal damping), from each given start, keeping the lowest cost. Covariance: the
+inverse Fisher information at the fit times the M-estimate's variance factor, the larger of
+Huber's efficiency factor at the Gaussian and its value on the fit's own residuals,
+s² = [Σ ψ(e)² / (m − p)] / [Σ ψ'(e) / m]² (Huber's sandwich), so that a model that does not fit
+widens it.
 """
 
 from __future__ import annotations

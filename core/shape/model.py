@@ -4,26 +4,16 @@ State (3N + 3; seed 003's N = 4 gives its 15 states, eq. (14))::
 
     X = [r1 (3), r2 (3), …, rN (3), m (3)]      positions (m, world frame), moment (A·m²)
 
-Each of the N dipoles has moment m; the predicted tensor is the sum of theirs (the filter's
-model is the point tensor, baseline 0). The target is static and the platform's positions are
-known (inertial navigation), so the process model is the identity with a small random walk
-(:data:`Q_POSITION`, :data:`Q_MOMENT`) and the measurement function depends on the step
-through the gradiometer's position s_k.
+Each dipole has moment m; the predicted tensor is the sum of theirs (the filters' model is the
+point tensor). The target is static and the platform's positions known, so the process is the
+identity with a small random walk (:data:`Q_POSITION`, :data:`Q_MOMENT`). Measurement: the 5
+tensor components (Gxx, Gxy, Gxz, Gyy, Gyz), nT/m, of :func:`core.gradient_tensor`, of the
+current sample (``lag=0``) or seed 003's window ``[G_{k−2n}, G_{k−n}, G_k]`` (eq. (15),
+``lag=n``), which uses every sample three times and so makes the covariance optimistic.
 
-Measurement: the 5 independent tensor components (Gxx, Gxy, Gxz, Gyy, Gyz), nT/m, of
-:func:`core.gradient_tensor` (the one magnetic measurement model), either of the current sample
-(``lag=0``, the honest one-sample update) or seed 003's window of three lagged readings
-``[G_{k−2n}, G_{k−n}, G_k]`` (eq. (15), ``lag=n``; n is not printed, 5 is our choice), which
-uses every sample three times and so makes the filter's covariance optimistic. At k < 2n the
-window holds the readings that exist (a lag with 2n ≥ K leaves the older readings missing at
-every sample: the command line refuses it).
-
-Start: not at one point. With all N dipoles at one point, every dipole's position columns of
-∂h/∂X are equal (each adds the same T(r)·m), so the Jacobian stacked over any number of
-samples has rank 6 (3 positions + 3 moment) whatever the data — and a UKF whose prior treats
-the dipoles alike keeps them together for ever. :func:`start_state` puts them at the vertices
-of a regular tetrahedron (radius :data:`START_SPREAD`) about a point fix (Euler) with moment
-m₀ / N each.
+Start: not at one point, where the Jacobian has rank 6 over any number of samples
+(docs/shape.md, *Model and start*): :func:`start_state` puts the dipoles at the vertices of a
+regular tetrahedron (radius :data:`START_SPREAD`) about a point fix with moment m₀ / N each.
 """
 
 from __future__ import annotations
@@ -33,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.magnetic import gradient_tensor, magnetic_field, magnetic_jacobian
+from ..model.validation import integer
 
 __all__ = ["G_COMPONENTS", "LAG", "N_DIPOLES", "P0_MOMENT_REL", "P0_POSITION", "Q_MOMENT",
            "Q_POSITION", "START_SPREAD", "DipoleModel", "collapsed", "start_state",
@@ -154,10 +145,8 @@ class DipoleModel:
         if st.ndim != 2 or st.shape[1] != 3 or not np.all(np.isfinite(st)):
             raise ValueError(f"stations must be finite positions (K, 3) in m; got shape {st.shape}")
         object.__setattr__(self, "stations", st)
-        if isinstance(self.lag, bool) or not isinstance(self.lag, (int, np.integer)) or self.lag < 0:
-            raise ValueError(f"lag must be an integer ≥ 0 (0 = one-sample update); got {self.lag!r}")
-        if isinstance(self.n_dipoles, bool) or not isinstance(self.n_dipoles, (int, np.integer)) or self.n_dipoles < 1:
-            raise ValueError(f"n_dipoles must be an integer ≥ 1; got {self.n_dipoles!r}")
+        integer("lag", self.lag, 0, what=" (0 = one-sample update)")
+        integer("n_dipoles", self.n_dipoles, 1)
 
     @property
     def n_state(self):
@@ -204,35 +193,30 @@ class DipoleModel:
             out[..., k0:, 5 * w: 5 * w + 5] = z5[..., k0 + off: K + off, :]
         return out
 
-    def jacobian(self, x, k):
-        """∂h/∂X at step k for one state x (3N + 3,): (n_meas, 3N + 3), exact, from
-        :func:`core.magnetic_jacobian` (each dipole's position columns; the moment columns
+    def _rows(self, x, stations):
+        """The one-sample readings (S, 5) nT/m of one state x (3N + 3,) at stations (S, 3) and
+        their exact Jacobian (5S, 3N + 3), station-major then component, from one
+        :func:`core.magnetic_jacobian` call (each dipole's position columns; the moment columns
         summed over the dipoles, which share m)."""
         x = np.asarray(x, float)
         n = self.n_dipoles
-        idx = np.clip(np.asarray(self.window) + k, 0, None)
         pos = x[: 3 * n].reshape(n, 3)
-        _, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))),
-                                 self.stations[idx], sensor="G", baseline=self.baseline)  # (N, w, 5, 8)
-        J = J.reshape(n, -1, 8)  # (N, n_meas, 8), window-major then component
+        h, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))), stations,
+                                 sensor="G", baseline=self.baseline)  # (N, S, 5), (N, S, 5, 8)
+        J = J.reshape(n, -1, 8)
         out = np.empty((J.shape[1], 3 * n + 3))
         for j in range(n):
             out[:, 3 * j: 3 * j + 3] = J[j, :, :3]
         out[:, 3 * n:] = J[:, :, 5:].sum(axis=0)
-        return out
+        return h.sum(axis=0), out
+
+    def jacobian(self, x, k):
+        """∂h/∂X at step k for one state x (3N + 3,): (n_meas, 3N + 3), window-major then
+        component (:meth:`_rows`)."""
+        return self._rows(x, self.stations[np.clip(np.asarray(self.window) + k, 0, None)])[1]
 
     def pass_jacobian(self, x):
         """The one-sample readings and Jacobian of one state over the whole pass (a batch fit's
-        model): h (K, 5) nT/m and ∂h/∂X (5K, 3N + 3), sample-major then component, from one
-        :func:`core.magnetic_jacobian` call (the window's lag plays no part: every sample once)."""
-        x = np.asarray(x, float)
-        n = self.n_dipoles
-        pos = x[: 3 * n].reshape(n, 3)
-        h, J = magnetic_jacobian(_states8(pos, np.broadcast_to(x[3 * n:], (n, 3))), self.stations,
-                                 sensor="G", baseline=self.baseline)  # (N, K, 5), (N, K, 5, 8)
-        K = self.stations.shape[0]
-        out = np.empty((K * 5, 3 * n + 3))
-        for j in range(n):
-            out[:, 3 * j: 3 * j + 3] = J[j, :, :, :3].reshape(-1, 3)
-        out[:, 3 * n:] = J[:, :, :, 5:].sum(axis=0).reshape(-1, 3)
-        return h.sum(axis=0), out
+        model): h (K, 5) nT/m and ∂h/∂X (5K, 3N + 3) (:meth:`_rows`; the window's lag plays no
+        part: every sample once)."""
+        return self._rows(x, self.stations)

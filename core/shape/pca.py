@@ -18,10 +18,8 @@ eigenvalues λ1 ≥ λ2 ≥ λ3 and unit eigenvectors u1, u2, u3.
   L = 2 √(Σ_i |P (r_i − r̄)|² / N) with P the projection on the (u1, u2) plane
   (= √((N − 1)(λ1 + λ2) · 4 / N); for the square, λ1 = λ2 = L² / 6, eq. (21)).
 - **Second-moment read of a line**: L₂ = √(12 λ1 N / (N + 1)), the rod whose N segment centres
-  have the dipoles' spread along u1 (with a 1/N covariance, λ1' = (N − 1) λ1 / N, this is the
-  spec's N · √(12 λ1' / (N² − 1))). It equals L for evenly spaced dipoles and uses every
-  dipole's projection, where the span uses the two end ones only: far from the target its
-  Cramér–Rao bound is orders of magnitude below the span's (core.shape.bound).
+  have the dipoles' spread along u1: L for evenly spaced dipoles, from every dipole's projection
+  where the span uses the two end ones only (its bound is far lower: :mod:`core.shape.bound`).
 - **Verdict**: "line" if λ2 / λ1 < :data:`PLANE_RATIO` (the second principal spread is less
   than half the first), else "plane".
 """

@@ -41,6 +41,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model.validation import integer, positive
+
 __all__ = ["CELL", "CLEARANCE", "Outliers", "Pass", "Target", "attitude_matrix", "clearance"]
 
 #: Grid cell of the truth model (m), seed 003's 0.1 m.
@@ -48,16 +50,6 @@ CELL = 0.1
 #: Nearest a target cell may be to the track (m) for a pass to be run (the dashboard and the
 #: command line refuse closer ones): the gradiometer's arms reach 0.25 m.
 CLEARANCE = 1.0
-
-
-def _pos(name, v, unit, allow_zero=False):
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number ({unit}); got {v!r}") from None
-    if not np.isfinite(f) or f < 0 or (f == 0 and not allow_zero):
-        raise ValueError(f"{name} must be a finite number {'≥' if allow_zero else '>'} 0 ({unit}); got {v!r}")
-    return f
 
 
 def _vec3(name, v, unit):
@@ -135,17 +127,17 @@ class Target:
     _grid: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        H = _pos("height", self.height, "m")
-        R = _pos("radius", self.radius, "m")
-        hi = _pos("inner_height", self.inner_height, "m", allow_zero=True)
-        ri = _pos("inner_radius", self.inner_radius, "m", allow_zero=True)
+        H = positive("height", self.height, "m")
+        R = positive("radius", self.radius, "m")
+        hi = positive("inner_height", self.inner_height, "m", zero=True)
+        ri = positive("inner_radius", self.inner_radius, "m", zero=True)
         if (hi > 0) != (ri > 0):
             raise ValueError("a cavity needs both inner_height and inner_radius > 0 (or both 0 for "
                              f"a solid body); got {hi!r} and {ri!r}")
         if hi > H or ri >= R:
             raise ValueError(f"the cavity must fit inside: inner_height ≤ height and inner_radius < "
                              f"radius; got H_in={hi!r} > H={H!r} or R_in={ri!r} ≥ R={R!r}")
-        h = _pos("cell", self.cell, "m")
+        h = positive("cell", self.cell, "m")
         att = _vec3("attitude", self.attitude, "rad: roll, pitch, yaw")
         mom = _vec3("moment", self.moment, "A·m² per cell")
         cen = _vec3("centre", self.centre, "m")
@@ -256,9 +248,8 @@ class Pass:
         v = _vec3("velocity", self.velocity, "m/s")
         if not np.any(v):
             raise ValueError("velocity must not be zero: the platform moves past the target")
-        _pos("rate", self.rate, "Hz")
-        if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 2:
-            raise ValueError(f"samples must be an integer ≥ 2; got {self.samples!r}")
+        positive("rate", self.rate, "Hz")
+        integer("samples", self.samples, 2)
 
     @property
     def times(self):
@@ -279,7 +270,7 @@ class Pass:
     def with_closest_approach(self, cpa):
         """The same pass with its offset from the x axis scaled so the closest approach to the
         origin is ``cpa`` (m) (direction of the offset kept)."""
-        cpa = _pos("closest approach", cpa, "m")
+        cpa = positive("closest approach", cpa, "m")
         s = np.asarray(self.start, float)
         v = np.asarray(self.velocity, float)
         along = (s @ v) / (v @ v) * v

@@ -3,20 +3,16 @@
 The engine of ``python -m core.sweep`` (its command line, CSV and heatmap are
 :mod:`core.cli.sweep`, which describes the options). A cell is a full parameter dict
 (:data:`PARAMETERS`) and settings (measure, layout, sensor, medium, steps, region); :func:`evaluate`
-computes one cell, :func:`row` one row of the grid, :func:`run` the grid: rows in a
-``concurrent.futures.ProcessPoolExecutor`` (each worker pins numba to one thread so the two
-levels of parallelism do not oversubscribe the cores) or, given a ``distributed.Client``, as
-tasks on its cluster (:mod:`core.dask_backend`, docs/dask.md). The values are the same bit for
+computes one cell, :func:`row` one row of the grid, :func:`run` the grid: rows in worker
+processes or, given a ``distributed.Client``, as tasks on its cluster
+(:func:`core.dask_backend.run_calls`, docs/dask.md). The values are the same bit for
 bit either way (each cell is computed by the same code).
 """
 
 from __future__ import annotations
 
 import math
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor, as_completed
 
-import numba
 import numpy as np
 
 import core
@@ -209,35 +205,16 @@ def row(base, xname, xvals, yname, yval, settings):
     return out
 
 
-def init_worker():
-    """One numba thread per worker process: the pool supplies the parallelism."""
-    numba.set_num_threads(1)
-
-
 def run(xaxis, yaxis, settings, base, workers=2, progress=None, client=None):
     """Evaluate the grid; returns values (len(y), len(x)). Rows run in ``workers`` processes,
-    or, given a ``distributed.Client`` as ``client``, as tasks on its cluster. ``progress``: a
-    callable given the number of cells each finished row adds (the CLI's progress bar), or None."""
+    or, given a ``distributed.Client`` as ``client``, as tasks on its cluster
+    (:func:`core.dask_backend.run_calls`). ``progress``: a callable given the number of cells
+    each finished row adds (the CLI's progress bar), or None."""
     (xname, xvals), (yname, yvals) = xaxis, yaxis
     values = np.full((yvals.size, xvals.size), np.nan)
-    done = progress if callable(progress) else (lambda cells: None)
-    if client is not None:
-        calls = [(base, xname, xvals, yname, yv, settings) for yv in yvals]
-        for i, cells in dask_backend.map_unordered(dask_backend.check_client(client), row, calls):
-            values[i] = cells
-            done(xvals.size)
-    elif workers == 1:
-        for i, yv in enumerate(yvals):
-            values[i] = row(base, xname, xvals, yname, yv, settings)
-            done(xvals.size)
-    else:
-        # spawn, not fork: forking a process whose numba thread pool is running is unsafe.
-        ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                 initializer=init_worker) as pool:
-            futures = {pool.submit(row, base, xname, xvals, yname, yv, settings): i
-                       for i, yv in enumerate(yvals)}
-            for fut in as_completed(futures):
-                values[futures[fut]] = fut.result()
-                done(xvals.size)
+    calls = [(base, xname, xvals, yname, yv, settings) for yv in yvals]
+    for i, cells in dask_backend.run_calls(row, calls, workers=workers, client=client):
+        values[i] = cells
+        if callable(progress):
+            progress(xvals.size)
     return values

@@ -2,32 +2,13 @@
 
 Without a prior, a tracker does not know where the target is. Seed 001 starts a bank of
 filters, one per hypothesis, and reports at every step the one with the largest accumulated
-log-likelihood of its innovations.
-
-Hypotheses (our reading of seed 001 eqs. (11)–(15); eq. (14) is lost in the text)
---------------------------------------------------------------------------------------
-- Strength levels p_i (default 50, 100, 200 A·m): ``Ph = p_i``, ``Pv = 0`` (a horizontal
-  dipole, see :mod:`core.tracking.motion`).
-- Bearings ψ_j (default π/4, 3π/4, 5π/4, 7π/4) of the start position from the array centre,
-  in *our* frame (x, y, depth; see :data:`SEED_BEARINGS` for seed 001's z-up frame).
-- Start range r_ij **from the field magnitude**: seed 001 inverts |E| = p/(4πσ r³) (eq. (11)),
-  with an empirical factor m_c for the layered sea (eqs. (12)–(13)). We solve the same equation
-  on the core's own model instead, ``‖h(x_ij(r))‖ = ‖y_0‖`` for r by bisection, so that the
-  whole space, the layered sea and 2-axis sensors need no empirical factor. The noise's share
-  of ``‖y_0‖²`` (m σ² on average) is subtracted first.
-- Heading: inbound, towards the array centre (ψ_j + π), at a prior speed; the heading sets the
-  moment's direction, so the filter needs one.
-- Covariance (eq. (15)): position σ = ``position_frac`` · r in x and y (wide enough to cover the
-  truth between neighbouring bearings), ξ_z in depth, σ_v per velocity axis, ξ_p = ``strength_frac``
-  · p_i on Ph and ``pv_std`` on Pv.
-
-Any sensor kind: the hypotheses' moments come from :meth:`core.Sensor.bank_moments` (electric
-as above; magnetic a vertical moment of strength p A·m², σ = ``strength_frac`` · p on each
-component) and the start range from the kind's own field, so the bank runs on B, G and BG too
-(n = 8 states).
-
-Numbering follows seed 001: filter n = N_F·(i − 1) + j (1-based), strength-major, so with the
-defaults filter 7 is (100 A·m, ψ₃) — seed 001's simulation winner.
+log-likelihood of its innovations. Our reading of its eqs. (11)–(15), where the text is lost
+(docs/tracking.md, *The filter bank*): strength levels p_i, bearings ψ_j of the start from the
+array centre (our frame, :data:`SEED_BEARINGS` for seed 001's), the start range solving
+``‖h(x_ij(r))‖ = ‖y_0‖`` on the core's own model by bisection (no empirical factor), an inbound
+heading, and the covariance of eq. (15). Any sensor kind: the hypotheses' moments come from
+:meth:`core.Sensor.bank_moments`. Filter n = N_F·(i − 1) + j (1-based), strength-major, as seed
+001's: with the defaults filter 7 is (100 A·m, ψ₃).
 """
 
 from __future__ import annotations
@@ -38,6 +19,7 @@ import numpy as np
 
 from ..model.measurement import SensorModel
 from ..model.sensors import sensor_model
+from ..model.validation import integer
 from .filters import run_filters
 
 __all__ = ["BANK_BEARINGS", "BANK_STRENGTHS", "SEED_BEARINGS", "BankResult", "bank_hypotheses",
@@ -260,8 +242,7 @@ def run_bank(ys, sensors, F, Q, *, depth, n_pu=1, init_steps=10, truth=None, pro
     if ys.ndim != 3 or ys.shape[2] != sensors.n_meas:
         raise ValueError(f"ys must have shape (R, K, {sensors.n_meas}); got {ys.shape}")
     n_runs, k_steps, m = ys.shape
-    if isinstance(init_steps, bool) or not isinstance(init_steps, (int, np.integer)) or init_steps < 1:
-        raise ValueError(f"init_steps must be a whole number ≥ 1; got {init_steps!r}")
+    integer("init_steps", init_steps, 1)
     # a short track (e.g. 5 s at T = 1 s: 6 steps) starts from all of its steps: the default 10
     # was refused for every track shorter than 10 steps, which the Track tab accepts
     x0, P0, ranges = bank_hypotheses(ys[:, :min(int(init_steps), k_steps)], sensors, depth=depth,

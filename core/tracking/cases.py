@@ -1,25 +1,13 @@
-"""Seed 001's tracking cases, measured by any sensor kind (run by :mod:`core.tracking.montecarlo`).
+"""Seed 001's tracking cases, measured by any sensor kind (run by :mod:`core.tracking.montecarlo`;
+their geometry and numbers: docs/tracking.md, *Cases*).
 
-Cases (our frame: x, y, z = depth positive down; seed 001's z-up frame is mapped by
-(x, y, z_up) → (x, −y, D − z_up), which keeps the frame right-handed; its bearings map by ψ → −ψ)
----------------------------------------------------------------------------------------------
-``seed001-sim``
-    Seed 001's simulation: p = 100 A·m (Ph = 100, Pv = 0), two 3-axis sensors on the y axis,
-    σa = 0.1 m/s², α = 0.001, σ = 1e-7 V/m, whole space σ = 4 S/m. Its Table 1 (sensor positions,
-    start, course) is lost in the text: we use the trial's geometry — sensors at (0, ±5 m) at
-    8.4 m depth, source 0.2 m deep starting at (−57.1, 280.0) m (seed frame (−57.1, −280.0)),
-    course along the array line (−y here, +y in seed 001), 2 m/s, 300 s at T = 1 s.
-``seed001-trial``
-    The same track replayed in seed 001's sea trial: layered sea D = 8.4 m, σ = 4 S/m,
-    σb = 0.4 S/m, two **2-axis** sensors on the seabed at (0, ±5 m, 8.4 m), source 0.2 m deep,
-    10 A × 10 m = 100 A·m. Simulated measurements (the trial's recordings are not published).
-
-Any sensor kind: a :class:`TrackCase` takes ``sensor=`` (a :class:`core.Sensor` or a kind name;
-its old keywords ``noise``, ``sigma``, ``sea_depth``, ``seabed_sigma`` build the electric one) and,
-for the magnetic kinds, the moment vector ``moments=(mx, my, mz)`` (A·m²) and an 8-entry
-``prior_std``; :func:`monte_carlo` takes ``sensor=`` too (it replaces the case's). The EKF and
-PUEKF run on it unchanged (the filters are generic over the measurement model); the bank's
-hypotheses take the kind's moments (:meth:`core.Sensor.bank_moments`).
+Our frame is x, y, z = depth positive down; seed 001's z-up frame maps by (x, y, z_up) → (x, −y,
+D − z_up), its bearings by ψ → −ψ. ``seed001-sim`` is its simulation (whole space, two 3-axis
+sensors) on the trial's geometry (its Table 1 is lost); ``seed001-trial`` the same track in the
+trial's layered sea with two 2-axis seabed sensors. A :class:`TrackCase` takes ``sensor=`` (a
+:class:`core.Sensor` or a kind name; the old keywords ``noise``, ``sigma``, ``sea_depth``,
+``seabed_sigma`` build the electric one) and, for a magnetic kind, ``moments=(mx, my, mz)``
+(A·m²) and an 8-entry ``prior_std`` (:func:`case_for_sensor`).
 """
 
 from __future__ import annotations

@@ -37,6 +37,7 @@ from ..kernels.filters import (
     _update_kernel,
 )
 from ..model.measurement import tracking_sensors
+from ..model.validation import integer
 
 __all__ = ["MIN_SPEED", "MIN_STATION_DISTANCE", "FilterRun", "ekf_predict", "ekf_update",
            "run_filters"]
@@ -174,18 +175,14 @@ def run_filters(x0, P0, ys, sensors, F, Q, *, n_pu=1, truth=None, progress=None,
         Prior covariances.
     ys : array_like, shape (N, K, m)
         Measurements of every filter at every step (V/m, nT, nT/m).
-    sensors : core.SensorModel or array_like (S, 3)
-        The sensors, or station positions together with ``sensor``.
+    sensors, n_pu, sensor
+        As for :func:`ekf_update`.
     F, Q : array_like, shape (n, n)
         From :func:`core.dwna_model` (``n_states=n``).
-    n_pu : int
-        Progressive sub-updates (1 = EKF).
     truth : array_like, shape (N, K, n), optional
         True states, for the NEES.
     progress : callable, optional
         Called with 1 after every step (e.g. ``tqdm.update``).
-    sensor : core.Sensor or str, optional
-        The measurement model when ``sensors`` are station positions (3 axes per station).
 
     Returns
     -------
@@ -226,8 +223,7 @@ def run_filters(x0, P0, ys, sensors, F, Q, *, n_pu=1, truth=None, progress=None,
                          f"{np.shape(P0)}") from None
     if not np.all(np.isfinite(x)) or not np.all(np.isfinite(P)):
         raise ValueError("x0 and P0 must be finite")
-    if isinstance(n_pu, bool) or not isinstance(n_pu, (int, np.integer)) or n_pu < 1:
-        raise ValueError(f"n_pu must be an integer ≥ 1 (progressive sub-updates); got {n_pu!r}")
+    integer("n_pu", n_pu, 1, what=" (progressive sub-updates)")
     F, Q = np.asarray(F, float), np.asarray(Q, float)
     if F.shape != (n_x, n_x) or Q.shape != (n_x, n_x):
         raise ValueError(f"F and Q must be {n_x} × {n_x} (core.dwna_model(..., n_states={n_x})); "

@@ -6,12 +6,10 @@ and returns the TRMSE of its position against the PCRLB; ``python -m core.track`
 
 Cases: :mod:`core.tracking.cases` (seed 001's two, any sensor kind); this module runs them.
 
-Truth: the nominal straight track (``truth_noise=False``, as seed 001's simulated straight
-course), or DWNA tracks sampled with the filter's own Q. The EKF and PUEKF start from a mean drawn
-from N(truth₀, P₀) with covariance P₀ (PCRLB prior J₀ = P₀⁻¹); the bank starts from its
-hypotheses, and its PCRLB knows only what every hypothesis assumes (depth ξ_z and Pv; flat in
-x, y, velocity, Ph). The PCRLB averages the measurement information over the runs' true tracks
-(all equal to the nominal track unless ``truth_noise``).
+Truth: the nominal straight track, or DWNA tracks sampled with the filter's own Q
+(``truth_noise``). The EKF and PUEKF start from a mean drawn from N(truth₀, P₀) (PCRLB prior
+J₀ = P₀⁻¹); the bank from its hypotheses, its PCRLB knowing only what every hypothesis assumes
+(docs/tracking.md, *Nominal versus sampled tracks*).
 
 Parallelism: runs are split into chunks; chunk results do not depend on the chunking (run r
 draws its noise from ``numpy.random.default_rng([seed, r])``). Chunks run in this process,
@@ -21,14 +19,13 @@ in ``workers`` spawned processes (both cores), or on a Dask scheduler (``schedul
 from __future__ import annotations
 
 import dataclasses
-import multiprocessing as mp
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from .. import dask_backend
+from ..model.validation import integer
 from .bank import BANK_BEARINGS, BANK_STRENGTHS, SEED_BEARINGS, run_bank
 from .cases import CASES, MAGNETIC_MOMENT, TrackCase, case_for_sensor, resolve_case
 from .filters import run_filters
@@ -131,10 +128,6 @@ def _chunk(case, filter_name, run_ids, seed, n_pu, truth_noise, keep_tracks=0, p
     return out
 
 
-def _init_worker():
-    numba.set_num_threads(1)  # one process per core: no nested threads
-
-
 def _chunks(runs, n):
     edges = np.linspace(0, runs, n + 1).astype(int)
     return [list(range(a, b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
@@ -211,74 +204,48 @@ def monte_carlo(case="seed001-sim", *, filter="bank", runs=100, seed=0, n_pu=Non
     case.check()
     if filter not in FILTERS:
         raise ValueError(f"filter must be one of {list(FILTERS)}; got {filter!r}")
-    for name, v, lo in (("runs", runs, 1), ("workers", workers, 1), ("seed", seed, 0)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-            raise ValueError(f"{name} must be an integer ≥ {lo}; got {v!r}")
-    if n_pu is None:
-        n_pu = DEFAULT_N_PU if filter == "puekf" else 1
-    if isinstance(n_pu, bool) or not isinstance(n_pu, (int, np.integer)) or n_pu < 1:
-        raise ValueError(f"n_pu must be an integer ≥ 1; got {n_pu!r}")
+    runs, workers, seed = (integer(name, v, lo) for name, v, lo in (
+        ("runs", runs, 1), ("workers", workers, 1), ("seed", seed, 0)))
+    n_pu = integer("n_pu", (DEFAULT_N_PU if filter == "puekf" else 1) if n_pu is None else n_pu, 1)
     if filter == "ekf" and n_pu != 1:
         raise ValueError("filter 'ekf' has n_pu = 1; use filter 'puekf' for progressive updates")
     sensors = case.sensors()  # fails early (e.g. no layered sea) before any worker starts
     t0 = time.perf_counter()
-    args = (case, filter, seed, int(n_pu), bool(truth_noise))
-    results = []
+    if isinstance(scheduler, str):  # an address: a client of our own, closed at the end
+        from distributed import Client
+
+        client = Client(scheduler, set_as_default=False)
+    else:
+        client = scheduler
     bar = progress
     try:
-        if scheduler is not None:
-            results = _run_dask(scheduler, args, runs, chunks, keep_tracks, bar)
-        elif workers > 1:
-            parts = _chunks(runs, chunks or workers)
-            if bar is not None:
-                bar.reset(total=len(parts))
-            with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
-                                     initializer=_init_worker) as pool:
-                futs = [pool.submit(_chunk, case, filter, ids, seed, int(n_pu), bool(truth_noise),
-                                    keep_tracks if n == 0 else 0)
-                        for n, ids in enumerate(parts)]
-                for fut in as_completed(futs):
-                    results.append(fut.result())
-                    if bar is not None:
-                        bar.update(1)
-        else:
+        if client is None and workers == 1:
             if bar is not None:
                 bar.reset(total=case.steps)
-            results = [_chunk(case, filter, list(range(runs)), seed, int(n_pu), bool(truth_noise),
+            results = [_chunk(case, filter, list(range(runs)), seed, n_pu, bool(truth_noise),
                               keep_tracks, progress=None if bar is None else bar.update)]
+        else:
+            if chunks is None and client is not None:
+                chunks = 2 * max(1, len(client.scheduler_info().get("workers", {})))
+            calls = [(case, filter, ids, seed, n_pu, bool(truth_noise),
+                      keep_tracks if n == 0 else 0)
+                     for n, ids in enumerate(_chunks(runs, chunks or workers))]
+            if bar is not None:
+                bar.reset(total=len(calls))
+            results = []
+            for _, res in dask_backend.run_calls(_chunk, calls, workers=workers, client=client):
+                results.append(res)
+                if bar is not None:
+                    bar.update(1)
     finally:
         if bar is not None:
             bar.close()
+        if client is not scheduler:
+            client.close()
     results.sort(key=lambda r: r["run_ids"][0])
     elapsed = time.perf_counter() - t0
     return _collect(case, filter, int(n_pu), seed, runs, truth_noise, sensors, results, elapsed,
                     workers if scheduler is None else "dask")
-
-
-def _run_dask(scheduler, args, runs, chunks, keep_tracks, bar):
-    from dask.distributed import Client
-    from dask.distributed import as_completed as dask_completed
-
-    own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else scheduler
-    try:
-        n_workers = max(1, len(client.scheduler_info().get("workers", {})))
-        parts = _chunks(runs, chunks or 2 * n_workers)
-        if bar is not None:
-            bar.reset(total=len(parts))
-        case, filter_name, seed, n_pu, truth_noise = args
-        futs = [client.submit(_chunk, case, filter_name, ids, seed, n_pu, truth_noise,
-                              keep_tracks if n == 0 else 0, pure=False)
-                for n, ids in enumerate(parts)]
-        results = []
-        for fut in dask_completed(futs):
-            results.append(fut.result())
-            if bar is not None:
-                bar.update(1)
-        return results
-    finally:
-        if own:
-            client.close()
 
 
 #: Two-sided probability of :func:`nees_band`.

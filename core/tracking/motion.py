@@ -1,19 +1,9 @@
 """Target motion for tracking: the DWNA process model and straight tracks (spec §8).
 
-State
------
-The tracker's state is the core's 7-state ``X = [x, y, z, vx, vy, Ph, Pv]`` (m, m/s, A·m), the
-state of :func:`core.dipole_field`: the horizontal moment ``Ph`` points along the heading
-θ = atan2(vy, vx), ``Pv`` is vertical, there is no vertical motion.
+The state is the core's ``X = [x, y, z, vx, vy, Ph, Pv]`` (m, m/s, A·m; magnetic kinds
+``[…, mx, my, mz]``): seed 001's horizontal dipole p along the keel is our heading-aligned
+``Ph`` with ``Pv = 0`` (docs/tracking.md, *Moment parametrisation*).
 
-Seed 001 (its eq. (5)) models the ship as a *horizontal* electric dipole of strength p along the
-keel, state ``[x, y, z, vx, vy, p]``. That maps onto ours as ``Ph = p`` and ``Pv = 0``: its
-horizontal dipole *is* our heading-aligned ``Ph``; we keep ``Pv`` as a state (true value 0 in
-seed 001's cases) so that filters, bounds and maps share one state and one measurement model.
-Its prior (``ξ_p``) and random walk (α) are those of the strength.
-
-Motion
-------
 Discrete white-noise acceleration (DWNA, Bar-Shalom, *Estimation with Applications to Tracking*,
 §6.3.2) on each horizontal axis, with acceleration standard deviation σa (m/s²) held over each
 interval T; ``z`` is constant; both moments are random walks of variance α ((A·m)² per step,
@@ -90,9 +80,7 @@ def dwna_model(T=1.0, sigma_a=0.1, alpha=0.001, *, n_states=STATE_SIZES[0]):
 
 
 def _steps(value):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"steps must be an integer ≥ 1 (instants on the track); got {value!r}")
-    return int(value)
+    return validation.integer("steps", value, 1, what=" (instants on the track)")
 
 
 def straight_track(start, heading, speed, steps, *, T=1.0, Ph=100.0, Pv=0.0, moments=None):

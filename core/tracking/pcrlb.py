@@ -12,11 +12,8 @@ its :class:`core.Sensor`: :func:`core.field_jacobian` or :func:`core.magnetic_ja
 and E over the true tracks. Given one track, E is that track (the usual "nominal track"
 bound); given M sampled tracks (:func:`core.sample_tracks`), E is their mean.
 
-The prediction is evaluated as ``(I + M Q)⁻¹ M`` with ``M = F⁻ᵀ J_k F⁻¹``, algebraically
-``(Q + F J_k⁻¹ Fᵀ)⁻¹`` but valid when J_k is singular (a flat prior, the first steps) and when Q
-is singular (no vertical motion; σa = 0): I + MQ is always invertible (MQ is similar to
-Q^½ M Q^½ ⪰ 0). With Q = 0 it is exactly ``F⁻ᵀ J F⁻¹``, so the bound at step N equals the batch
-CRLB of N instants (:func:`core.crlb_covariance`) propagated to step N.
+The prediction is evaluated as ``(I + M Q)⁻¹ M`` with ``M = F⁻ᵀ J_k F⁻¹``: algebraically
+``(Q + F J_k⁻¹ Fᵀ)⁻¹``, but valid when J_k or Q is singular (docs/tracking.md).
 
 Where J_k is numerically singular (η_J below :data:`SINGULAR_TOL`, see :func:`pcrlb`), the bound
 is +inf: not enough information yet, or a structurally unobservable geometry.
@@ -233,11 +230,8 @@ def linearisation_breaks(crlb_m, range_m, limit=0.3):
         raise ValueError("crlb_m must be ≥ 0 (m) or +inf; got a negative value")
     if np.any(~np.isfinite(rng)) or np.any(rng <= 0):
         raise ValueError("range_m must be finite and > 0 (m)")
-    try:
-        limit = float(limit)
-    except (TypeError, ValueError):
-        raise ValueError(f"limit must be a number in (0, 1]; got {limit!r}") from None
-    if not (0.0 < limit <= 1.0):
+    limit = validation.positive("limit", limit, "crlb / range")
+    if limit > 1.0:
         raise ValueError(f"limit must be a number in (0, 1] (crlb / range); got {limit!r}")
     try:
         shape = np.broadcast_shapes(crlb.shape, rng.shape)

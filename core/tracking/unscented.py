@@ -14,9 +14,8 @@ Sigma points (scaled unscented transform, Julier 2002; the convention of Stone S
     X₀ = x,   X_i = x + √c L_i,   X_{n+i} = x − √c L_i   (L = chol(P), L_i its i-th column)
     Wm₀ = λ / c,   Wc₀ = λ / c + (1 − α² + β),   Wm_i = Wc_i = 1 / (2c)
 
-Defaults :data:`ALPHA` = 1, :data:`BETA` = 2, :data:`KAPPA` = 0: λ = 0, so Wm₀ = 0 and every
-weight is ≥ 0 and the transformed covariances stay positive semi-definite (with 15 states the
-common α = 1e-3 gives Wm₀ ≈ −1e6, and Stone Soup's κ = 3 − n a negative Wc₀).
+Defaults :data:`ALPHA` = 1, :data:`BETA` = 2, :data:`KAPPA` = 0: λ = 0, every weight ≥ 0
+(docs/shape.md, *Filters*).
 
 Update (Stone Soup's ``UnscentedKalmanUpdater``): fresh sigma points of the prediction,
 ẑ = Σ Wm Z_i, S = Σ Wc (Z_i − ẑ)(Z_i − ẑ)ᵀ + R̃, P_xz = Σ Wc (X_i − x)(Z_i − ẑ)ᵀ,
