@@ -61,8 +61,9 @@ PATIENCE_MS = 1000
 #: Points per axis of a preview (at most the scenario's resolution), and the fewest it may
 #: come down to (:data:`PREVIEW_BUDGET_S`).
 PREVIEW_N, PREVIEW_MIN_N = 100, 30
-#: Seconds of compute a preview may take: a slower one (a magnetic kind: ~0.6 s at 100², its
-#: kernels not yet as fast as the electric ones) makes the next previews coarser, so the maps
+#: Seconds of compute a preview may take: a slower one (a loaded machine; a 100² preview takes
+#: 4 ms for the paper's electric map and 13–23 ms for the magnetic kinds' CRLB maps on a quiet
+#: one, docs/performance.md) makes the next previews coarser, so the maps
 #: still follow the hand (and hold the kernels, which every session shares, for less long); a
 #: fast one lets the grid grow back to PREVIEW_N.
 PREVIEW_BUDGET_S = 0.06
