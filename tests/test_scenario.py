@@ -216,15 +216,16 @@ def test_maps_for_every_measure_and_plane():
 @pytest.mark.parametrize("bad,why", [
     ([], "1 to 8 stations"),
     ([[0.0, 0.0, 100.0]] * 9, "At most 8 stations"),
-    ([[0.0, float("nan"), 100.0]], "three numbers"),
-    ([[0.0, 0.0]], "three numbers"),
-    ([[0.0, 0.0, 1e9]], "three numbers"),
+    ([[0.0, float("nan"), 100.0]], "m: its y is empty or not a number"),
+    ([[0.0, 0.0]], "m: it has 2 coordinates"),
+    ([[0.0, 0.0, 1e9]], "m: its z = 1000000000 m is outside that range"),
 ])
 def test_custom_layout_is_checked(bad, why):
     s = Scenario()
     before = s.stations.stations
     s.stations.stations = bad
     assert s.stations.stations == before and why in s.message
+    assert "[" not in s.message and "nan" not in s.message  # in words (issue 46 defect 7)
 
 
 def test_design_maps_and_best_spacing():
