@@ -26,6 +26,7 @@ from .applies import (
     applies,
 )
 from .cache import SHARED
+from .cal_source import bring_own_values
 from .calibration import calibration_parts
 from .compute import KIND_NAMES, MAP_INPUTS
 from .derive import MAGNETIC_READS
@@ -295,6 +296,7 @@ def first_visit(tabs, titles, holders, makers):
 
 def create_app():
     scenario = Scenario()
+    bring_own_values(scenario)  # before the link is read: a link naming only the source too
     cache = SHARED  # results are shared by every session of the process (app.cache)
 
     def session_closed(ctx):
