@@ -482,6 +482,17 @@ def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends()
     assert gone == [[0.0, 0.0, 50.0], [-134.0, -165.0, 53.0]]
 
 
+def test_a_dragged_station_is_rounded_as_the_table_shows_it_and_the_others_kept_exactly():
+    # issue 46 defect 9: the link held 206.999985918 after a drag while the table showed 207.0
+    from app.design import drawn_stations
+
+    layout = [[0.0, 0.0, 100.0], [15.123456, -3.25, 90.0]]  # typed in the table: kept as typed
+    moved = drawn_stations({"x": [206.999985918, 15.123456], "y": [-41.00000762, -3.25]}, layout, 100.0)
+    assert moved == [[207.0, -41.0, 100.0], [15.123456, -3.25, 90.0]]
+    added = drawn_stations({"x": [0.0, 15.123456, 12.3456789], "y": [0.0, -3.25, 1e-9]}, layout, 100.0)
+    assert added[2] == [12.3, 0.0, 100.0] and added[:2] == layout
+
+
 def test_each_map_is_captioned_with_its_own_moments():
     # issue 25, defect 3: map B's caption (and saved PNG) said A's P = (100, 20) in Fig. 2
     s = Scenario(resolution=21)
