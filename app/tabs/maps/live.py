@@ -50,7 +50,7 @@ from bokeh.core.properties import Any, Int, List
 from bokeh.models import CustomJS
 from bokeh.model import DataModel
 
-from app.kit import offloop
+from app.kit import number_box, offloop
 from . import data as map_data, figures as map_figures
 from .compute import MAP_INPUTS, Snapshot, compute
 
@@ -185,6 +185,7 @@ class Live:
         self.generation = 0  # a release starts a new one: previews of an older one are dropped
         self.drawn = 0  # previews drawn (for tests and the benchmark)
         self.preview_n = PREVIEW_N  # points per axis of the next preview (PREVIEW_BUDGET_S)
+        self.boxes = {}  # input -> its number box, which shows the value previewed (follow)
         if doc is not None and doc.session_context is not None:
             _SESSIONS[doc] = self
             doc.on_session_destroyed(lambda _ctx: self.close())
@@ -222,6 +223,7 @@ class Live:
         self.pending, self.dragging = None, None
         before = Snapshot.of(self.scenario)
         setattr(owner, name, value)  # the scenario may refuse it and keep its value
+        number_box.show(self.boxes.get(name), getattr(owner, name))  # what it holds, not a preview
         if self.previewed and Snapshot.of(self.scenario) == before:
             self.exact()  # nothing changed, so nothing redraws: the previews must go
 
@@ -237,9 +239,9 @@ class Live:
             answer(self.drag, seq)
             return
         future = _PREVIEWS.submit(_preview, snapshot)
-        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n, seq))
+        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n, seq, name, value))
 
-    async def _finish(self, generation, future, n, seq):
+    async def _finish(self, generation, future, n, seq, name=None, value=None):
         try:
             prepared, seconds = await asyncio.wrap_future(future)
         except Exception:  # noqa: BLE001 (a value the scenario would refuse: no preview)
@@ -255,6 +257,7 @@ class Live:
         with pn.io.hold():
             if prepared is not None and generation == self.generation and self.shown:
                 map_figures.fill(self.figs, prepared)
+                number_box.show(self.boxes.get(name), value)  # the box says what the maps show
                 self.previewed = True
                 self.drawn += 1
             answer(self.drag, seq)
@@ -272,6 +275,7 @@ class Live:
         _SESSIONS.pop(self.doc, None)
         self.drag.remove_on_change("state", self.changed)
         self.scenario = self.figs = self.doc = self.exact = None
+        self.boxes = {}
 
     def drawn_exact(self):
         """Called by app/tabs/maps/maps.py when it has drawn exact maps: no preview is shown, and none
@@ -298,12 +302,14 @@ def next_n(n, seconds):
     return max(PREVIEW_MIN_N, min(PREVIEW_N, scaled))
 
 
-def follow(slider, name):
+def follow(slider, name, box=None):
     """Make the Panel ``slider`` of input ``name`` drive the current session's previews (a no-op
-    for an input the maps do not read, a page without a Maps tab, or previews off: PREVIEWS)."""
+    for an input the maps do not read, a page without a Maps tab, or previews off: PREVIEWS);
+    ``box`` (app.number_box) shows the value a preview draws."""
     live = _SESSIONS.get(pn.state.curdoc) if pn.state.curdoc is not None else None
     if live is None or not PREVIEWS or name not in MAP_INPUTS:
         return
+    live.boxes[name] = box
     args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS, patience=PATIENCE_MS)
     slider.jscallback(args=args, value=FOLLOW_JS)
 

@@ -32,6 +32,18 @@ def _fmt(v, spec=".3g"):
     return "—" if v is None or not np.isfinite(v) else format(v, spec)
 
 
+#: An axis is a line: no estimate is more than 90° off it, so a 1σ bound of 90° or more says
+#: nothing about the axis (a far pass gave "± 7.6e+03°", issue 46 defect 14).
+NO_ANGLE_BOUND_DEG = 90.0
+
+
+def _angle_bound(deg):
+    """The axis's 1σ bound as the text says it: "no bound" where it constrains nothing."""
+    if deg is None or not np.isfinite(deg) or deg >= NO_ANGLE_BOUND_DEG:
+        return "no bound"
+    return f"bound ± {format(deg, '.2g')}°"
+
+
 def sizing_text(case, b):
     """One paragraph: the bound of the main scale in both reads, the rigid line, and the
     verdict."""
@@ -98,7 +110,7 @@ def verdict_text(out):
         lines.append(
             f"**{label}**: **{kind}** {ok}, main scale **{scale}** (span{second}; error "
             f"{_fmt(d['main_scale_error_m'], '.2g')} m), axis {_fmt(d['axis_error_deg'])}° off "
-            f"(bound ± {_fmt(b.axis_deg, '.2g')}°), centroid error "
+            f"({_angle_bound(b.axis_deg)}), centroid error "
             f"{_fmt(d['centroid_error_m'], '.2g')} m (bound {_fmt(b.centroid_m, '.2g')} m), {nees}.")
     e = s["euler"]
     lines.append(f"**Euler** (point fix of each reading): final error {e['centroid_error_m']:.2g} m, "
