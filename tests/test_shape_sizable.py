@@ -135,6 +135,8 @@ def test_the_verdict_agrees_with_the_monte_carlo_either_side_of_the_edge(tmp_pat
     (["--rate", "20", "--speed", "0.5"], "makes 3201 samples"),
     (["--offset", "0", "--above", "0.5"], "m from the target's nearest cell; keep it at least 1 m away"),
     (["--lag", "5", "--rate", "0.5"], "the largest lag accepted is 4"),
+    (["--speed", "20", "--rate", "0.25"], "makes 2 samples over the 80 m pass; the 4-dipole model has 15 unknowns"),
+    (["--speed", "20", "--rate", "0.1"], "makes 1 sample over the 80 m pass"),
     (["--cpa-sweep", "5:40"], "must be LO:HI:N"),
     (["--cpa-sweep", "40:5:3"], "0 < LO < HI"),
     (["--cpa-sweep", "5:40:1"], "N must be 2 to 40"),
@@ -177,3 +179,34 @@ def test_a_verdict_that_is_not_the_targets_kind_gets_a_caution():
                    "scale and axis are not the target's"]
     row["filters"]["nhukf"]["kind"] = row["filters"]["fit"]["kind"] = "line"
     assert cli.cautions(row) == []
+
+
+@pytest.mark.parametrize("lag", [0, 4])
+def test_a_short_pass_runs_and_counts_its_last_sample(tmp_path, lag):
+    """Issue 46: a pass of ≤ 10 samples (SETTLE) crashed the command with KeyError: 'misfit'
+    (the summary took the filters' 9-sample tracks for the fit's one estimate). 9 samples (5 m/s,
+    0.5 Hz) with lag 0 and the largest lag 4: the command ends with status 0, the summary counts
+    the filters' peak error and NEES from the last sample (settle_samples 8), and the fit's entry
+    has its own fields."""
+    p = subprocess.run([sys.executable, "-m", "core.shape", "--case", "seed003-fig4", "--speed", "5",
+                        "--rate", "0.5", "--lag", str(lag), "--out", str(tmp_path)], cwd=ROOT,
+                       capture_output=True, text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin"})
+    assert p.returncode == 0, p.stderr
+    data = json.loads((tmp_path / "summary.json").read_text())
+    row = data["rows"][0]
+    assert row["truth"]["pass"]["samples"] == 9 and data["lag"] == lag and row["settle_samples"] == 8
+    f = data["filters"]
+    for name in ("euler", "ukf", "nhukf"):  # one sample counted: its peak is its final error
+        assert f[name]["peak_error_m"] == f[name]["centroid_error_m"], (name, f[name])
+    assert {"misfit", "converged_share", "nees_band"} <= set(f["fit"]) and "peak_error_m" not in f["fit"]
+
+
+def test_the_lag_help_states_the_real_default():
+    """Issue 46: --lag's help said the figures default to lag 0; every case runs seed 003's window
+    (cases.PAPER_LAG) and the figures add the one-sample update beside it."""
+    from core.shape.cases import CASES, PAPER_LAG
+
+    text = " ".join(cli._parser().format_help().split())
+    assert f"seed 003's window of lag {PAPER_LAG} for every case" in text
+    assert "figures 0" not in text
+    assert {r.lag for _, rows in CASES.values() for r in rows if not r.comparison} == {PAPER_LAG}

@@ -19,8 +19,9 @@ from dataclasses import replace
 import numpy as np
 
 from ..shape.bound import SIZABLE_FRACTION, shape_bound
-from ..shape.cases import CASES, case_rows, describe
+from ..shape.cases import CASES, PAPER_LAG, case_rows, describe
 from ..shape.experiment import run_case
+from ..shape.model import N_DIPOLES
 from ..shape.targets import CLEARANCE, Pass, clearance
 from . import ArgumentParser
 from .shape_plots import plot_errors, plot_shape, plot_sweep
@@ -35,6 +36,9 @@ LIMITS = {"offset": (-100.0, 100.0, "m"), "above": (-100.0, 100.0, "m"),
           "noise": (1e-5, 10.0, "nT/m"), "speed": (0.5, 20.0, "m/s"), "rate": (0.1, 50.0, "Hz")}
 #: Most samples a pass may have (80 · rate / speed + 1): the filters' cost is linear in them.
 MAX_SAMPLES = 2001
+#: Fewest samples a pass may have: the 4-dipole model's 15 unknowns over 5 readings a sample
+#: (with fewer the Fisher matrix is singular, and the bound and the fit's σ mean nothing).
+MIN_SAMPLES = -(-(3 * N_DIPOLES + 3) // 5)
 #: Length of the pass along x (m): x = −40 … +40, as seed 003's.
 PASS_LENGTH = 80.0
 #: Most closest approaches of a --cpa-sweep.
@@ -75,7 +79,9 @@ def _parser():
     p.add_argument("--lag", type=_int(0, "seed 003's window lag n; 0 = one-sample update"), default=None,
                    help="the update's window lag n for every row: 0 = one-sample update, n > 0 = "
                         "seed 003's [k − 2n, k − n, k] with 2n below the sample count (81: n ≤ 40); "
-                        "default: the case's own (figures 0, tables 5)")
+                        f"default: the case's own, seed 003's window of lag {PAPER_LAG} for every "
+                        "case, with the one-sample update beside it for Figs. 4 and 5 (dropped "
+                        "when --lag is given)")
     for name, what in (("offset", "lateral offset y of the track from the target's centre"),
                        ("above", "height of the track above the target's centre (z is down)"),
                        ("noise", "noise σ of each tensor component"),
@@ -133,6 +139,12 @@ def geometry(row, offset=None, above=None, noise=None, speed=None, rate=None):
         samples = t.samples
     else:
         samples = int(round(PASS_LENGTH * hz / spd)) + 1
+        if samples < MIN_SAMPLES:
+            raise ValueError(f"--rate {hz:g} Hz at --speed {spd:g} m/s makes {samples} sample"
+                             f"{'s' if samples > 1 else ''} over the {PASS_LENGTH:g} m pass; the "
+                             f"4-dipole model has {3 * N_DIPOLES + 3} unknowns and a sample gives 5 "
+                             f"readings, so at least {MIN_SAMPLES} (rate / speed ≥ "
+                             f"{(MIN_SAMPLES - 1) / PASS_LENGTH:g} per m)")
         if samples > MAX_SAMPLES:
             raise ValueError(f"--rate {hz:g} Hz at --speed {spd:g} m/s makes {samples} samples over "
                              f"the {PASS_LENGTH:g} m pass; at most {MAX_SAMPLES} (rate / speed ≤ "
@@ -194,6 +206,7 @@ def _json_safe(v):
 def _row_summary(r, bound):
     return {"label": r.case.name, "comparison": r.case.comparison, "truth": r.summary["case"],
             "filters": r.summary["filters"], "outlier_samples": r.outlier_samples,
+            "settle_samples": r.summary["settle_samples"],
             "bound": bound.to_dict(), "sizable": bound.sizable, "sizing": bound.sizing}
 
 

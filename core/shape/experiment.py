@@ -7,8 +7,8 @@ outliers), so its Euler start, and hence the filters' start, differ. Run r uses
 
 Metrics (per filter; "position" is the centroid of the N dipoles, or Euler's point; what each
 field of the summary means: docs/shape.md, *Command line*): errors of the centroid at the last
-sample and at their peak after :data:`SETTLE` samples, the PCA of the final dipoles against the
-target's main scale and axis, and the centroid's NEES (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true),
+sample and at their peak after :data:`SETTLE` samples (:func:`settle_samples` on a shorter pass),
+the PCA of the final dipoles against the target's main scale and axis, and the centroid's NEES (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true),
 3 degrees of freedom (A averages the dipole positions: the true target is not a 4-dipole state,
 so only the centroid has a truth to compare with). The batch fit (``"fit"``) has one estimate
 per pass, not a track.
@@ -241,22 +241,31 @@ def verdict(kinds, scales):
     return kind, share, by_kind
 
 
+def settle_samples(samples):
+    """Samples skipped before a track's peak error and NEES are counted: :data:`SETTLE`, or on a
+    pass of ≤ SETTLE samples all but the last (issue 46: a 9-sample pass had no sample left, and
+    its summary crashed)."""
+    return min(SETTLE, int(samples) - 1)
+
+
 def summarise(res):
     """summary.json's content (module notes); medians over runs where there are several."""
     case = res.case
     truth_scale = case.target.main_scale
     out = {"case": case.to_dict(), "runs": res.runs, "outlier_samples": res.outlier_samples,
            "filters": {}}
+    settle = settle_samples(res.times.size)
+    out["settle_samples"] = settle
     for name, err in res.errors.items():
-        track = err.shape[1] > SETTLE  # a filter's or Euler's track; the batch fit: one estimate
+        track = name != "fit"  # a filter's or Euler's track; the batch fit: one estimate
         with np.errstate(invalid="ignore"):  # Euler is NaN where G is singular
             d = {"centroid_error_m": float(np.nanmedian(err[:, -1]))}
             if track:
-                d["peak_error_m"] = float(np.nanmedian(np.nanmax(err[:, SETTLE:], axis=1)))
+                d["peak_error_m"] = float(np.nanmedian(np.nanmax(err[:, settle:], axis=1)))
         if name in res.final:
             f = res.final[name]
             kind, share, by_kind = verdict(f["kind"], f["main_scale_m"])
-            nees = res.nees[name][:, SETTLE:] if track else res.nees[name]
+            nees = res.nees[name][:, settle:] if track else res.nees[name]
             d.update({
                 "main_scale_m": by_kind.get(kind, float("nan")),
                 "main_scale_by_kind_m": by_kind,
