@@ -213,3 +213,37 @@ def test_the_lag_help_states_the_real_default():
     assert f"seed 003's window of lag {PAPER_LAG} for every case" in text
     assert "figures 0" not in text
     assert {r.lag for _, rows in CASES.values() for r in rows if not r.comparison} == {PAPER_LAG}
+
+
+def test_huge_noise_prints_no_converged_fit(tmp_path):
+    """Issue 46: --noise 10 printed a fit centroid of 1.6e29 m with converged_share 1.0 (its
+    dipoles ran off to where the model's field is nil, the best fit of pure noise). Now the
+    fits end implausible (a dipole farther from the centroid than the track is), are counted
+    not converged, left out of the medians (null) and the command says so."""
+    p = subprocess.run([sys.executable, "-m", "core.shape", "--case", "seed003-fig4", "--noise", "10",
+                        "--lag", "5", "--runs", "2", "--out", str(tmp_path)], cwd=ROOT,
+                       capture_output=True, text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin"})
+    assert p.returncode == 0, p.stderr
+    fit = json.loads((tmp_path / "summary.json").read_text())["filters"]["fit"]
+    assert fit["converged_share"] == 0.0 and fit["plausible_share"] == 0.0
+    assert fit["centroid_error_m"] is None and fit["main_scale_m"] is None and fit["kind"] == "none"
+    assert "fit: no pass converged to a plausible answer" in p.stdout
+    assert "WARNING: the fit did not converge to a plausible answer in 2 of 2 passes" in p.stdout
+    assert "CAUTION: fit" not in p.stdout
+
+
+def test_the_sweeps_far_row_prints_no_runaway_fit(tmp_path):
+    """Issue 46: the 50 m row of --cpa-sweep's CSV had a fit error of 1e22 m. The fit's columns
+    are now medians over its converged (plausible) passes, with its converged share beside them:
+    what is left is a size the pass could have seen (< 200 m, four times the closest approach;
+    measured ≤ 172 m over 6 passes at 50 m before the change dropped the runaways: the 1e22 m
+    came from a fit whose dipoles had left), or NaN when no pass converged."""
+    cli.cpa_sweep("seed003-fig4", 40.0, 50.0, 2, runs=3, seed=0, out=str(tmp_path), plots=False)
+    with open(tmp_path / "cpa_sweep.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows:
+        assert 0.0 <= float(r["fit_converged_share"]) <= 1.0 and float(r["fit_sized_share"]) == 0.0
+        for q in ("span_error_m", "second_moment_error_m"):
+            v = float(r[f"fit_{q}"])
+            assert np.isnan(v) or v < 200.0, (r["closest_approach_m"], q, v)
+        assert r["verdict"] == "not sizable"
