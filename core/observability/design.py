@@ -19,7 +19,8 @@ import inspect as _inspect
 from .criteria import CRITERIA, CriterionResult, layout_criterion
 from .crlb import CrlbErrors, crlb_covariance, crlb_maps, horizontal_error_ellipse
 from .layouts import LAYOUTS, MAX_STATIONS, station_layout
-from .optimiser import LayoutProblem, LayoutResult, optimise_layout
+from .optimiser import LayoutResult, optimise_layout
+from .problem import LayoutProblem
 from .spacing import SpacingResult, best_spacing, spacing_curve
 
 #: Every name imported above (not the modules).

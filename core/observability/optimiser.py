@@ -8,56 +8,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from ..model import sensors, validation
+from ..model import validation
 from .crlb import _pair
-from .criteria import _check_criterion, _criterion, _region_states
-from .fisher import DEFAULT_STEPS
+from .criteria import _criterion
 from .layouts import LAYOUTS, _n_stations, station_layout
+from .problem import check_problem
 from .spacing import _d_grid, _refine
 
-__all__ = ["LayoutProblem", "LayoutResult", "optimise_layout"]
-
-
-@dataclass(frozen=True)
-class LayoutProblem:
-    """What a layout is optimised for, as one object (issue 36): the region, the target, the
-    criterion and the measurement. Pass it as :func:`optimise_layout`'s third argument instead
-    of the keywords (which remain a convenience that builds the same problem).
-
-    Parameters
-    ----------
-    region : core.Plane
-        Surveillance region (see :func:`core.layout_criterion`).
-    h : float
-        Station depth (m).
-    velocity, moments, criterion, threshold, steps, T, known
-        As for :func:`core.layout_criterion`.
-    sensor : core.Sensor or str or None
-        The measurement (kind, noise, medium, baseline); None: the electric default.
-
-    Examples
-    --------
-    >>> import core
-    >>> problem = core.LayoutProblem(core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9))
-    >>> core.optimise_layout("line", 2, problem, d_range=(5, 300), n_curve=5).stations.shape
-    (2, 3)
-    """
-
-    region: object
-    h: float = 100.0
-    velocity: tuple = (2.0, 2.0)
-    moments: tuple = (100.0, 20.0)
-    criterion: str = "mean_dopt"
-    threshold: float = 10.0
-    steps: int = DEFAULT_STEPS
-    T: float = 1.0
-    known: tuple = ()
-    sensor: object = None
-
-    def keywords(self):
-        """The problem as :func:`optimise_layout`'s keywords."""
-        return {f: getattr(self, f) for f in ("h", "velocity", "moments", "criterion",
-                                              "threshold", "steps", "T", "known", "sensor")}
+__all__ = ["LayoutResult", "optimise_layout"]
 
 
 @dataclass(frozen=True)
@@ -133,19 +91,8 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None)
     return best_d, best_v, nfev, at_bound if n > 1 else ()  # one station: d plays no part
 
 
-def _same(a, b):
-    """Whether a keyword holds its default (tuples and lists alike)."""
-    try:
-        return bool(np.array_equal(np.asarray(a, dtype=object), np.asarray(b, dtype=object)))
-    except (TypeError, ValueError):
-        return a is b
-
-
-def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
-                    moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                    noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None,
-                    sea=None, known=(), d_range=None, n_curve=25, x0=None, bounds=None,
-                    maxfev=400, client=None, sensor=None):
+def optimise_layout(kind, n_stations, problem, *, d_range=None, n_curve=25, x0=None,
+                    bounds=None, maxfev=400, client=None):
     """Optimise an N-station layout for a region criterion.
 
     Parameters
@@ -159,11 +106,8 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         copes with the piecewise-constant ``"area_crlb"``).
     n_stations : int
         N, 1 … :data:`MAX_STATIONS`.
-    region : core.Plane or LayoutProblem
-        Surveillance region; or the whole problem (:class:`LayoutProblem`: region, target,
-        criterion, measurement), the keywords below then left at their defaults.
-    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
-        As for :func:`spacing_curve`.
+    problem : core.LayoutProblem
+        Region, target, measurement, criterion, station depth h and constraints.
     d_range : (float, float), optional
         (min, max) spacing (m) of the scaled kinds, 0 < min < max, and of the default start of
         ``"free"``. Default: from min(2 m, d_fit / 2) to d_fit, the largest spacing at which the
@@ -193,31 +137,18 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     --------
     >>> import core
     >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9)
-    >>> r = core.optimise_layout("triangle", 3, region, d_range=(5, 300), n_curve=5)
+    >>> problem = core.LayoutProblem(region)
+    >>> r = core.optimise_layout("triangle", 3, problem, d_range=(5, 300), n_curve=5)
     >>> r.stations.shape
     (3, 3)
     """
-    if isinstance(region, LayoutProblem):  # the problem as one object: no keyword beside it
-        given = dict(h=h, velocity=velocity, moments=moments, criterion=criterion,
-                     threshold=threshold, noise=noise, steps=steps, T=T, sigma=sigma, model=model,
-                     sea=sea, known=known, sensor=sensor)
-        defaults = dict(LayoutProblem(None).keywords(), noise=None, sigma=None, model=None,
-                        sea=None)
-        twice = sorted(k for k, v in given.items() if not _same(v, defaults[k]))
-        if twice:
-            raise ValueError(f"pass the problem either as a core.LayoutProblem or as keywords, "
-                             f"not both; got a LayoutProblem and {', '.join(twice)}")
-        return optimise_layout(kind, n_stations, region.region, d_range=d_range, n_curve=n_curve,
-                               x0=x0, bounds=bounds, maxfev=maxfev, client=client,
-                               **region.keywords())
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     n = _n_stations(n_stations)
     validation.integer("maxfev", maxfev, 1)
-    states = _region_states(region, velocity, moments, sensor)
-    threshold = _check_criterion(criterion, threshold)
-    h = station_layout("line", 1, h=h)[0, 2]  # validates h
+    problem = check_problem(problem)
+    states, sensor, threshold, h, T = problem.prepared()
+    region = problem.region
     (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
         _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
     if not (xlo < xhi and ylo < yhi):
@@ -225,7 +156,8 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     box = np.array([[xlo, xhi], [ylo, yhi]])
 
     def value(st):
-        return _criterion(states, st, criterion, threshold, steps, T, known, sensor).value
+        return _criterion(states, st, problem.criterion, threshold, problem.steps, T,
+                          problem.known, sensor).value
 
     if kind != "free":
         if d_range is None:
@@ -235,9 +167,7 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         return LayoutResult(_centred_layout(kind, n, d, h, box), best, kind, d, nfev, at_bound)
     nfev = 0
     if x0 is None:
-        start = optimise_layout("square", n, region, h=h, velocity=velocity, moments=moments,
-                                criterion=criterion, threshold=threshold, steps=steps, T=T,
-                                known=known, sensor=sensor, d_range=d_range, n_curve=n_curve,
+        start = optimise_layout("square", n, problem, d_range=d_range, n_curve=n_curve,
                                 bounds=((xlo, xhi), (ylo, yhi)), client=client)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
