@@ -58,6 +58,7 @@ from .observability.crlb import CrlbErrors, crlb_covariance, crlb_maps, horizont
 from .observability.design import (
     CRITERIA,
     CriterionResult,
+    LayoutConstraints,
     LayoutProblem,
     LayoutResult,
     SpacingResult,

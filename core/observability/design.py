@@ -16,6 +16,7 @@ search in :mod:`.spacing`, the optimiser in :mod:`.optimiser`; this module gathe
 
 import inspect as _inspect
 
+from .constraints import LayoutConstraints
 from .criteria import CRITERIA, CriterionResult, layout_criterion
 from .crlb import CrlbErrors, crlb_covariance, crlb_maps, horizontal_error_ellipse
 from .layouts import LAYOUTS, MAX_STATIONS, station_layout

@@ -14,6 +14,8 @@ from .criteria import _criterion
 from .layouts import LAYOUTS, _n_stations, station_layout
 from .problem import check_problem
 from .spacing import _d_grid, _refine
+from . import search
+from .constraints import feasibility
 
 __all__ = ["LayoutResult", "optimise_layout"]
 
@@ -39,6 +41,8 @@ class LayoutResult:
         (the ends of ``d_range``) for the scaled kinds; for ``"free"`` the sides of the box that
         a station touches, from ``"x_min"``, ``"x_max"``, ``"y_min"``, ``"y_max"``. A bound
         that is hit means the optimum may lie beyond it.
+    fixed : int
+        The first ``fixed`` rows of ``stations`` are the problem's fixed stations (unmoved).
     """
 
     stations: np.ndarray
@@ -47,6 +51,7 @@ class LayoutResult:
     d: float | None
     nfev: int
     at_bound: tuple = ()
+    fixed: int = 0
 
 
 def _default_bounds(region):
@@ -155,6 +160,9 @@ def optimise_layout(kind, n_stations, problem, *, d_range=None, n_curve=25, x0=N
         raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
     box = np.array([[xlo, xhi], [ylo, yhi]])
 
+    cons = problem.constraints
+    cand = None if cons is None else feasibility(cons, n, h, box, sensor.sea)  # said at once
+
     def value(st):
         return _criterion(states, st, problem.criterion, threshold, problem.steps, T,
                           problem.known, sensor).value
@@ -163,18 +171,29 @@ def optimise_layout(kind, n_stations, problem, *, d_range=None, n_curve=25, x0=N
         if d_range is None:
             fit = _largest_spacing(kind, n, box)
             d_range = (min(2.0, 0.5 * fit), fit)
-        d, best, nfev, at_bound = _optimise_spacing(kind, n, h, box, d_range, n_curve, value, client)
-        return LayoutResult(_centred_layout(kind, n, d, h, box), best, kind, d, nfev, at_bound)
+        unbounded = np.array([[-np.inf, np.inf]] * 2)  # the scaled layout's box is d_range's
+        scorer = None if cons is None else search._Scorer(value, cons, unbounded, sensor.sea)
+        d, best, nfev, at_bound = _optimise_spacing(kind, n, h, box, d_range, n_curve,
+                                                    value if cons is None else scorer.score, client)
+        st = _centred_layout(kind, n, d, h, box)
+        if cons is not None:
+            if best <= search._INFEASIBLE:
+                raise ValueError(f"no spacing d in {tuple(map(float, d_range))} m puts a centred "
+                                 f"{kind} of {n} stations where the constraints allow")
+            st, best = np.vstack([cons.fixed, st]), value(np.vstack([cons.fixed, st]))
+        return LayoutResult(st, best, kind, d, nfev, at_bound, 0 if cons is None else len(cons.fixed))
+    if cons is not None:
+        with search.serial():
+            st, best, nfev = _constrained_free(value, cons, n, h, box, cand, sensor.sea, x0, maxfev)
+        return LayoutResult(st, best, kind, None, nfev, _touching(st[len(cons.fixed):], box),
+                            len(cons.fixed))
     nfev = 0
     if x0 is None:
         start = optimise_layout("square", n, problem, d_range=d_range, n_curve=n_curve,
                                 bounds=((xlo, xhi), (ylo, yhi)), client=client)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
-        xy = validation.as_array("x0", x0)
-        if xy.shape != (n, 2) or not np.all(np.isfinite(xy)):
-            raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
-                             f"got shape {xy.shape}")
+        xy = _x0(x0, n)
     xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
 
     def objective(p):
@@ -185,8 +204,43 @@ def optimise_layout(kind, n_stations, problem, *, d_range=None, n_curve=25, x0=N
                             options={"maxfev": int(maxfev), "xtol": 1e-2, "ftol": 1e-6})
     p = res.x if res.fun <= objective(xy.ravel()) else xy.ravel()
     st = np.column_stack([p.reshape(n, 2), np.full(n, h)])
+    return LayoutResult(st, float(-objective(p)), kind, None, int(nfev + res.nfev + 2),
+                        _touching(st, box))
+
+
+def _x0(x0, n):
+    xy = validation.as_array("x0", x0)
+    if xy.shape != (n, 2) or not np.all(np.isfinite(xy)):
+        raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
+                         f"got shape {xy.shape}")
+    return xy
+
+
+def _touching(st, box):
+    """The box sides that a station lies on (within _BOX_TOUCH of the box width)."""
+    (xlo, xhi), (ylo, yhi) = box
     near = _BOX_TOUCH * np.diff(box, axis=1)[:, 0]
-    at_bound = tuple(name for name, hit in (
+    return tuple(name for name, hit in (
         ("x_min", np.any(st[:, 0] - xlo <= near[0])), ("x_max", np.any(xhi - st[:, 0] <= near[0])),
         ("y_min", np.any(st[:, 1] - ylo <= near[1])), ("y_max", np.any(yhi - st[:, 1] <= near[1]))) if hit)
-    return LayoutResult(st, float(-objective(p)), kind, None, int(nfev + res.nfev + 2), at_bound)
+
+
+def _constrained_free(value, cons, n, h, box, cand, sea, x0, maxfev):
+    """The constrained free search (:mod:`.search`); returns (all stations, value, nfev)."""
+    scorer = search._Scorer(value, cons, box, sea)
+    if x0 is not None:
+        new = np.column_stack([_x0(x0, n), np.full(n, h)])
+        if not scorer.feasible(new):
+            raise ValueError("x0 breaks the constraints: " + "; ".join(
+                cons.violations(np.vstack([cons.fixed, new]), sea) or ["a station is outside the box"]))
+    else:
+        coarse = search._grid(box, h, cons, sea, search.EXCHANGE_GRID)
+        new, _ = search.exchange(scorer, coarse, n, h)
+        if new is None:  # the coarse grid has no room: the feasibility check's finer one has
+            new, _ = search.exchange(scorer, cand, n, h)
+    new, best = search.polish(scorer, new, maxfev)
+    st = np.vstack([cons.fixed, new])
+    broken = cons.violations(st, sea)
+    if broken:  # cannot happen: every step keeps the feasible layout it starts from
+        raise RuntimeError("the constrained search broke its constraints: " + "; ".join(broken))
+    return st, value(st), scorer.nfev + 1

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..model import sensors, validation
+from .constraints import LayoutConstraints
 from .criteria import _check_criterion, _region_states
 from .fisher import DEFAULT_STEPS
 from .layouts import station_layout
@@ -78,6 +79,9 @@ class LayoutProblem:
         states = _region_states(self.region, self.velocity, self.moments, sensor)
         h = station_layout("line", 1, h=self.h)[0, 2]  # validates h
         validation.steps(self.steps, 1)
+        if self.constraints is not None and not isinstance(self.constraints, LayoutConstraints):
+            raise ValueError("constraints must be None or a core.LayoutConstraints; got "
+                             f"{type(self.constraints).__name__}")
         return states, sensor, threshold, h, validation.positive("T", self.T, "s")
 
 
