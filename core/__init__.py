@@ -62,10 +62,14 @@ from .observability.design import (
     LayoutProblem,
     LayoutResult,
     SpacingResult,
+    StationCount,
+    StationLoss,
     best_spacing,
     layout_criterion,
     optimise_layout,
     spacing_curve,
+    station_count_curve,
+    station_loss,
 )
 from .observability.fisher import (
     DEFAULT_NOISE,

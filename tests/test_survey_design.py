@@ -71,3 +71,129 @@ def test_a_seabed_band_puts_the_new_stations_on_the_seabed():
         core.optimise_layout("free", 1, core.LayoutProblem(
             region, h=150.0, sensor=sensor, constraints=core.LayoutConstraints(
                 fixed=[[0, 0, 140.0]], depth_band=("seabed", 5.0))))
+
+
+# --- criteria (issue 49 item 2) -------------------------------------------------------------
+
+CRIT_REGION = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 13)
+TRIANGLE = core.station_layout("triangle", 3, d=140.0) - [[70.0, 40.0, 0.0]]
+T_COVER = 40.0
+
+
+def _schur_log10_lambda_min(states, stations):
+    """log10 λ_min of the Schur complement F_pp − F_pr F_rr⁻¹ F_rp of F's position block, from
+    core.fisher_information (the Fisher map), each point on its own."""
+    out = []
+    for f in core.fisher_information(states, stations):
+        s = np.sqrt(np.diag(f))  # scale to unit diagonal: F mixes m, m/s and A·m
+        a = f / np.outer(s, s)
+        schur = a[:3, :3] - a[:3, 3:] @ np.linalg.solve(a[3:, 3:], a[3:, :3])
+        out.append(np.log10(np.linalg.eigvalsh(schur * np.outer(s[:3], s[:3]))[0]))
+    return np.array(out)
+
+
+def _direct(criterion, stations):
+    """Each criterion from the maps of core.crlb_maps / evaluate_map / fisher_information."""
+    kw = dict(velocity=(2.0, 2.0), moments=(100.0, 20.0))
+    e = core.crlb_maps(CRIT_REGION, stations, **kw).position
+    ok = ~np.isnan(e)
+    if criterion in ("mean_dopt", "worst_dopt"):
+        d = core.evaluate_map(CRIT_REGION, stations, measure="d_optimal", **kw).value[ok]
+        return d.mean() if criterion == "mean_dopt" else d.min()
+    if criterion == "worst_direction":
+        states = CRIT_REGION.states((2.0, 2.0), (100.0, 20.0))[ok]
+        return _schur_log10_lambda_min(states, stations).mean()
+    if criterion == "area_crlb_n1":  # every station removed in turn, each map from scratch
+        worst = np.max([core.crlb_maps(CRIT_REGION, np.delete(stations, k, 0), **kw).position
+                        for k in range(len(stations))], axis=0)
+        return np.mean(worst[ok] <= T_COVER)
+    return {"mean_crlb": -e[ok].mean(), "worst_crlb": -e[ok].max(),
+            "area_crlb": np.mean(e[ok] <= T_COVER)}[criterion]
+
+
+@pytest.mark.parametrize("criterion", sorted(core.CRITERIA))
+def test_each_criterion_equals_a_direct_computation_from_the_maps(criterion):
+    value = core.layout_criterion(TRIANGLE, CRIT_REGION, criterion=criterion,
+                                  threshold=T_COVER).value
+    # The kernels' Givens QR and crlb_maps' Householder QR agree to ~1e-12 relative (1e-10
+    # allowed, as tests/test_sensor_kinds.py); the Schur complement is formed from F = ΓᵀΓ,
+    # which squares Γ's condition number (~1e3 here): 1e-8 in log10 is ample and still far
+    # below any change of layout.
+    tol = 1e-8 if criterion == "worst_direction" else 1e-10
+    np.testing.assert_allclose(value, _direct(criterion, TRIANGLE), rtol=tol, atol=0)
+    assert core.CRITERIA[criterion][1]  # each criterion states its unit
+
+
+def test_unobservable_points_are_an_infinite_error():
+    one = core.single_station(100.0)  # the scale symmetry: nothing observable (spec §4)
+    for criterion in ("mean_crlb", "worst_crlb", "worst_direction"):
+        assert core.layout_criterion(one, CRIT_REGION, criterion=criterion).value == -np.inf
+    for criterion in ("area_crlb", "area_crlb_n1"):
+        assert core.layout_criterion(one, CRIT_REGION, criterion=criterion,
+                                     threshold=1e12).value == 0.0
+
+
+# --- the loss of a station (issue 49 item 3) -------------------------------------------------
+
+@pytest.mark.parametrize("stations,sensor,known", [
+    (core.station_layout("square", 4, d=120.0) - [[60.0, 60.0, 0.0]], None, ()),
+    (core.station_layout("line", 3, d=60.0), core.Sensor("B"), ()),
+    (core.station_layout("triangle", 3, d=80.0), None, ("Ph", "Pv")),
+    (core.dual_station(100.0, 30.0), None, ()),  # a loss leaves one station: unobservable
+])
+def test_the_loss_maps_equal_a_recomputation_without_each_station(stations, sensor, known):
+    magnetic = sensor is not None
+    region = core.Plane("xy", (-200, 200), (-200, 200), 20.0 if magnetic else 120.0, 17)
+    if magnetic:
+        stations = stations * [1.0, 1.0, 0.0]
+    kw = dict(velocity=(2.0, 2.0), moments=(1e3, -2e3, 5e2) if magnetic else (100.0, 20.0))
+    problem = core.LayoutProblem(region, sensor=sensor, known=known, threshold=30.0, **kw)
+    loss = core.station_loss(stations, problem)
+    for k in range(len(stations)):
+        brute = core.crlb_maps(region, np.delete(stations, k, 0), sensor=sensor, known=known,
+                               **kw).position if len(stations) > 2 else np.where(
+            np.isnan(loss.per_station[k]), np.nan, np.inf)
+        got = loss.per_station[k]
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(brute))
+        np.testing.assert_array_equal(np.isinf(got), np.isinf(brute))
+        finite = np.isfinite(brute)
+        # issue 49: to 1e-9 relative (Cholesky of the unit-diagonal F within κ ≤ 1e5: ~1e-11)
+        np.testing.assert_allclose(got[finite], brute[finite], rtol=1e-9, atol=0)
+        ok = ~np.isnan(got)
+        assert loss.coverage_left[k] == np.mean(got[ok] <= 30.0)
+    np.testing.assert_array_equal(loss.worst, np.max(loss.per_station, axis=0))
+    assert loss.coverage_n1 == np.mean(loss.worst[~np.isnan(loss.worst)] <= 30.0)
+    if len(stations) == 2:
+        assert np.all(np.isinf(loss.worst[~np.isnan(loss.worst)]))
+
+
+def test_the_worst_station_is_the_one_whose_loss_is_worst():
+    stations = core.station_layout("square", 4, d=120.0) - [[60.0, 60.0, 0.0]]
+    loss = core.station_loss(stations, core.LayoutProblem(CRIT_REGION))
+    ok = loss.worst_station >= 0
+    picked = np.take_along_axis(loss.per_station, loss.worst_station[None].clip(0), 0)[0]
+    np.testing.assert_array_equal(picked[ok], loss.worst[ok])
+    assert np.all(np.isnan(loss.worst[~ok]))
+
+
+# --- how many stations (issue 49 item 4) -----------------------------------------------------
+
+@pytest.mark.parametrize("kind,constraints", [
+    ("square", None),
+    ("free", core.LayoutConstraints(fixed=[[-100.0, 0.0, 100.0]], min_spacing=20.0)),
+])
+def test_the_station_count_curve_equals_separate_optimisations(kind, constraints):
+    region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 7)
+    problem = core.LayoutProblem(region, criterion="mean_crlb", constraints=constraints)
+    opts = dict(n_curve=4, maxfev=20)
+    curve = core.station_count_curve(problem, kind=kind, n_max=4, share=0.2, **opts)
+    n_fixed = 0 if constraints is None else 1
+    assert curve.n.tolist() == list(range(n_fixed + 1, 5))
+    for n, value, layout in zip(curve.n, curve.value, curve.layouts):
+        alone = core.optimise_layout(kind, int(n - n_fixed), problem, **opts)
+        assert value == alone.value
+        np.testing.assert_array_equal(layout.stations, alone.stations)
+    # the knee: the first N whose next station adds less than 20 % of the whole gain
+    gain = curve.value[-1] - curve.value[0]
+    small = [n for n, step in zip(curve.n, np.diff(curve.value)) if step < 0.2 * gain]
+    assert curve.knee == (small[0] if small and np.isfinite(gain) and gain > 0 else None)
