@@ -197,3 +197,77 @@ def test_the_station_count_curve_equals_separate_optimisations(kind, constraints
     gain = curve.value[-1] - curve.value[0]
     small = [n for n, step in zip(curve.n, np.diff(curve.value)) if step < 0.2 * gain]
     assert curve.knee == (small[0] if small and np.isfinite(gain) and gain > 0 else None)
+
+
+# --- every returned layout keeps every constraint (issue 49, done-when 1) --------------------
+
+def _star_polygon(rng, centre, radius):
+    """A simple polygon: 3–6 vertices at increasing angles around ``centre``, each at its own
+    radius (a star-shaped polygon never crosses itself)."""
+    k = int(rng.integers(3, 7))
+    angles = np.sort(rng.uniform(0, 2 * np.pi, k))
+    r = rng.uniform(0.3, 1.0, k) * radius
+    return np.column_stack([centre[0] + r * np.cos(angles), centre[1] + r * np.sin(angles)])
+
+
+def test_every_returned_layout_meets_every_constraint_over_random_constraint_sets():
+    """A seeded property test (hypothesis is not installed): random fixed stations, forbidden
+    zones, depth bands, minimum spacings and station counts. Each case either is refused at
+    once with a ValueError or returns a layout that breaks
+    nothing."""
+    rng = np.random.default_rng(49)
+    region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 5)
+    returned = refused = 0
+    for case in range(40):
+        zones = [_star_polygon(rng, rng.uniform(-250, 250, 2), rng.uniform(30, 200))
+                 for _ in range(rng.integers(0, 4))]
+        n_fixed = int(rng.integers(0, 3))
+        fixed = np.column_stack([rng.uniform(-300, 300, (n_fixed, 2)),
+                                 rng.choice([90.0, 100.0, 110.0], n_fixed)])
+        band = [None, (95.0, 105.0), (80.0, 120.0)][rng.integers(0, 3)]
+        spacing = float(rng.choice([0.0, 30.0, 120.0, 250.0]))
+        n_new = int(rng.integers(1, 4))
+        criterion = ["mean_dopt", "area_crlb", "mean_crlb"][case % 3]
+        try:
+            cons = core.LayoutConstraints(fixed=fixed, zones=zones, depth_band=band,
+                                          min_spacing=spacing)
+            problem = core.LayoutProblem(region, criterion=criterion, threshold=50.0,
+                                         constraints=cons)
+            r = core.optimise_layout("free", n_new, problem, maxfev=30)
+        except ValueError as err:
+            refused += 1
+            assert str(err)  # said in words
+            continue
+        returned += 1
+        assert r.stations.shape == (n_fixed + n_new, 3) and r.fixed == n_fixed
+        np.testing.assert_array_equal(r.stations[:n_fixed], fixed)  # never moved
+        assert cons.violations(r.stations) == [], (case, cons.violations(r.stations))
+        assert np.all(np.abs(r.stations[n_fixed:, :2]) <= 300.0)  # in the box
+    assert returned >= 15 and refused >= 5  # both branches exercised
+
+
+# --- against an exhaustive search (issue 49, done-when 2) ------------------------------------
+
+@pytest.mark.parametrize("n_new,criterion,per_side", [
+    (2, "area_crlb", 6), (2, "mean_crlb", 6), (3, "area_crlb", 5), (3, "mean_crlb", 5)])
+def test_the_optimiser_is_within_two_percent_of_an_exhaustive_search(n_new, criterion, per_side):
+    """Every placement of the new stations on a coarse candidate grid (allowed points only),
+    each scored by core.layout_criterion; the optimiser must come within 2 % of the best."""
+    import itertools
+
+    region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9)
+    cons = core.LayoutConstraints(fixed=[[-150.0, -150.0, 100.0]], min_spacing=50.0,
+                                  zones=[[(0, 0), (300, 0), (300, 300), (0, 300)]])
+    problem = core.LayoutProblem(region, criterion=criterion, threshold=60.0, constraints=cons)
+    g = np.linspace(-300, 300, per_side)
+    cand = np.array([[x, y, 100.0] for y in g for x in g])
+    cand = cand[cons.allowed(cand)]
+    best = -np.inf
+    for combo in itertools.combinations(range(len(cand)), n_new):
+        st = np.vstack([cons.fixed, cand[list(combo)]])
+        if cons.violations(st):
+            continue
+        best = max(best, core.layout_criterion(st, region, criterion=criterion,
+                                               threshold=60.0).value)
+    r = core.optimise_layout("free", n_new, problem)
+    assert np.isfinite(best) and r.value >= best - 0.02 * abs(best), (r.value, best)
