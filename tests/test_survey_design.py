@@ -157,7 +157,7 @@ def test_the_loss_maps_equal_a_recomputation_without_each_station(stations, sens
         np.testing.assert_array_equal(np.isnan(got), np.isnan(brute))
         np.testing.assert_array_equal(np.isinf(got), np.isinf(brute))
         finite = np.isfinite(brute)
-        # issue 49: to 1e-9 relative (Cholesky of the unit-diagonal F within κ ≤ 1e5: ~1e-11)
+        # issue 49: to 1e-9 relative (Cholesky of the unit-diagonal F within κ ≤ 1e6: ≲ 1e-10)
         np.testing.assert_allclose(got[finite], brute[finite], rtol=1e-9, atol=0)
         ok = ~np.isnan(got)
         assert loss.coverage_left[k] == np.mean(got[ok] <= 30.0)

@@ -39,16 +39,15 @@ __all__ = ["CRITERIA", "CriterionResult", "layout_criterion"]
 
 #: Region criteria: name -> (label, unit). Larger is better for every one of them.
 CRITERIA = {
-    "mean_dopt": ("D: mean D-optimal ½·log10 det F over the region", "log10 of F's units"),
+    "mean_dopt": ("mean D-optimal ½·log10 det F over the region", "log10 of F's units"),
     "worst_dopt": ("worst (minimum) D-optimal ½·log10 det F over the region", "log10 of F's units"),
-    "mean_crlb": ("A: minus the mean CRLB position error over the region", "m"),
-    "worst_direction": ("E: mean log10 of the smallest eigenvalue of the position information "
-                        "(the worst direction)", "log10(1/m²)"),
-    "area_crlb": ("coverage: fraction of the region with CRLB position error ≤ threshold",
-                  "dimensionless"),
-    "worst_crlb": ("worst point: minus the largest CRLB position error over the region", "m"),
-    "area_crlb_n1": ("N−1 coverage: fraction of the region with CRLB position error ≤ threshold "
-                     "whichever one station is lost", "dimensionless"),
+    "mean_crlb": ("minus the mean CRLB position error over the region (A)", "m"),
+    "worst_direction": ("mean log10 of the smallest eigenvalue of the position information, the "
+                        "worst direction (E)", "log10(1/m²)"),
+    "area_crlb": ("fraction of the region with CRLB position error ≤ threshold", "dimensionless"),
+    "worst_crlb": ("minus the largest CRLB position error over the region (worst point)", "m"),
+    "area_crlb_n1": ("fraction of the region with CRLB position error ≤ threshold whichever one "
+                     "station is lost (N−1 coverage)", "dimensionless"),
 }
 
 

@@ -9,7 +9,7 @@ decades). Γ is built once per point; each loss is then a 7 × 7 factorisation, 
 Numerics. F_(−k) is column-scaled to unit diagonal (A = D⁻¹ F D⁻¹, D² = diag F: the scaling of
 the kernels' Γ_s) and factorised by Cholesky (:func:`core.kernels.loss.loss_inverse_diag`). The condition number of
 A is at most n · trace(A⁻¹); where that bound exceeds :data:`KAPPA_MAX` (a normal-equations
-inverse would lose more than ~1e-11 of its digits), or the factorisation breaks down, the point
+inverse would lose more than ~1e-10 of its digits), or the factorisation breaks down, the point
 is done exactly as :func:`core.crlb_maps` does it: the rank by the one criterion
 (:func:`core.observable_rank`'s SVD of the column-scaled Γ_(−k)) and the covariance from the QR
 of Γ_(−k). So the loss map equals a recomputation with the station removed.
@@ -29,15 +29,24 @@ from .gamma import _gamma, _svd_rank
 __all__: list = []
 
 #: Largest bound on the condition number of the column-scaled F_(−k) trusted to the Cholesky
-#: path: its inverse then carries a relative error ≲ κ · ε ≈ 1e-11; beyond it, the exact path.
-KAPPA_MAX = 1e5
+#: path: its inverse then carries a relative error ≲ κ · ε ≈ 1e-10 (measured at most 3e-11 on
+#: a 120² map of 4 stations); beyond it, the exact path.
+KAPPA_MAX = 1e6
+#: A Cholesky bound on κ(A) = (σ_max/σ_min)² of the column-scaled Γ below this proves full rank
+#: by the one criterion (σ_min/σ_max > RANK_RTOL = 1e-10) with three decades to spare: σ_min/σ_max
+#: ≥ 1e-7, even with the bound's own round-off (relative κ·ε ≈ 1e-2).
+FULL_RANK_KAPPA = 1e14
 
 
-def _exact_position(states, kept, steps, T, known, sensor, pos):
+def _exact_position(states, kept, steps, T, known, sensor, pos, kappa):
     """(P,) CRLB position error (m) of the stations ``kept``, as :func:`core.crlb_maps` computes
-    it: the one rank criterion, then the QR of Γ; +inf where unobservable."""
+    it: the one rank criterion, then the QR of Γ; +inf where unobservable. Where the Cholesky
+    bound ``kappa`` (P,) is at most :data:`FULL_RANK_KAPPA`, Γ has full rank without an SVD."""
     g = _gamma(states, kept, T, sensor, steps, known)
-    observable = _svd_rank(g) == g.shape[-1]
+    observable = kappa <= FULL_RANK_KAPPA
+    unsure = np.flatnonzero(~observable)
+    if unsure.size:
+        observable[unsure] = _svd_rank(g[unsure]) == g.shape[-1]
     cov = _covariance_flat(states, kept, observable, steps, T, known, sensor)
     free = sensor.free_columns(known)
     err = np.sqrt(np.sum(cov[:, free[pos], free[pos]], axis=1))
@@ -69,7 +78,7 @@ def _loss_position(states, stations, steps, T, known, sensor):
         exact = np.flatnonzero(~(kappa[:, k] <= KAPPA_MAX))
         if exact.size:
             out[exact, k] = _exact_position(states[exact], np.delete(stations, k, axis=0), steps,
-                                            T, known, sensor, pos)
+                                            T, known, sensor, pos, kappa[exact, k])
     return out
 
 
