@@ -1,8 +1,8 @@
 """The command-line tools, the only modules of :mod:`core` that import argparse, matplotlib or
 tqdm (tests/test_layout.py checks it): :mod:`.sweep` (``python -m core.sweep``), :mod:`.track`
 (``python -m core.track``), :mod:`.calibration` (``python -m core.calibration``) and
-:mod:`.shape` (``python -m core.shape``, its figures in :mod:`.shape_plots`). ``import core``
-imports none of them.
+:mod:`.shape` (``python -m core.shape``, its figures in :mod:`.shape_plots`) and :mod:`.design`
+(``python -m core.design``). ``import core`` imports none of them.
 
 They (and ``python -m paper``) parse with :class:`ArgumentParser`, which names an unknown
 option before a missing required one.
