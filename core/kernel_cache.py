@@ -24,7 +24,7 @@ import numba
 #: kernels. A module that gains a cached kernel must be listed here (tests/test_kernel_cache.py
 #: checks the list against every file under core/, subpackages included).
 KERNEL_SOURCES = ("kernels/electric.py", "kernels/sea.py", "kernels/gamma.py", "kernels/measures.py",
-                  "kernels/filters.py", "kernels/pcrlb.py", "kernels/magnetic.py")
+                  "kernels/filters.py", "kernels/pcrlb.py", "kernels/magnetic.py", "kernels/loss.py")
 #: Name of the file that records the sources' hash at the last refresh.
 STAMP = "kernel-sources.sha256"
 

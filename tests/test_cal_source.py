@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from panel.io.location import Location
 
-from app import calibration as tab
-from app.cal_source import OWN, bring_own_values
-from app.scenario import Scenario
-from app.url import sync_url
+from app.tabs.calibration import calibration as tab
+from app.tabs.calibration.source import OWN, bring_own_values
+from app.state.scenario import Scenario
+from app.state.url import sync_url
 from core import calibration as cal
 
 TABLE1 = "Seed 004 Table 1"

@@ -156,7 +156,7 @@ def test_the_install_s_cache_after_a_warm_up_counts_as_cached():
     it is filled: the suite's served apps have run it), the next start says it loads."""
     import io
 
-    from app.warmup import compile_kernels
+    from app.serve.warmup import compile_kernels
 
     compile_kernels(out=io.StringIO())
     assert kernel_cache.cached()

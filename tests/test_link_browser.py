@@ -65,7 +65,7 @@ def test_a_lower_case_tab_opens_the_tab_and_unknown_keys_are_said(chromium, serv
 
 def test_a_link_too_long_for_the_page_is_refused_whole_and_said(chromium, server):
     # issue 46 defect 5: a link the page did not make, longer than it opens, is refused whole
-    from app.url import MAX_LINK_CHARS
+    from app.state.url import MAX_LINK_CHARS
 
     search = "?Ph=250&cal_headings=" + "+".join(["1"] * (MAX_LINK_CHARS // 2 + 500))
     pg, errors = _open(chromium, server + "/app" + search)

@@ -11,7 +11,7 @@ from urllib.parse import parse_qs
 
 import pytest
 
-from app.connection import BACK, BANNER_CLASS, RELOAD
+from app.kit.connection import BACK, BANNER_CLASS, RELOAD
 from support.page import open_page, type_value, wait_maps, wait_value
 from support.server import free_port, served_app, stop
 

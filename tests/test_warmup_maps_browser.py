@@ -15,11 +15,11 @@ import time
 import panel as pn
 import pytest
 
-from app import maps
-from app.cache import SHARED
-from app.dashboard import panel_extension
-from app.scenario import Scenario
-from app.warmup import Warmup
+from app.tabs.maps import maps
+from app.kit.cache import SHARED
+from app.page import panel_extension
+from app.state.scenario import Scenario
+from app.serve.warmup import Warmup
 from support.page import chromium_browser, wait_maps
 from support.server import free_port
 
