@@ -26,7 +26,7 @@ _SHOWN: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def show(box, value):
     """Show ``value`` in ``box`` (a :func:`number_box`) without setting it on its owner: the
-    value of a slider being dragged, that the maps preview (app/live.py); the box kept the old
+    value of a slider being dragged, that the maps preview (app/tabs/maps/live.py); the box kept the old
     value while the maps followed the hand (issue 46 defect 8). A no-op for ``box`` None."""
     text_of = _TEXT_OF.get(box) if box is not None else None
     if text_of is not None and box.value != text_of(value):

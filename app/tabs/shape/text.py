@@ -24,7 +24,7 @@ HOW = (f"*How the verdict is decided*: from the Cramér–Rao σ of the main sca
        f"fit's model bias, in the read that sizes best (the span of the 4 dipoles along the axis, "
        f"or their second moment): {SIZABLE_RULE}. Where it says sizable the batch fit sizes ≥ 80 % "
        "of passes within 10 % and 10°, where it says not < 50 % (docs/shape.md, *Sizable*). "
-       "Only on a sizable pass does a verdict get a ✓.")
+       "The kind must be right and the pass sizable. Only then does a verdict get a ✓.")
 
 
 def _fmt(v, spec=".3g"):
