@@ -1,13 +1,17 @@
-"""The Shape tab's pure functions (app/shape.py) and its parameters in the Scenario and the link."""
+"""The Shape tab's pure functions (app/tabs/shape/shape.py) and its parameters in the Scenario and the link."""
+
+import re
 
 import holoviews as hv
 import numpy as np
 import pytest
 
-from app import shape, url
-from app import design_compute, track
-from app.compute import READS
-from app.scenario import Scenario, preset_values
+from app.state import url
+from app.state.scenario import Scenario, preset_values
+from app.tabs.design import compute as design_compute
+from app.tabs.maps.compute import READS
+from app.tabs.shape import shape, text as shape_text
+from app.tabs.track import track
 from core.shape.bound import shape_bound
 from core.shape.cases import CASES
 
@@ -186,5 +190,9 @@ def test_a_pass_that_cannot_size_the_target_gets_no_tick():
     text = shape.verdict_text(out)
     assert "✓" not in text.replace("Only then does a verdict get a ✓", "") and "** ✓" not in text
     assert "**This pass cannot size the target**" in text and "second-moment read ±" in text
+    # Issue 46 defect 14: the axis bound there was "± 7.6e+03°"; past 90° it bounds nothing
+    assert out["bound"].axis_deg > shape_text.NO_ANGLE_BOUND_DEG
+    assert "(no bound)" in text and "°)" not in text
     near = shape.verdict_text(shape.compute(shape.key_of(Scenario())))
+    assert re.search(r"\(bound ± [0-9.e+-]+°\)", near)  # a near pass keeps its bound
     assert near.count("** ✓") >= 2  # at least the NHUKF and the fit: right kind and sizable
