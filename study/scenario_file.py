@@ -336,6 +336,18 @@ def loads(text, *, where="page", base=None):
                   notes=notes, header={k: doc.get(k) for k in HEADER})
 
 
+def with_inputs(loaded, more=None, vary=None):
+    """``loaded`` with the inputs ``more`` set otherwise and the batch ``vary`` added (the
+    command line's ``--set`` and ``--vary``), checked as the file's own: a new :class:`Loaded`."""
+    inputs = _check_inputs({**loaded.inputs, **(more or {})})
+    vary = _check_vary({**loaded.vary, **(vary or {})})
+    fresh, problems = applied(inputs)
+    if problems:
+        raise ScenarioFileError(list(problems.values()))
+    return Loaded(inputs=inputs, values=fresh.values(), log=loaded.log, log_name=loaded.log_name,
+                  vary=vary, notes=loaded.notes, header=loaded.header)
+
+
 def load(path, **kw):
     """:func:`loads` of a file on disk, its log's path resolved relative to it (the command line)."""
     p = Path(path)
