@@ -1,5 +1,10 @@
 """A study's report (spec §12): one self-contained HTML file, every script inline, no network.
 
+Written with Bokeh alone (``bokeh.embed.file_html`` with INLINE resources): the page's Bokeh
+figures as they are, its HoloViews views rendered by HoloViews' Bokeh renderer, texts as Bokeh
+``Div``s. Not with Panel's ``save``: its panes link Panel's stylesheets from its CDN even with
+inline resources (holoviz/panel#6759, open), and a report must open with no network.
+
 It holds the scenario (every input that differs from its default, with its label and unit; the
 format, the project's version, the date), each tab's figures as the page draws them (the app's
 own figure and view functions, interactive where the page is), with their captions, the
@@ -9,15 +14,16 @@ summary numbers (:func:`study.results.summary`) and every warning and veil the p
 from __future__ import annotations
 
 import html
-import io
 import json
+from pathlib import Path
 
 import holoviews as hv
+import markdown
 import numpy as np
-import panel as pn
-from bokeh.layouts import row
-from bokeh.core.templates import FILE
-from bokeh.resources import INLINE
+from bokeh.embed import file_html
+from bokeh.layouts import column, row
+from bokeh.models import Div, InlineStyleSheet
+from bokeh.resources import Resources
 
 from app import calibration, map_figures, shape, track, views
 from app.calibration_plots import Figures as CalFigures
@@ -34,15 +40,30 @@ hv.extension("bokeh", logo=False)
 WIDTH = 1400
 
 
+STYLE = """
+table { border-collapse: collapse; font-size: 13px; }
+td, th { border: 1px solid #bbb; padding: 3px 8px; text-align: left; }
+div { font-family: sans-serif; font-size: 14px; color: #222; }
+"""
+
+
+def _div(text_html):
+    return Div(text=text_html, width=WIDTH, stylesheets=[InlineStyleSheet(css=STYLE)])
+
+
 def _md(text):
-    return pn.pane.Markdown(text, width=WIDTH)
+    return _div(markdown.markdown(text, extensions=["tables"]))
 
 
 def _table(rows, head):
     cells = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
     heads = "".join(f"<th>{html.escape(h)}</th>" for h in head)
-    return pn.pane.HTML(f'<table class="study"><thead><tr>{heads}</tr></thead><tbody>{cells}'
-                        "</tbody></table>", width=WIDTH)
+    return _div(f"<table><thead><tr>{heads}</tr></thead><tbody>{cells}</tbody></table>")
+
+
+def _plot(view):
+    """A HoloViews view of the page, as Bokeh (HoloViews' own renderer)."""
+    return hv.render(view, backend="bokeh")
 
 
 def scenario_rows(values):
@@ -109,17 +130,16 @@ def _maps(c):
     map_figures.fill(figs, c.maps)
     for fig in figs.layout:
         fig.sizing_mode = "fixed"
-    return [_md("## Maps"), pn.pane.HTML(legend(c.maps), width=WIDTH),
-            pn.pane.Bokeh(row(*figs.layout))]
+    return [_md("## Maps"), _div(legend(c.maps)), row(*figs.layout)]
 
 
 def _design(c):
     out = [_md("## Layout design")]
     if c.design is not None:
-        out.append(pn.pane.HoloViews(views.error_map(c.design, "Custom layout: Cramér–Rao error")
-                                     * views.station_layer(c.design.stations)))
+        out.append(_plot(views.error_map(c.design, "Custom layout: Cramér–Rao error")
+                         * views.station_layer(c.design.stations)))
     if c.spacing is not None:
-        out.append(pn.pane.HoloViews(views.spacing_plot(c.spacing)))
+        out.append(_plot(views.spacing_plot(c.spacing)))
     return out
 
 
@@ -127,8 +147,7 @@ def _track(c):
     if c.track is None:
         return [_md("## Track\n\n" + c.failed.get("Track", ""))]
     return [_md("## Track\n\n" + track.summary_text(c.track)),
-            pn.Row(pn.pane.HoloViews(track.plan_view(c.track)),
-                   pn.pane.HoloViews(track.error_view(c.track)))]
+            row(_fixed(_plot(track.plan_view(c.track))), _fixed(_plot(track.error_view(c.track))))]
 
 
 def _calibration(c):
@@ -140,8 +159,8 @@ def _calibration(c):
     for fig in figs.figures.values():  # the page stretches them; a file gives them a size
         fig.sizing_mode, fig.width, fig.height = "fixed", 340, fig.height or 300
     return [_md("## Calibration\n\n" + calibration.summary(res)),
-            pn.pane.DataFrame(calibration.coefficient_table(res), index=False, width=WIDTH),
-            pn.pane.Bokeh(row(*(figs.figures[k] for k in ("K", "Bp", "be", "manoeuvre"))))]
+            _div(calibration.coefficient_table(res).to_html(index=False, border=0)),
+            row(*(figs.figures[k] for k in ("K", "Bp", "be", "manoeuvre")))]
 
 
 def _shape(c):
@@ -149,18 +168,19 @@ def _shape(c):
         return [_md("## Shape\n\n" + c.failed.get("Shape", ""))]
     v = shape.views(shape.key_of(scenario_of(c.values)))
     return [_md("## Shape\n\n" + v["verdict"]),
-            pn.Row(pn.pane.HoloViews(v["plan"]), pn.pane.HoloViews(v["side"])),
-            pn.Row(pn.pane.HoloViews(v["error"]), pn.pane.HoloViews(v["bound"]))]
+            row(_fixed(_plot(v["plan"])), _fixed(_plot(v["side"]))),
+            row(_fixed(_plot(v["error"])), _fixed(_plot(v["bound"])))]
 
 
-STYLE = """
-table.study { border-collapse: collapse; font-size: 13px; }
-table.study td, table.study th { border: 1px solid #bbb; padding: 3px 8px; text-align: left; }
-"""
+def _fixed(fig, width=WIDTH // 2 - 20, height=420):
+    """A figure the page stretches to its column, at a size of its own in the report."""
+    if fig.sizing_mode not in (None, "fixed"):
+        fig.sizing_mode, fig.width, fig.height = "fixed", width, fig.height or height
+    return fig
 
 
 def layout(c, summary, *, title="Observability study", written="", header=None):
-    """The report as one Panel layout."""
+    """The report as one Bokeh layout."""
     header = header or {}
     rows = scenario_rows(c.values)
     head = [_md(f"# {html.escape(title)}\n\nScenario file format {header.get('format', '')} version "
@@ -173,16 +193,40 @@ def layout(c, summary, *, title="Observability study", written="", header=None):
                                                               if warn else "None."))]
     body = [*head, *numbers(summary), *said, *_maps(c), *_design(c), *_track(c),
             *_calibration(c), *_shape(c)]
-    return pn.Column(*body, stylesheets=[STYLE], width=WIDTH + 40)
+    return column(*body)
+
+
+class Inline(Resources):
+    """Bokeh's own scripts and styles, inline, and nothing to fetch: Bokeh adds the scripts and
+    styles every imported model class names (``__javascript__``, ``__css__``: for Panel's, a
+    relative ``static/…`` path) as links, which a file opened alone cannot load."""
+
+    def __init__(self, components=None):
+        super().__init__(mode="inline", components=components)
+
+    def clone(self, *, components=None):
+        # Bokeh clones the resources without the parts the report does not use (tables, GL …)
+        return Inline(self.components if components is None else components)
+
+    @property
+    def js_files(self):
+        return []
+
+    @property
+    def css_files(self):
+        return []
+
+
+def html_of(page, title):
+    """The self-contained HTML text of a Bokeh layout."""
+    return file_html(page, Inline(), title)
 
 
 def write(path, c, summary, **kw):
-    """Write the report of results ``c`` and their ``summary`` to ``path`` (str, Path or a text
-    file), every resource inline. Bokeh's plain page template: Panel's own links its favicon
-    from a CDN, which a browser fetches."""
-    page = layout(c, summary, **kw)
-    target = path if isinstance(path, io.StringIO) else str(path)
-    page.save(target, resources=INLINE, template=FILE, title=kw.get("title", "Observability study"))
+    """Write the report of results ``c`` and their ``summary`` to ``path``, every resource
+    inline."""
+    text = html_of(layout(c, summary, **kw), kw.get("title", "Observability study"))
+    Path(path).write_text(text, encoding="utf-8")
 
 
 #: Most points per axis of a small multiple (the report stays small: 12 variants' maps at full
@@ -244,7 +288,6 @@ def write_comparison(path, runs, out, *, title="Observability study: variants", 
             _md(f"## The numbers per variant\n\nCRLB position error (1σ, m); threshold T = {T:g} m."),
             _table(comparison_rows(runs, summaries), COMPARISON_HEAD),
             _md("## CRLB position error maps, A and B of each variant (one colour range)"),
-            pn.pane.HoloViews(hv.Layout(tiles).cols(4)),
+            _plot(hv.Layout(tiles).cols(4)),
             _md("## Warnings and veils\n\n" + ("\n".join(f"- {w}" for w in warn) if warn else "None."))]
-    pn.Column(*body, stylesheets=[STYLE], width=WIDTH + 40).save(
-        str(path), resources=INLINE, template=FILE, title=title)
+    Path(path).write_text(html_of(column(*body), title), encoding="utf-8")
