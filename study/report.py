@@ -20,6 +20,8 @@ from pathlib import Path
 import holoviews as hv
 import markdown
 import numpy as np
+from bokeh.core.validation import silence
+from bokeh.core.validation.warnings import FIXED_SIZING_MODE
 from bokeh.embed import file_html
 from bokeh.layouts import column, row
 from bokeh.models import Div, InlineStyleSheet
@@ -219,7 +221,13 @@ class Inline(Resources):
 
 def html_of(page, title):
     """The self-contained HTML text of a Bokeh layout."""
-    return file_html(page, Inline(), title)
+    # HoloViews sizes its fixed plots by their frame (frame_width), not width and height, which
+    # Bokeh's check of a fixed figure would warn about, once per plot
+    silence(FIXED_SIZING_MODE, True)
+    try:
+        return file_html(page, Inline(), title)
+    finally:
+        silence(FIXED_SIZING_MODE, False)
 
 
 def write(path, c, summary, **kw):
