@@ -23,6 +23,7 @@ from app import calibration, design_compute, shape, track
 from app.compute import READS as MAP_READS
 from app.compute import Snapshot
 from app.compute import compute as compute_maps
+from app.cache import SHARED
 from app.scenario import Scenario
 
 #: The tabs a study covers, in the page's order.
@@ -67,16 +68,16 @@ def compute(values, log=None):
     """Every tab's results for the scenario ``values`` (name -> value, every input) and the
     uploaded calibration ``log`` (bytes or None)."""
     s = scenario_of(values)
-    maps = compute_maps(Snapshot.of(s, MAP_READS))
+    # the page's cache (app.cache.SHARED) and keys: a report of the page's scenario reuses its maps
+    maps = SHARED.get(Snapshot.of(s, MAP_READS), compute_maps)
     crlb = maps
     if maps.measure != "crlb_position":
-        crlb_reads = Snapshot.of_values(s, {"measure": CRLB}, MAP_READS)
-        crlb = compute_maps(crlb_reads)
+        crlb = SHARED.get(Snapshot.of_values(s, {"measure": CRLB}, MAP_READS), compute_maps)
     failed = {}
-    design = _tab(failed, "Layout design", lambda: design_compute.design(
-        Snapshot.of(s, design_compute.ERROR_MAP_READS)))
-    spacing = _tab(failed, "Layout design", lambda: design_compute.best_spacing(
-        Snapshot.of(s, design_compute.SPACING_READS)))
+    design = _tab(failed, "Layout design", lambda: SHARED.get(
+        Snapshot.of(s, design_compute.ERROR_MAP_READS), design_compute.design))
+    spacing = _tab(failed, "Layout design", lambda: SHARED.get(
+        Snapshot.of(s, design_compute.SPACING_READS), design_compute.best_spacing))
     tracked = _tab(failed, "Track", lambda: track.compute(s))
     cal = calibration.compute(s.values(["calibration"]), log)
     if cal.get("error"):
