@@ -50,12 +50,12 @@ ENV HOME=/home/dipole \
     PYTHONMALLOC=malloc \
     BOKEH_ALLOW_WS_ORIGIN=localhost:5006,127.0.0.1:5006
 USER 10001:10001
-# Compile every numba kernel once at build time into NUMBA_CACHE_DIR (app.warmup: the list the
+# Compile every numba kernel once at build time into NUMBA_CACHE_DIR (app.serve.warmup: the list the
 # server itself warms up with, ~3-6 min of LLVM on 2 cores), and build the app once (HoloViews'
 # first import makes matplotlib's font cache), so that the first visitor does not wait. -P: import
 # the installed packages, as the server does (not ./core, whose numba cache would sit elsewhere).
-RUN python -P -m app.warmup \
- && python -P -c "import panel as pn; pn.extension('tabulator'); import app.dashboard as d; d.create_app()"
+RUN python -P -m app.serve.warmup \
+ && python -P -c "import panel as pn; pn.extension('tabulator'); import app.page as d; d.create_app()"
 
 EXPOSE 5006
 HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \

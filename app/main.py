@@ -1,14 +1,14 @@
 """Entry point for ``panel serve app``: build the page and serve it (or, while the kernels of the
-default page are still compiling on a first start, a page that says so: app/warming.py)."""
+default page are still compiling on a first start, a page that says so: app/serve/warming.py)."""
 
 import contextlib
 
 import panel as pn
 
-from app import server_threads
-from app.dashboard import create_app, freeze_startup_objects, panel_extension
-from app.warming import warming_page
-from app.warmup import WARMING_MARK, WARMUP
+from app.page import create_app, freeze_startup_objects, panel_extension
+from app.serve import threads as server_threads
+from app.serve.warming import warming_page
+from app.serve.warmup import WARMING_MARK, WARMUP
 
 server_threads.configure()
 panel_extension()

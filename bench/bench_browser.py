@@ -27,7 +27,7 @@ Honesty checks, per change: the P_h text box shows a new value; all three maps' 
 new and map A's values differ from before; the final value was never used before; the page is left
 alone until its websocket has been quiet for ``--quiet-ms`` so no later image is missed (the
 *last* image of each plot counts, stale intermediate ones never do); and the drawn map A is
-compared with an in-process ``app.compute.compute`` of the slider's exact value, and so is map B. The in-process
+compared with an in-process ``app.tabs.maps.compute.compute`` of the slider's exact value, and so is map B. The in-process
 compute time of the default scenario (median of 10) is the baseline for the ratio.
 """
 
@@ -53,10 +53,10 @@ SLIDER = {"name": "Ph"}
 
 
 def scenario(**values):
-    """A Scenario as the page has it: the link's values (START) first, as app/url.py applies
+    """A Scenario as the page has it: the link's values (START) first, as app/state/url.py applies
     them in one update (so switching to a layered sea moves the stations to the seabed), then
     ``values``."""
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
 
     sc = Scenario()
     sc.update(START)
@@ -178,7 +178,7 @@ def fractions(count):
 
 
 def compute_baseline(repeat=10):
-    from app.compute import Snapshot, compute
+    from app.tabs.maps.compute import Snapshot, compute
 
     snap = Snapshot.of(scenario())
     compute(snap)  # warm-up (numba)
@@ -192,11 +192,11 @@ def compute_baseline(repeat=10):
 
 def expected_map_sums(ph):
     """[(sum, count)] of the finite values of maps A and B's images as the server sends them
-    (float32, normalised to their colour range: app/map_figures.py), computed here in-process.
+    (float32, normalised to their colour range: app/tabs/maps/figures.py), computed here in-process.
     Both: a map may have no value at all (A, one station, on the CRLB measure: unobservable
     everywhere), and one that is round-off (A on log10|det Γ|) differs with the last bit of P_h."""
-    from app import map_data
-    from app.compute import Snapshot, compute
+    from app.tabs.maps import data as map_data
+    from app.tabs.maps.compute import Snapshot, compute
 
     p = compute(Snapshot.of(scenario(**{SLIDER['name']: ph})))
     out = []
@@ -218,7 +218,7 @@ def server_update_inprocess(repeat=5):
     model updates of the three maps)."""
     from bokeh.document import Document
 
-    from app.dashboard import create_app, panel_extension
+    from app.page import create_app, panel_extension
 
     panel_extension()
     template = create_app()
@@ -360,7 +360,7 @@ def main(argv=None):
 
     extra = {}
     if args.sensor:
-        from app.parts import SENSORS
+        from app.state.parts import SENSORS
 
         extra["sensor"] = next(label for label, kind in SENSORS.items() if kind == args.sensor)
         if args.sensor != "E":
@@ -381,7 +381,7 @@ def main(argv=None):
     rows, values = [], []
     with served_app() as (url, _):
         base = compute_baseline()
-        print(f"in-process app.compute.compute(default scenario): median of 10 = {base:.1f} ms")
+        print(f"in-process app.tabs.maps.compute.compute(default scenario): median of 10 = {base:.1f} ms")
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
             page = browser.new_page(viewport={"width": 1700, "height": 1100})

@@ -20,7 +20,7 @@ bench.bench_browser's init script, before BokehJS sees a message):
 * ``shown``: the new summary naming the log's attitudes is in the DOM (client: deserialise, lay
   out); polled every POLL_MS.
 
-The in-process times of the same work (parse, ``app.calibration.compute``, the four plots)
+The in-process times of the same work (parse, ``app.tabs.calibration.calibration.compute``, the four plots)
 split the server's share. The machine may be shared: compare runs made together.
 """
 
@@ -38,7 +38,7 @@ from support.page import CHROMIUM, CHROMIUM_ARGS
 from support.server import served_app
 
 TARGET_S = 5.0
-#: The Calibration tab's label (app.dashboard).
+#: The Calibration tab's label (app.page).
 TAB = "Calibration"
 
 #: Before any page script: log every websocket message in and out (page clock, direction, size,
@@ -93,8 +93,8 @@ POLL_MS = 20
 
 def in_process(data):
     """Seconds of each server-side step for the upload ``data`` (bytes), in this process."""
-    from app import calibration as ac
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.calibration import calibration as ac
     from core import calibration as cal
 
     s = Scenario()

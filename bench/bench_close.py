@@ -9,7 +9,7 @@ then closes ``--closes`` of them one at a time, ``--window`` seconds apart. For 
 
 * the server process's CPU (user + system, psutil) over the window after the close, minus its idle
   rate (answering the same polls) measured just before the first close (the window holds Panel's own ``gc.collect``, which
-  it runs 5 s after the last session it destroyed, and app.dashboard's memory trim at 15 s is
+  it runs 5 s after the last session it destroyed, and app.page's memory trim at 15 s is
   left out: it is once per burst of closes and a few ms);
 * the longest ``GET /liveness`` answer, polled every 50 ms during the window: how long the event
   loop was held.

@@ -11,7 +11,7 @@ for ``--seconds``, moved to a last place and released at once. Measured in the p
 the slider's value changes, the pointer events; the websocket's bytes by bench_browser's
 INIT_JS) for
 
-* this project (``panel serve app``): the previews drawn while dragging (app/live.py);
+* this project (``panel serve app``): the previews drawn while dragging (app/tabs/maps/live.py);
 * the raw-Bokeh floor (bench/floor/drag_bokeh_app.py): three 200² float32 maps recomputed on
   every ``value`` the slider sends (no debounce, no throttle: as short as Bokeh makes it);
 * the minimal Panel app (bench/floor/drag_panel_app.py): the same through Panel's ``value``.
@@ -29,14 +29,14 @@ Part 2, several analysts on one replica (the project only): ``--sessions`` lists
 sessions drag at once (Bokeh websocket clients, bench/load_test.py's ``Client``, each writing
 P_h values into its page's Drag model, then the release), each paced as ``--loops`` says:
 ``closed`` as the page does (the next value once the server answered the previous one,
-``Drag.ready``, at most one every 40 ms: app/live.py), ``open`` one every 40 ms whatever the
+``Drag.ready``, at most one every 40 ms: app/tabs/maps/live.py), ``open`` one every 40 ms whatever the
 server's pace (the page's former throttle); meanwhile another session's cheap event (a refused
 value: a message, no maps) is timed, and the server's RSS before the drags and after (5 s after
 the last release). Redraws per second per session are the previews the server sent it; the
 load average at the end of each case is printed beside it.
 
 Part 3, ``--design`` (instead of parts 1 and 2): a station dragged on the Layout design map
-(app/design_live.py) in Chromium, a closed loop as in part 1 (a mouse move every ~16 ms, station 2
+(app/tabs/design/live.py) in Chromium, a closed loop as in part 1 (a mouse move every ~16 ms, station 2
 circling over the map, then the release at once). Measured in the page's clock
 (support/drag.py's DESIGN_INSTALL_JS): previews painted per second while dragging; input →
 preview painted, p50 and p95 (each preview knows the layout it shows: the Drag's ``ready`` in
@@ -100,7 +100,7 @@ def closed_loop_drag(page, seconds, step_s=0.016, lo=0.15, hi=0.75, last=0.62):
 
 class Fingerprints:
     """Map B's fingerprint (sum of its finite values as sent) for a slider value, in-process:
-    the project's preview (uint8 levels, at the grid the page got: app/live.py may coarsen it)
+    the project's preview (uint8 levels, at the grid the page got: app/tabs/maps/live.py may coarsen it)
     or the floor's image (float32). Cached."""
 
     def __init__(self, name):
@@ -110,9 +110,9 @@ class Fingerprints:
         key = (value, count)
         if key not in self.cache:
             if self.name == "project":
-                from app import map_data
-                from app.compute import Snapshot, compute
-                from app.scenario import Scenario
+                from app.tabs.maps import data as map_data
+                from app.tabs.maps.compute import Snapshot, compute
+                from app.state.scenario import Scenario
 
                 snap = Snapshot.of_values(Scenario(), {"Ph": value, "resolution": math.isqrt(count)})
                 img = map_data.prepare(compute(snap), preview=True).images[1]
@@ -127,9 +127,9 @@ class Fingerprints:
 def final_expected(name, value):
     """The three final images' fingerprints at ``value`` (exact maps), in-process."""
     if name == "project":
-        from app import map_data
-        from app.compute import Snapshot, compute
-        from app.scenario import Scenario
+        from app.tabs.maps import data as map_data
+        from app.tabs.maps.compute import Snapshot, compute
+        from app.state.scenario import Scenario
 
         sc = Scenario()
         sc.target.Ph = value
@@ -236,7 +236,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
     """``sessions`` sessions dragging at once (part 2): their previews per second, another
     session's cheap event, the server's RSS before and after. ``loop``: "closed", each sends
     its next value once the previous one is answered (``Drag.ready``), as the page does
-    (app/live.py); "open", one every THROTTLE_MS whatever the server's pace."""
+    (app/tabs/maps/live.py); "open", one every THROTTLE_MS whatever the server's pace."""
     import psutil
 
     from bench.load_test import Client
@@ -244,7 +244,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
 
     class Dragger(Client):
         def __init__(self, url):
-            import app.live  # noqa: F401  (the Drag model's class, to read the page's document)
+            import app.tabs.maps.live  # noqa: F401  (the Drag model's class, to read the page's document)
 
             super().__init__(url)
             models = list(self.doc.models)
@@ -254,7 +254,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
         def drag_for(self, index, seconds, out):
             from bokeh.document.events import ModelChangedEvent
 
-            from app.live import PATIENCE_MS, THROTTLE_MS
+            from app.tabs.maps.live import PATIENCE_MS, THROTTLE_MS
 
             start = len(self.events)
             t0 = time.perf_counter()
@@ -272,7 +272,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
                     self._pump(lambda: False, rest)
                 k += 1
             dt = time.perf_counter() - t0
-            # the preview layers are made on a page's first preview (app/map_figures.add_previews):
+            # the preview layers are made on a page's first preview (app/tabs/maps/figures.add_previews):
             # their sources are read after the drag (the first preview, in the new layers, is not
             # a data change: one fewer per map on a page's first drag)
             previews = {m.id for m in self.doc.models if getattr(m, "name", None) == "map-preview"}
@@ -386,10 +386,10 @@ def design_drag(browser, url, seconds, drags, screenshot=None):
 
 def design_analyse(log, ws):
     """Part 3's figures from one station drag's page log and websocket log."""
-    from app import views
-    from app.compute import Snapshot
-    from app.design_compute import ERROR_MAP_READS, design
-    from app.scenario import Scenario
+    from app.kit import views
+    from app.state.scenario import Scenario
+    from app.tabs.design.compute import ERROR_MAP_READS, design
+    from app.tabs.maps.compute import Snapshot
 
     down = next(t for t, kind in log["pointer"] if kind == "pointerdown")
     up = next(t for t, kind in log["pointer"] if kind == "pointerup")

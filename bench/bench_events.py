@@ -3,7 +3,7 @@
     python -m bench.bench_events [--repeat 200]
 
 Builds the dashboard in a document, as the server does for a session (after
-``app.server_threads.configure()``, as app/main.py), and times what runs when the P_h slider's
+``app.serve.threads.configure()``, as app/main.py), and times what runs when the P_h slider's
 Bokeh model receives a release (``value_throttled``) that the Scenario refuses (P_h < 0): Panel's
 slider, its editable twin, the link to the Scenario, the refusal and restore, the message. No map
 is computed. The release is set on the Bokeh model with ``Model.set_from_json`` (as Bokeh applies
@@ -21,8 +21,8 @@ from bokeh.document import Document
 from bokeh.models import Slider
 from panel.io.state import set_curdoc
 
-from app import server_threads
-from app.dashboard import create_app, panel_extension
+from app.page import create_app, panel_extension
+from app.serve import threads as server_threads
 
 
 def refused_release(repeat):

@@ -30,7 +30,7 @@ and measures for each:
 
 The table gives absolute values and ratios to the minimal Panel app, with the issue's targets:
 release → paint median ≤ 1.3×, CPU per update ≤ 1.5×, new page CPU ≤ 1.2× (issue 40; ready
-and quiet: the page's sidebar is built after its maps, app.dashboard.in_parts).
+and quiet: the page's sidebar is built after its maps, app.page.in_parts).
 """
 
 from __future__ import annotations
@@ -100,12 +100,12 @@ def idle_rate(proc, seconds=2.0):
 
 def compute_cpu_ms(name, repeat=15):
     """CPU (ms, this process: user + system, every thread) of one update's maps computed
-    in-process, the median of ``repeat`` new slider values: the project's ``app.compute.compute``
+    in-process, the median of ``repeat`` new slider values: the project's ``app.tabs.maps.compute.compute``
     (its kernels on numba's threads, as in the server) or the floor apps' ``bench.floor.maps``.
     The floor's compute was set to the project's *wall* time; on two threads the project's uses
     about twice the CPU, which the server's CPU per update carries."""
     if name == "project":
-        from app.compute import Snapshot, compute
+        from app.tabs.maps.compute import Snapshot, compute
 
         def one(ph):
             compute(Snapshot.of(scenario(Ph=ph)))

@@ -46,17 +46,17 @@ from support.server import free_port
 #: times (a part's callees included), so the rows overlap: indented rows are inside the row above.
 PARTS = (
     ("a session made (Bokeh: the app's script run for it)", "bokeh/server/contexts.py", "create_session_if_needed"),
-    ("  the page's Python objects: app.dashboard.create_app", "app/dashboard.py", "create_app"),
-    ("    Scenario()", "app/scenario.py", "__init__"),
-    ("    the link read (app.url.read_link)", "app/url.py", "read_link"),
-    ("    Maps tab (app.maps.maps_tab)", "app/maps.py", "maps_tab"),
-    ("      its three figures (app.map_figures.build)", "app/map_figures.py", "build"),
-    ("      their first maps written (map_figures.fill)", "app/map_figures.py", "fill"),
-    ("      the drag follower (app.live.Live)", "app/live.py", "__init__"),
-    ("    sidebar cards (app.dashboard._section)", "app/dashboard.py", "_section"),
-    ("      number inputs (app.inputs.number_input)", "app/inputs.py", "number_input"),
-    ("      number boxes (app.number_box.number_box)", "app/number_box.py", "number_box"),
-    ("    URL sync (app.url.sync_url)", "app/url.py", "sync_url"),
+    ("  the page's Python objects: app.page.create_app", "app/page.py", "create_app"),
+    ("    Scenario()", "app/state/scenario.py", "__init__"),
+    ("    the link read (app.state.url.read_link)", "app/state/url.py", "read_link"),
+    ("    Maps tab (app.tabs.maps.maps.maps_tab)", "app/tabs/maps/maps.py", "maps_tab"),
+    ("      its three figures (app.tabs.maps.figures.build)", "app/tabs/maps/figures.py", "build"),
+    ("      their first maps written (map_figures.fill)", "app/tabs/maps/figures.py", "fill"),
+    ("      the drag follower (app.tabs.maps.live.Live)", "app/tabs/maps/live.py", "__init__"),
+    ("    sidebar cards (app.page._section)", "app/page.py", "_section"),
+    ("      number inputs (app.kit.inputs.number_input)", "app/kit/inputs.py", "number_input"),
+    ("      number boxes (app.kit.number_box.number_box)", "app/kit/number_box.py", "number_box"),
+    ("    URL sync (app.state.url.sync_url)", "app/state/url.py", "sync_url"),
     ("    the template (Panel BootstrapTemplate)", "panel/template/bootstrap/__init__.py", "__init__"),
     ("  servable: Panel's models of the page (Template.server_doc)", "panel/template/base.py", "server_doc"),
     ("    Panel get_root (every root)", "panel/viewable.py", "get_root"),
@@ -194,8 +194,8 @@ def main(argv=None):
 
     import panel as pn
 
-    from app.dashboard import freeze_startup_objects
-    from app.warmup import WARMUP
+    from app.page import freeze_startup_objects
+    from app.serve.warmup import WARMUP
 
     WARMUP.start()  # as app/server_lifecycle.py does for ``panel serve app``
     for done in WARMUP.done:

@@ -4,7 +4,7 @@
                               [--replicas N]
 
 Loopback only, bounded in count and time. Starts its own ``panel serve app`` (support.server), or
-with ``--replicas N`` N of them behind nginx (app.cluster, deploy/nginx.conf) and talks to the
+with ``--replicas N`` N of them behind nginx (app.serve.cluster, deploy/nginx.conf) and talks to the
 proxy, with ``--check-unused-sessions 1000 --unused-session-lifetime 3000`` so closed sessions
 are destroyed within seconds, then:
 
@@ -23,7 +23,7 @@ are destroyed within seconds, then:
    session connects (websocket, its first page built by the server, the document pulled, the
    rest of the page built after it announces itself, until the page is complete:
    :meth:`Client.complete`): how long a newcomer waits while the others work. The page is built
-   on the newcomer's replica a part at a time (app.dashboard), but each part still takes its
+   on the newcomer's replica a part at a time (app.page), but each part still takes its
    event loop for a while, so the other figures are measured with ``--newcomers 0`` too;
 5. after the sessions close: the server's RSS (the sum over the replicas) must come back within
    10 % of the baseline.
@@ -55,13 +55,13 @@ from bokeh.document.events import MessageSentEvent, ModelChangedEvent
 from bokeh.events import DocumentReady
 from bokeh.models import ColumnDataSource
 
-from app import timings
-from app.applies import MAPS_TAB, applies
-from app.cluster import Cluster
-from app.compute import Snapshot, compute
-from app.dashboard import SECTIONS
-from app.scenario import MEASURE_LABELS, Scenario
-from app.url import read_link
+from app.kit import timings
+from app.page import SECTIONS
+from app.serve.cluster import Cluster
+from app.state.applies import MAPS_TAB, applies
+from app.state.scenario import MEASURE_LABELS, Scenario
+from app.state.url import read_link
+from app.tabs.maps.compute import Snapshot, compute
 from support.server import served_app
 
 SERVER_ARGS = ("--check-unused-sessions", "1000", "--unused-session-lifetime", "3000")
@@ -128,7 +128,7 @@ class Client:
         attr, new = getattr(ev, "attr", None), getattr(ev, "new", None)
         self.events.append((attr, getattr(getattr(ev, "model", None), "id", None), new))
         if attr == "children":  # a pane put into the page (a refusal's message, made on the first
-            for m in new or ():  # refusal: app.maps.with_refusal) comes with its text
+            for m in new or ():  # refusal: app.tabs.maps.maps.with_refusal) comes with its text
                 if isinstance(getattr(m, "text", None), str):
                     self.events.append(("text", m.id, m.text))
 
@@ -305,7 +305,7 @@ def poll_liveness(url, stop, out, every=0.05):
 
 
 #: An update's legs as reported (from, to, what), between the client's own ``send`` and
-#: ``answer`` and the server's timestamps (app/timings.py: one clock, CLOCK_MONOTONIC).
+#: ``answer`` and the server's timestamps (app/kit/timings.py: one clock, CLOCK_MONOTONIC).
 SPLIT = (
     ("send", "arrived", "client -> change applied on the server's loop (network, loop busy)"),
     ("arrived", "handler", "-> maps' handler runs (Panel's 50 ms debounce, loop, a Panel thread)"),
@@ -357,7 +357,7 @@ def report_timings(matched):
     cut = sorted(total)[max(0, int(len(total) * 0.95) - 1)]
     tail = [st for (_, st), t in zip(full, total) if t >= cut]
     kinds = {name: [st for e, st in full if e[1] == name] for name in ("Ph", "measure")}
-    print(f"where an update's time goes (server timestamps, app/timings.py; {len(full)} of "
+    print(f"where an update's time goes (server timestamps, app/kit/timings.py; {len(full)} of "
           f"{len(matched)} updates matched; ms):")
     print(f"  {'leg':<72} {'median':>7} {'p95':>7} {'slowest':>7} {'P_h':>7} {'measure':>7}")
     print(f"  {'':<72} {'':>7} {'':>7} {'5% mean':>7} {'median':>7} {'median':>7}")
@@ -388,7 +388,7 @@ def report_timings(matched):
             print(f"  unanswered {name} = {value!r} (session {sid[:8]}): {seen}")
 
 
-#: app/timings.py's legs in order, for "how far an update got".
+#: app/kit/timings.py's legs in order, for "how far an update got".
 LEG_ORDER = {leg: i for i, leg in enumerate(timings.LEGS)}
 
 
@@ -436,9 +436,9 @@ def main(argv=None):
     ap.add_argument("--newcomers", type=int, default=3,
                     help="new sessions opened during the load, evenly spread (0-10)")
     ap.add_argument("--no-timings", action="store_true",
-                    help="leave the server's per-update timestamps off (app/timings.py; on by default)")
+                    help="leave the server's per-update timestamps off (app/kit/timings.py; on by default)")
     ap.add_argument("--replicas", type=int, default=0,
-                    help="N ≥ 1: N replicas behind nginx (app.cluster), the load through the proxy; "
+                    help="N ≥ 1: N replicas behind nginx (app.serve.cluster), the load through the proxy; "
                          "0: one panel serve, directly")
     args = ap.parse_args(argv)
     if not 1 <= args.sessions <= 50 or not 0 < args.duration <= 600 or not 0 <= args.think <= 60:
@@ -452,7 +452,7 @@ def main(argv=None):
     print(f"one map computation (A and B, 200×200, in-process, idle): median {one_map * 1e3:.0f} ms")
     os.environ.setdefault("QUIET_SERVER", "1")
     timings_dir = None
-    if not args.no_timings:  # the server's per-update timestamps (app/timings.py), in a file of ours
+    if not args.no_timings:  # the server's per-update timestamps (app/kit/timings.py), in a file of ours
         import tempfile
 
         timings_dir = tempfile.TemporaryDirectory(prefix="load-timings-")

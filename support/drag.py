@@ -32,7 +32,7 @@ INSTALL_JS = """(css) => {
   let n = 0;
   const hooked = new Set();
   // a layer made after the page (the maps' preview layers, made on the first preview:
-  // app/map_figures.add_previews) is hooked when it arrives, its first data logged as a change
+  // app/tabs/maps/figures.add_previews) is hooked when it arrives, its first data logged as a change
   const hook = (p, i, r, arriving) => {
     const src = r.data_source;
     if (!src || !src.data || !('image' in src.data || 'pv' in src.data) || hooked.has(src)) return;
@@ -136,7 +136,7 @@ def settled(page, quiet_ms=800.0, timeout=60.0, check=None):
 
 # ----------------------------------------------------------------------------- a dragged station
 #: Installs the Layout design map's log (``window.__design``): every change of its HoloViews
-#: image (the exact map) and of its preview layer (app/design_live.py) as [time, animation frame
+#: image (the exact map) and of its preview layer (app/tabs/design/live.py) as [time, animation frame
 #: after it, sum and count of the finite values, length, and for a preview the sequence number
 #: of the layout it shows: the design Drag's ``ready`` at the end of the message that brought
 #: it]; the layouts the page sent ([time, sequence number]); pointer events. Returns the number
@@ -171,7 +171,7 @@ DESIGN_INSTALL_JS = """() => {
   if (preview === undefined) return null;
   watch(preview, log.previews, true);
   for (const m of Bokeh.documents[0].all_models)
-    if (m.properties && m.properties.ready && m.properties.state)  // app.live.Drag models
+    if (m.properties && m.properties.ready && m.properties.state)  // app.tabs.maps.live.Drag models
       m.connect(m.properties.state.change, () => {
         if (m.state[0] !== 'stations') return;
         log.drag = m;

@@ -29,7 +29,7 @@ def free_port():
         return s.getsockname()[1]
 
 
-#: What the server prints when every stage of its warm-up is done, or failed (app/warmup.py).
+#: What the server prints when every stage of its warm-up is done, or failed (app/serve/warmup.py).
 WARM = "[warm-up] all kernels ready"
 WARM_FAILED = "[warm-up] FAILED"
 

@@ -29,7 +29,7 @@ pytestmark = pytest.mark.skipif(
 )
 
 #: Per plot: [RGBA bytes of the map layer as drawn, how many differ from the image's real values
-#: (the sent image is normalised to the colour range: app/map_figures.py) mapped through the
+#: (the sent image is normalised to the colour range: app/tabs/maps/figures.py) mapped through the
 #: plot's colour bar mapper].
 COLOURS_JS = """() => {
 """ + PLOTS_WALK + """
@@ -44,7 +44,7 @@ COLOURS_JS = """() => {
     return [px.length, bad];
   });
 }"""
-#: Per plot: how many pixels of its veil are unobservable (veil codes 1 and 2: app/map_figures.py).
+#: Per plot: how many pixels of its veil are unobservable (veil codes 1 and 2: app/tabs/maps/figures.py).
 VEILED_JS = """() => {
 """ + PLOTS_WALK + """
   return plots.map(p => { const r = p.renderers.filter(r => r.data_source && r.data_source.data.image)[1];
@@ -126,7 +126,7 @@ SPINNING_JS = """() => Array.from(Bokeh.documents[0].all_models).some(
 
 def test_slow_change_shows_the_busy_spinner_until_its_maps_are_drawn(chromium, server):
     # CRLB maps of 10 instants at 400 × 400 take several tenths of a second (fast changes do not
-    # flash the spinner: app/dashboard.py BUSY_AFTER)
+    # flash the spinner: app/page.py BUSY_AFTER)
     query = urlencode({"measure": "CRLB position error (m)", "steps": 10, "resolution": 400})
     pg = chromium.new_page(viewport=VIEWPORT)
     try:
@@ -289,7 +289,7 @@ def test_a_crlb_far_from_the_stations_is_hatched_and_not_quoted_as_an_error(page
     assert " m" in far and "far-field runaway" in far
     near = _tooltip(page, 1, 0.47, 0.33)  # ~55 m from the stations (frame above its colour bar): trusted
     assert " m" in near and "runaway" not in near
-    # the legend's entry: the panes under the maps follow the maps' own message (app/maps.py)
+    # the legend's entry: the panes under the maps follow the maps' own message (app/tabs/maps/maps.py)
     page.get_by_text("far-field runaway)").first.wait_for(state="visible", timeout=15_000)
     note = page.locator(".w-note").first
     assert "not trackable from these stations" in note.locator(".alert").text_content()
@@ -372,7 +372,7 @@ def test_fig1_visibly_identifies_the_paper_figure(page):
     page.get_by_role("button", name="Fig. 1").click()
     drawn = wait_maps(page, lambda d: "(paper)" in d[0][0])
     assert [t for t, _ in drawn] != before
-    # the banner's change is a message of its own after the maps' (app/offloop.py, changes)
+    # the banner's change is a message of its own after the maps' (app/kit/offloop.py, changes)
     page.locator(".w-paper").filter(visible=True).first.locator(".alert").filter(
         has_text="Fig. 1").wait_for(timeout=15_000)
 

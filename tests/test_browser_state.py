@@ -49,9 +49,11 @@ def test_stations_added_by_clicks_keep_the_station_depth(page):
 
 def expected_readout(presets, x, y, z=None):
     """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
-    from app import compute, design_compute, views
-    from app.compute import Snapshot
-    from app.scenario import Scenario
+    from app.kit import views
+    from app.state.scenario import Scenario
+    from app.tabs.design import compute as design_compute
+    from app.tabs.maps import compute
+    from app.tabs.maps.compute import Snapshot
 
     s = Scenario(resolution=21)
     for preset in presets:
@@ -69,8 +71,8 @@ def ended_at(pg):
     """The preset whose values the page's address holds (None: none's)."""
     from urllib.parse import parse_qsl, urlsplit
 
-    from app import url
-    from app.scenario import Scenario
+    from app.state import url
+    from app.state.scenario import Scenario
 
     s = Scenario()
     url.read_link(s, {k: [v.encode()] for k, v in parse_qsl(urlsplit(pg.url).query)})
@@ -116,15 +118,15 @@ def test_every_message_reaches_the_page_in_the_order_it_was_made(page, session):
     # CI failed on "reference p4070 isn't known" after a preset on Layout design: the maps'
     # message (made on the loop, queued by Panel's own path while the socket was busy) was
     # overtaken by a later change from Panel's threads to another pane that used a stylesheet
-    # the overtaken message was first to send; the browser dropped that change (app/offloop.py,
+    # the overtaken message was first to send; the browser dropped that change (app/kit/offloop.py,
     # changes). That race needs a busy socket: with both cores of this machine loaded, the
     # module's first two tests failed so in 3 of 22 runs before the fix, 0 of 10 after. Here each
     # new session (the stylesheets are sent on a pane's first update) goes through every preset
     # on Layout design, whose readout and maps change together; the fixture fails on any console
     # error. The same burst found two more: the readout left at an older preset's numbers (a
-    # slower evaluation on another thread ended last: 2 of 3 runs; app/design.py ellipse_text)
-    # and two presets' updates interleaved on two threads (app/scenario.py Scenario.update).
-    from app.scenario import PRESETS
+    # slower evaluation on another thread ended last: 2 of 3 runs; app/tabs/design/design.py ellipse_text)
+    # and two presets' updates interleaved on two threads (app/state/scenario.py Scenario.update).
+    from app.state.scenario import PRESETS
 
     page.get_by_text("Layout design", exact=True).click()
     page.get_by_text("1-σ horizontal error ellipse").first.wait_for(timeout=30_000)
@@ -168,8 +170,8 @@ def test_map_b_is_titled_and_captioned_with_its_own_moments(page):
 
 def test_map_bs_note_gives_bs_own_unobservable_direction(page):
     # defect 3: Figs. 3 and 4: B's "unobservable direction" was A's vector
-    from app.compute import Snapshot, compute
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.maps.compute import Snapshot, compute
 
     for name in ("Fig. 3", "Fig. 4"):
         page.get_by_role("button", name=name).click()
@@ -345,7 +347,7 @@ def test_the_noise_box_takes_any_accepted_value_and_says_why_it_refuses_one(page
     box.press("Enter")
     page.locator(".w-message-noise").get_by_text("outside the accepted range").wait_for(timeout=15_000)
     # the message is sent as the owner refuses; the box shows the kept value on the loop's next
-    # tick (app/number_box.settle), so it may still read -1 when the message arrives (it did on CI)
+    # tick (app/kit/number_box.settle), so it may still read -1 when the message arrives (it did on CI)
     deadline = time.time() + 15
     while box.input_value() != "0.001":
         assert time.time() < deadline, f"the box shows {box.input_value()!r}, expected '0.001'"
@@ -383,7 +385,7 @@ TRACK_DRAWN_JS = """() => Array.from(Bokeh.documents[0].all_models).some(m => m.
   && m.title.text.startsWith('Track, PCRLB'))"""
 
 #: Seconds within which the banner, the note and the address follow the maps of a preset. They
-#: are sent ~0.1 s after the maps (app/maps.py, URL_AFTER) when nothing holds them; this bound
+#: are sent ~0.1 s after the maps (app/tabs/maps/maps.py, URL_AFTER) when nothing holds them; this bound
 #: leaves the rest for a loaded machine (2 cores shared with other work), far below the defect's
 #: 20-30 s.
 TEXT_AFTER_MAPS_S = 8.0
@@ -400,17 +402,17 @@ def plain(text):
 def expected_texts(presets):
     """(paper banner, note, query) as the page should show them after ``presets`` applied in turn
     on a fresh page: from the library, in this process."""
-    from app import url
-    from app.compute import Snapshot, compute
-    from app.maps import _paper_line, alert
-    from app.scenario import Scenario
+    from app.state import url
+    from app.state.scenario import Scenario
+    from app.tabs.maps.compute import Snapshot, compute
+    from app.tabs.maps.maps import _paper_line, alert
 
     s = Scenario()
     for preset in presets:
         s.apply_preset(preset)
     p = compute(Snapshot.of(s))
     note = "\n".join(t for t in (p.note, p.far_note) if t)
-    # as the page's panes hold them (app/maps.py): alerts, which Panel sends escaped
+    # as the page's panes hold them (app/tabs/maps/maps.py): alerts, which Panel sends escaped
     return (plain(html.escape(_paper_line(p))), plain(html.escape(alert(note, "warning"))),
             url.query(s))
 

@@ -1,4 +1,4 @@
-"""The dashboard's Calibration tab (app/calibration.py) used in headless Chromium."""
+"""The dashboard's Calibration tab (app/tabs/calibration/calibration.py) used in headless Chromium."""
 
 from __future__ import annotations
 
@@ -41,13 +41,13 @@ def no_exception_of_ours(log):
     """No exception from the tab's code on the server (a websocket closed by the browser's exit
     may log Tornado's own WebSocketClosedError: not ours)."""
     text = log.read_text()
-    for ours in ("app/calibration.py", "core/calibration/", "ValueError"):
+    for ours in ("app/tabs/calibration/calibration.py", "core/calibration/", "ValueError"):
         assert ours not in text, text[-3000:]
 
 
 def test_calibration_tab_in_chromium(tmp_path, served):
-    from app import calibration as ac
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.calibration import calibration as ac
 
     url, log = served
     bad = tmp_path / "bad.csv"
@@ -132,7 +132,7 @@ def test_calibration_issue_25_in_chromium(served):
         page.locator(".w-cal_source select").select_option("Uploaded CSV")
         for cls in ("w-cal_seed", "w-cal_n_attitudes", "w-cal_headings"):
             expect(page.locator(f".{cls}")).to_be_hidden(timeout=SLOW)
-        # (issue 28, app/offloop.py) an instant result, the message to upload, leaves no spinner
+        # (issue 28, app/kit/offloop.py) an instant result, the message to upload, leaves no spinner
         # on: it stayed on for good when the spinner's "on" reached the page after the result
         page.wait_for_selector("text=Upload a CSV file", timeout=SLOW)
         page.wait_for_timeout(2000)  # the page's last changes of this result

@@ -358,7 +358,7 @@ def test_cli_module_is_the_only_one_with_argparse_and_nothing_imports_it():
     # the command line parses with core.cli's ArgumentParser (an argparse one, shared by every CLI)
     assert "ArgumentParser" in (ROOT / "core" / "cli" / "calibration.py").read_text()
     assert "argparse" in imported(ROOT / "core" / "cli" / "__init__.py")
-    p = subprocess.run([sys.executable, "-c", "import sys, core, app.calibration; "
+    p = subprocess.run([sys.executable, "-c", "import sys, core, app.tabs.calibration.calibration; "
                         "print('core.cli.calibration' in sys.modules)"],
                        cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert p.returncode == 0 and p.stdout.strip() == "False", p.stderr

@@ -1,4 +1,4 @@
-"""The Calibration tab's numbers and words (app/calibration.py), in-process (issue 25's items on
+"""The Calibration tab's numbers and words (app/tabs/calibration/calibration.py), in-process (issue 25's items on
 the tab: the noise the residuals give, the convention that fits, a rank-9 manoeuvre said as such,
 inputs that follow the data source, numbers without float noise, distinct curve colours).
 The same things in the browser: tests/test_calibration_browser.py."""
@@ -15,9 +15,9 @@ import param
 import pytest
 from bokeh.models import GlyphRenderer
 
-from app import calibration as ac
-from app.calibration_plots import Figures, plot_data
-from app.scenario import Scenario
+from app.state.scenario import Scenario
+from app.tabs.calibration import calibration as ac
+from app.tabs.calibration.plots import Figures, plot_data
 from core import calibration as cal
 
 #: Panel 1.9 deprecates the button_type/button_style every button of the app uses (as

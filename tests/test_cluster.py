@@ -1,6 +1,6 @@
-"""Replicas behind nginx (app/cluster.py, deploy/nginx.conf), all real, on loopback.
+"""Replicas behind nginx (app/serve/cluster.py, deploy/nginx.conf), all real, on loopback.
 
-One ``python -m app.cluster --replicas 2`` for the module. The tests run in file order: the
+One ``python -m app.serve.cluster --replicas 2`` for the module. The tests run in file order: the
 page and a slider change through the proxy; a link too long refused with a page; a browser's page and its websocket reach the same
 replica (nginx's access log names the replica of every request); one replica killed, the
 sessions on the other carry on and new sessions are served by it; SIGTERM stops everything.
@@ -33,12 +33,12 @@ SERIAL = "it runs nginx and replicas and kills one"
 
 
 class Running:
-    """The cluster started by ``python -m app.cluster``, as it describes itself on stdout."""
+    """The cluster started by ``python -m app.serve.cluster``, as it describes itself on stdout."""
 
     def __init__(self, replicas=2):
         self.port = free_port()
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "app.cluster", "--replicas", str(replicas), "--port", str(self.port)],
+            [sys.executable, "-m", "app.serve.cluster", "--replicas", str(replicas), "--port", str(self.port)],
             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         self.replicas, self.lines = [], []  # [(pid, port)]
         self.nginx = self.prefix = self.url = None
@@ -53,7 +53,7 @@ class Running:
                 break
         if self.url is None:
             self.proc.wait(30)
-            raise RuntimeError("app.cluster did not start: " + "".join(self.lines))
+            raise RuntimeError("app.serve.cluster did not start: " + "".join(self.lines))
         threading.Thread(target=self.proc.stdout.read, daemon=True).start()  # drain the rest
         self.tree = [psutil.Process(self.proc.pid), *psutil.Process(self.proc.pid).children(recursive=True)]
 

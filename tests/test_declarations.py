@@ -1,5 +1,5 @@
 """Each input declared once (issue 39 item 1): the sidebar, what it shows where, the hard limits
-and the depths are built from the inputs' declarations alone (app.part: a parameter's metadata)."""
+and the depths are built from the inputs' declarations alone (app.state.part: a parameter's metadata)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ import panel as pn
 import param
 import pytest
 
-from app import applies, dashboard
-from app.part import declared
-from app.scenario import (
+from app import page as dashboard
+from app.state import applies
+from app.state.part import declared
+from app.state.scenario import (
     ACCEPTED,
     CARDS,
     DEPTHS,
@@ -172,7 +173,7 @@ def _watch_lists(tree):
 
 def test_no_module_of_app_keeps_a_list_of_input_names():
     """A tuple, list, set or dict's keys written in app/ whose strings are all input names (two
-    or more) is a hand-kept list: what it says belongs in the inputs' declarations (app.part). A
+    or more) is a hand-kept list: what it says belongs in the inputs' declarations (app.state.part). A
     watcher's list of what it reads is not one (the tab-key test checks the computations')."""
     import ast
     import pathlib
@@ -213,8 +214,8 @@ def test_what_a_layered_sea_moves_is_what_the_inputs_declare():
     """Switching to a layered sea moves exactly the inputs declared with ``seabed`` or
     ``layered``; the link writes those (url.SEABED_INPUTS); the ones declared on the seabed
     follow the sea depth."""
-    from app import url
-    from app.derive import LAYERED, SEABED
+    from app.state import url
+    from app.state.derive import LAYERED, SEABED
 
     assert set(url.SEABED_INPUTS) == set(SEABED) | set(LAYERED)
     assert SEABED == {"z": "within", "h": "bottom", "stations": "bottom", "z_min": "surface",
@@ -247,7 +248,8 @@ WIDGET_NAME = pytest.mark.filterwarnings("ignore:Widget.name is deprecated:Pendi
 def test_the_numbers_formats_are_the_declared_ones():
     """Every number box's slider, in the sidebar and in the tabs' own inputs, has its declared
     format (``fmt``), else the default."""
-    from app import shape, track
+    from app.tabs.shape import shape
+    from app.tabs.track import track
 
     s = Scenario()
     built = {}
@@ -279,8 +281,8 @@ def test_the_numbers_formats_are_the_declared_ones():
 
 @WIDGET_NAME
 def test_the_shape_tabs_cards_are_the_declared_groups():
-    from app import shape
-    from app.derive import groups
+    from app.state.derive import groups
+    from app.tabs.shape import shape
 
     cards = shape._inputs(Scenario()).select(pn.Card)
     declared_groups = groups(shape.PARAMS)
@@ -302,7 +304,7 @@ def test_the_shape_tabs_cards_are_the_declared_groups():
 
 
 def test_the_calibration_inputs_show_for_their_declared_sources():
-    from app import calibration
+    from app.tabs.calibration import calibration
 
     s = Scenario()
     widgets = {n: calibration._input(s, n) for n in calibration.FIELDS}
@@ -320,8 +322,8 @@ def test_the_calibration_inputs_show_for_their_declared_sources():
 def test_the_moments_known_are_the_declared_moments_and_cores_moment_states():
     """The "moments known" state set drops the target's moment inputs of the sensor kind, which
     are core's moment states of that kind's Sensor."""
-    from app.derive import moments
-    from app.scenario import SENSORS, STATE_SETS
+    from app.state.derive import moments
+    from app.state.scenario import SENSORS, STATE_SETS
 
     for label, kind in SENSORS.items():
         for state_set, known in STATE_SETS.items():
@@ -334,7 +336,7 @@ def test_the_moments_known_are_the_declared_moments_and_cores_moment_states():
 
 
 def test_the_sensor_banner_follows_every_input_the_magnetic_kinds_read():
-    from app.derive import MAGNETIC_READS
+    from app.state.derive import MAGNETIC_READS
 
     assert set(MAGNETIC_READS) == {"mx", "my", "mz", "noise_b", "noise_g", "baseline"}
     s = Scenario(sensor="magnetometer + gradiometer (BG)")

@@ -1,4 +1,4 @@
-"""app/design_live.py without a browser: the Layout design map's previews of a dragged station,
+"""app/tabs/design/live.py without a browser: the Layout design map's previews of a dragged station,
 the drop, what is refused."""
 
 import holoviews as hv
@@ -7,11 +7,13 @@ import panel as pn
 import pytest
 from bokeh.models import HoverTool
 
-from app import design_live, live, views
-from app.cache import SHARED
-from app.compute import Snapshot
-from app.design_compute import ERROR_MAP_READS, design
-from app.scenario import Scenario
+from app.kit import views
+from app.kit.cache import SHARED
+from app.state.scenario import Scenario
+from app.tabs.design import live as design_live
+from app.tabs.design.compute import ERROR_MAP_READS, design
+from app.tabs.maps import live
+from app.tabs.maps.compute import Snapshot
 
 pytestmark = [
     pytest.mark.filterwarnings(  # Panel 1.9 deprecates button_type (as test_calibration_tab)
@@ -24,8 +26,8 @@ pytestmark = [
 
 @pytest.fixture
 def tab():
-    from app.dashboard import _widgets
-    from app.design import design_tab
+    from app.page import _widgets
+    from app.tabs.design.design import design_tab
 
     scenario = Scenario()
     t = design_tab(scenario, SHARED, _widgets())

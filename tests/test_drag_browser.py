@@ -1,6 +1,6 @@
 """Maps that follow the hand (issue 38), in headless Chromium: previews while a slider is dragged
-(electric and magnetic maps), the exact maps of the final value on release (app/live.py); the
-Layout design map while a station is dragged, its exact map on the drop (app/design_live.py)."""
+(electric and magnetic maps), the exact maps of the final value on release (app/tabs/maps/live.py); the
+Layout design map while a station is dragged, its exact map on the drop (app/tabs/design/live.py)."""
 
 import math
 import re
@@ -40,9 +40,9 @@ def open_maps(chromium, server, errors):
 def expected(value, name="Ph", sensor=None):
     """The maps' images and texts as the server sends them for input ``name`` = ``value`` (with
     the sidebar's ``sensor``, if given), computed here."""
-    from app import map_data
-    from app.compute import Snapshot, compute
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.maps import data as map_data
+    from app.tabs.maps.compute import Snapshot, compute
 
     sc = Scenario()
     if sensor is not None:
@@ -132,7 +132,7 @@ def test_a_click_on_the_track_draws_the_exact_maps_and_no_preview(chromium, serv
 
 
 def test_with_previews_off_a_drag_draws_only_the_exact_maps_of_the_release(chromium, monkeypatch):
-    # APP_PREVIEWS=off (app/live.py): a replica for many analysts on few cores spares the CPU
+    # APP_PREVIEWS=off (app/tabs/maps/live.py): a replica for many analysts on few cores spares the CPU
     monkeypatch.setenv("APP_PREVIEWS", "off")
     with served_app() as (url, _):
         errors = []
@@ -215,10 +215,10 @@ def test_a_release_after_a_whole_number_leaves_handle_box_and_maps_at_the_releas
 
 
 def test_the_design_map_follows_a_dragged_station_and_ends_exact(chromium, server, tmp_path):
-    from app import views
-    from app.compute import Snapshot
-    from app.design_compute import ERROR_MAP_READS, design
-    from app.scenario import Scenario
+    from app.kit import views
+    from app.state.scenario import Scenario
+    from app.tabs.design.compute import ERROR_MAP_READS, design
+    from app.tabs.maps.compute import Snapshot
 
     errors = []
     page = open_page(chromium, server + "/app?tab=Layout+design", errors)

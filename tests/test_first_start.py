@@ -13,8 +13,8 @@ from pathlib import Path
 
 import panel as pn
 
-from app.warming import warming_page
-from app.warmup import STAGES, WARMING_MARK, Warmup
+from app.serve.warming import warming_page
+from app.serve.warmup import STAGES, WARMING_MARK, Warmup
 from support.page import chromium_browser
 from support.server import ROOT, SERVER_ENV, free_port, stop
 

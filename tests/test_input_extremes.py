@@ -4,12 +4,12 @@ for that tab (:data:`WITHIN`), or is refused with a message saying why; none rai
 
 The numbers are walked one at a time from the default scenario, in the context where they are
 used (a magnetic moment with a magnetic sensor, the x–z plane's y in the x–z plane, the seabed
-in a layered sea, …). Refusals come from :class:`app.scenario.Scenario` (the last good value is
+in a layered sea, …). Refusals come from :class:`app.state.scenario.Scenario` (the last good value is
 kept and :attr:`Scenario.message` names the input) or from the tab, which says what is wrong in
 its own pane. The Track, Calibration and Shape tabs are their real layouts built here, outside a
-server: their computations (app.offloop) then finish before the value's assignment returns, so
+server: their computations (app.kit.offloop) then finish before the value's assignment returns, so
 the time of that assignment is the tab's time for the value. The maps and the Layout design tab
-are computed by the functions their tabs call (app.compute, app.design_compute).
+are computed by the functions their tabs call (app.tabs.maps.compute, app.tabs.design.compute).
 """
 
 import math
@@ -20,9 +20,13 @@ import panel as pn
 import param
 import pytest
 
-from app import calibration, compute, design_compute, shape, track
-from app.compute import Snapshot
-from app.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
+from app.state.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
+from app.tabs.calibration import calibration
+from app.tabs.design import compute as design_compute
+from app.tabs.maps import compute
+from app.tabs.maps.compute import Snapshot
+from app.tabs.shape import shape
+from app.tabs.track import track
 
 # The tabs' widgets use ``name``, ``button_type`` and ``button_style`` (Panel 1.5.5, the lowest
 # declared version, has no ``label``, ``color`` or ``variant``); Panel 1.9 warns that they will be

@@ -4,7 +4,7 @@ The defect: ``/app?sea_model=layered&sea_depth=80&h=100`` said "Link values refu
 kept" yet showed a layered sea of 80 m with z = h = 80 m, and left the address bar empty. The
 link was read twice: the first read switched the sea and moved h to the seabed, the second saw
 h = 100 below that seabed and refused, leaving the first read's values in place. Here the link
-is read as the page reads it (app.url.sync_url with Panel's own Location).
+is read as the page reads it (app.state.url.sync_url with Panel's own Location).
 """
 
 from urllib.parse import parse_qs
@@ -12,8 +12,8 @@ from urllib.parse import parse_qs
 import pytest
 from panel.io.location import Location
 
-from app.scenario import PART_OF, Scenario
-from app.url import query, read_link, sync_url
+from app.state.scenario import PART_OF, Scenario
+from app.state.url import query, read_link, sync_url
 
 TITLES = ("Maps", "Layout design", "Track", "Calibration", "Shape")
 

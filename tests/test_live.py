@@ -1,12 +1,12 @@
-"""app/live.py without a browser: previews of a dragged value, the release, what is ignored."""
+"""app/tabs/maps/live.py without a browser: previews of a dragged value, the release, what is ignored."""
 
 import numpy as np
 import pytest
 
-from app import live, map_figures, maps
-from app.cache import SHARED
-from app.compute import Snapshot
-from app.scenario import Scenario
+from app.kit.cache import SHARED
+from app.state.scenario import Scenario
+from app.tabs.maps import live, figures as map_figures, maps
+from app.tabs.maps.compute import Snapshot
 
 pytestmark = pytest.mark.filterwarnings(  # Panel 1.9 deprecates button_type (as test_calibration_tab)
     "ignore:.*deprecated and will be removed in version 2.0:PendingDeprecationWarning")
@@ -25,7 +25,7 @@ def drag(lv, name, value, seq, released=False):
 def test_a_dragged_value_is_previewed_and_its_release_draws_the_exact_maps(tab):
     scenario, t = tab
     figs, lv = t.figures, t.live
-    assert figs.preview_layers == ()  # made by the first preview (app/map_figures.add_previews)
+    assert figs.preview_layers == ()  # made by the first preview (app/tabs/maps/figures.add_previews)
     drag(lv, "Ph", 150.0, 1)
     assert lv.drawn == 1 and scenario.target.Ph == 100.0  # the scenario keeps its value until release
     # each map's preview layer over its map and under its veil
@@ -47,7 +47,7 @@ def test_a_release_where_nothing_changes_still_replaces_the_previews(tab):
     drag(t.live, "Ph", 333.0, 1)
     drag(t.live, "Ph", 100.0, 2, released=True)  # the hand came back: the scenario does not change
     assert scenario.target.Ph == 100.0
-    # made by the first preview (app/map_figures.add_previews), hidden by the release
+    # made by the first preview (app/tabs/maps/figures.add_previews), hidden by the release
     assert len(t.figures.preview_layers) == 3
     assert not any(layer.visible for layer in t.figures.preview_layers)
 

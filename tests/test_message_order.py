@@ -1,6 +1,6 @@
-"""An input built by a change from Panel's threads reaches the page in order (app/offloop.py soon).
+"""An input built by a change from Panel's threads reaches the page in order (app/kit/offloop.py soon).
 
-The sidebar builds an input when it first applies (app/dashboard.py): after the default page,
+The sidebar builds an input when it first applies (app/page.py): after the default page,
 *Fig. 2* builds the ``layout`` and ``y`` inputs, from a watcher on Panel's threads. Made there,
 Panel applied that change as a callback of the document inside its own ``hold``, which writes
 its message on a path of its own (queued and retried while the socket is busy, so a later
@@ -18,7 +18,7 @@ with long timeouts.
 
 from __future__ import annotations
 
-#: The inputs Fig. 2 builds after the default page (checked against app.applies below).
+#: The inputs Fig. 2 builds after the default page (checked against app.state.applies below).
 NEW_INPUTS = ("layout", "y")
 
 
@@ -37,7 +37,7 @@ def probe():
     from bench.load_test import Client
     from support.server import close_client, free_port, on_thread, report
 
-    from app.dashboard import create_app, panel_extension
+    from app.page import create_app, panel_extension
 
     panel_extension()
     sessions = []  # (document, template, inputs seen in its change callbacks)
@@ -96,8 +96,8 @@ def probe():
 
 
 def test_fig2s_new_inputs_reach_the_page_through_the_documents_ordered_changes():
-    from app.applies import MAPS_TAB, applies
-    from app.scenario import Scenario
+    from app.state.applies import MAPS_TAB, applies
+    from app.state.scenario import Scenario
     from support.server import run_probe
 
     s = Scenario()

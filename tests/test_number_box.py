@@ -1,13 +1,13 @@
-"""The number boxes (app.number_box) refuse what they refuse with a reason, on the server: the
+"""The number boxes (app.kit.number_box) refuse what they refuse with a reason, on the server: the
 Calibration tab's boxes and the sidebar's noise box (issue 40 defect 5). What the browser does
 with them is tests/test_number_box_browser.py."""
 
 import panel as pn
 import pytest
 
-from app import calibration as ac
-from app.number_box import number_box
-from app.scenario import Scenario
+from app.kit.number_box import number_box
+from app.state.scenario import Scenario
+from app.tabs.calibration import calibration as ac
 
 #: Panel 1.9 deprecates the button_type/button_style every button of the app uses (as
 #: tests/test_calibration_tab.py, which builds the tab too).

@@ -49,7 +49,7 @@ def _type(pg, css, text):
 def _wait_text(box, want, timeout=15.0):
     deadline = time.time() + timeout
     # the text exactly: the box once stepped past Panel's echo filter with a trailing space and
-    # sometimes kept "100 " (app/number_box.py now sets only the value's own text)
+    # sometimes kept "100 " (app/kit/number_box.py now sets only the value's own text)
     while box.input_value() != want:
         assert time.time() < deadline, f"the box shows {box.input_value()!r}, expected {want!r}"
         time.sleep(0.2)

@@ -14,8 +14,8 @@ SERIAL = "it measures the CPU an idle OpenMP pool burns"
 
 PROBE = """
 import os
-import app.compute as c
-from app.scenario import Scenario
+import app.tabs.maps.compute as c
+from app.state.scenario import Scenario
 c.compute(c.Snapshot.of(Scenario()))  # runs the parallel kernels: the threading layer is loaded
 import numba
 print(numba.threading_layer(), os.environ.get("OMP_WAIT_POLICY"))

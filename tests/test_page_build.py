@@ -3,7 +3,7 @@
 Bokeh runs a new session's script in one step of the server's event loop, which every other
 session of the process waits for. The page's first step builds the Maps tab and the frame of the
 page; the sidebar's parts (the paper-figure buttons, each card, the downloads) are built after it,
-one per turn of the loop (``app.dashboard.in_parts``). The served page is still whole when the
+one per turn of the loop (``app.page.in_parts``). The served page is still whole when the
 client has it. Nothing here is timed: ``python -m bench.bench_page_build`` measures the steps.
 """
 
@@ -12,9 +12,9 @@ from __future__ import annotations
 import panel as pn
 import pytest
 
-from app.applies import MAPS_TAB, applies
-from app.dashboard import SECTIONS, create_app, panel_extension
-from app.scenario import Scenario
+from app.page import SECTIONS, create_app, panel_extension
+from app.state.applies import MAPS_TAB, applies
+from app.state.scenario import Scenario
 
 #: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
 SERIAL = "it measures what a page build holds the event loop for"
@@ -70,7 +70,7 @@ def test_a_served_page_builds_its_sidebar_after_the_first_step_and_arrives_whole
     assert out["first_step"] == [0]
     assert out["missing"] == [] and out["presets"] and out["downloads"]
     assert out["models"] <= MAX_MODELS, out["models"]
-    # the maps' preview layers are made on the first drag (app/map_figures.add_previews; a drag
+    # the maps' preview layers are made on the first drag (app/tabs/maps/figures.add_previews; a drag
     # draws into them: tests/test_live.py, tests/test_drag_browser.py)
     assert out["previews"] == 0
 

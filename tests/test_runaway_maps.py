@@ -6,17 +6,19 @@ import numpy as np
 import pytest
 
 import core
-from app import compute as c
-from app import design, map_data, map_figures, views
-from app import design_compute as dc
-from app.compute import Snapshot
-from app.scenario import Scenario
+from app.kit import views
+from app.state.scenario import Scenario
+from app.tabs.design import design
+from app.tabs.design import compute as dc
+from app.tabs.maps import compute as c
+from app.tabs.maps import data as map_data, figures as map_figures
+from app.tabs.maps.compute import Snapshot
 
 CRLB = "CRLB position error (m)"
 
 
 def _by_hand(plane, stations, crlb, observable):
-    """The flag, point by point from its definition (no shared code with app.compute.runaway)."""
+    """The flag, point by point from its definition (no shared code with app.tabs.maps.compute.runaway)."""
     u, v = plane.axes
     out = np.zeros(crlb.shape, dtype=bool)
     for i, vi in enumerate(v):
@@ -102,7 +104,7 @@ def test_the_optimiser_is_not_capped_below_the_region_and_reports_a_bound_it_hit
 
 def test_the_track_is_drawn_over_the_snapshot_crlb_map_of_its_stations():
     # issue 18: "set or draw a straight track over the current map and stations"
-    from app import track
+    from app.tabs.track import track
 
     s = Scenario(track_runs=2, track_filter="ekf", track_duration=60.0)
     out = track.compute(s)

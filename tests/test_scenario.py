@@ -8,11 +8,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from app import design_compute as dc
-from app import map_data, map_figures, views
-from app.cache import PanelCache
-from app.compute import READS, Snapshot, compute
-from app.scenario import (
+from app.kit import views
+from app.kit.cache import PanelCache
+from app.state.scenario import (
     ACCEPTED,
     DEPTHS,
     PAPER_MAPS,
@@ -23,6 +21,9 @@ from app.scenario import (
     Scenario,
     parameter,
 )
+from app.tabs.design import compute as dc
+from app.tabs.maps import data as map_data, figures as map_figures
+from app.tabs.maps.compute import READS, Snapshot, compute
 
 
 def test_presets_set_what_the_paper_says():
@@ -320,7 +321,7 @@ def test_every_layer_of_a_map_covers_the_maps_rectangle(first, then):
 
 
 def test_the_xz_plane_has_depth_increasing_downwards_and_shows_every_station():
-    # the ranges are fitted in the browser (DataRange1d, match_aspect: app/map_figures.py) to the
+    # the ranges are fitted in the browser (DataRange1d, match_aspect: app/tabs/maps/figures.py) to the
     # view box's corners; tests/test_browser.py checks the fitted ranges
     figs = map_figures.build()
     _fill(figs, plane="x–z", z_min=100.0, z_max=400.0, h=100.0)
@@ -444,7 +445,7 @@ def test_best_and_paper_maps_share_one_colour_range():
 
 
 def test_a_station_added_by_a_click_sits_at_the_station_depth():
-    from app.design import drawn_stations
+    from app.tabs.design.design import drawn_stations
 
     old = [[0.0, 0.0, 100.0], [15.0, 0.0, 90.0]]
     data = {"x": [0.0, 20.0, 50.0], "y": [0.0, 0.0, 30.0], "z": [100.0, 90.0, 0.0]}  # z: empty_value
@@ -464,7 +465,7 @@ def test_the_sea_trial_preset_is_recognised_as_active():
 def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends():
     # issue 25, defect 1: each clicked station was rewritten to z = 0 when the next was added
     # (the point-draw tool's z column holds a placeholder for clicked points)
-    from app.design import drawn_stations
+    from app.tabs.design.design import drawn_stations
 
     layout = [[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]]
     for x, y in [(-229.0, 168.0), (-134.0, -165.0), (55.0, 205.0)]:
@@ -555,7 +556,7 @@ def test_a_preset_after_another_is_the_same_scenario_as_alone(first):
 
 def test_a_figure_button_keeps_the_track_and_design_tabs_own_settings():
     # issue 40 defect 7: Fig. 1 reset the Track tab's runs from 2 to 5 without a word
-    from app.scenario import TAB_OWN
+    from app.state.scenario import TAB_OWN
     own = {n for a in TAB_OWN for n in PARTS[a].names()} - set(PRESET_INPUTS)
     assert {"track_runs", "track_filter", "error_quantity", "n_stations"} <= own
     for name in PRESETS:
@@ -572,7 +573,7 @@ def test_the_sea_trial_preset_is_the_command_lines_trial_on_the_track_tab():
     # at (−57.1, 280) heading −y, 300 measurements. The Maps tab's pair (core.dual_station) has
     # the same spacing and depth.
     import core
-    from app import track
+    from app.tabs.track import track
     from core.tracking import montecarlo as tr
 
     s = Scenario()
@@ -594,7 +595,7 @@ def test_the_sea_trial_preset_is_the_command_lines_trial_on_the_track_tab():
 
 def test_the_sidebar_speed_and_heading_are_hidden_on_the_track_tab():
     # issue 25 (Track): the sidebar's Speed/Heading stayed visible though the track uses its own
-    from app.applies import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+    from app.state.applies import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
 
     s = Scenario()
     for name in ("speed", "heading"):
@@ -659,7 +660,7 @@ def test_presets_applied_from_two_threads_at_once_leave_one_of_them_whole():
 def test_csv_names_each_unit_once_and_lists_only_the_inputs_that_apply():
     # issue 40 (low): the column "A: CRLB position error (1σ, m) (m)", and a header listing the
     # magnetic moments, the seabed and scenario B's inputs beside electric whole-space maps
-    from app import maps
+    from app.tabs.maps import maps
 
     s = Scenario(resolution=21, measure="CRLB position error (m)")
     text = maps.to_csv(s, PanelCache()).read()
@@ -683,7 +684,7 @@ def test_one_map_exports_alone_at_a_useful_resolution():
     # issue 40 (still present): a map's own PNG was its save tool's canvas, 403 px wide
     from PIL import Image
 
-    from app import export
+    from app.tabs.maps import export
 
     p = compute(Snapshot.of(Scenario(resolution=21)))
     for which in range(3):

@@ -4,8 +4,8 @@ and the maps computed through core's layered field."""
 import numpy as np
 
 import core
-from app import compute as c
-from app.scenario import PRESETS, Scenario
+from app.state.scenario import PRESETS, Scenario
+from app.tabs.maps import compute as c
 
 
 def test_default_is_the_whole_space_and_fig_presets_stay_there():

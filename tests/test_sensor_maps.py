@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 import core
-from app import map_data, map_figures
-from app.compute import Snapshot, compute
-from app.design_compute import ERROR_MAP_READS
-from app.applies import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
-from app.design_compute import design
-from app.scenario import PRESETS, Scenario
+from app.state.applies import DESIGN_TAB, MAPS_TAB, TRACK_TAB, applies
+from app.state.scenario import PRESETS, Scenario
+from app.tabs.design.compute import ERROR_MAP_READS
+from app.tabs.design.compute import design
+from app.tabs.maps import data as map_data, figures as map_figures
+from app.tabs.maps.compute import Snapshot, compute
 
 MAGNETOMETER, GRADIOMETER = "magnetometer (B, nT)", "gradiometer (G, nT/m)"
 BOTH, ELECTRIC = "magnetometer + gradiometer (BG)", "electric (E, V/m)"
@@ -154,9 +154,9 @@ def test_a_gradiometer_baseline_sets_the_scale_on_maps_design_and_track():
     Track), the same core.Sensor everywhere, and the page says its effect: one gradiometer of
     baseline L > 0 is observable (the differences are not homogeneous in r: spec §11's scale
     symmetry breaks at order (L/r)²), where the point tensor is rank 7 of 8 everywhere."""
-    from app import track
-    from app.dashboard import tensor_text
-    from app.design_compute import _fisher_options
+    from app.page import tensor_text
+    from app.tabs.design.compute import _fisher_options
+    from app.tabs.track import track
 
     s = Scenario(sensor=GRADIOMETER, baseline=0.5, **SMALL)
     p = compute(Snapshot.of(s))

@@ -1,10 +1,10 @@
 """The sensor kind is a selector of sensor parts (issue 39 item 1): each kind of the Sensor
-selector is a small param part (app.sensors) that builds its own ``core.Sensor``.
+selector is a small param part (app.state.sensors) that builds its own ``core.Sensor``.
 
 Checked here: the selector offers exactly the parts' labels; each part builds, for the same
 inputs, the same ``core.Sensor`` as the code it replaced (written out below as it was in
 ``ScenarioValues.core_options``); and each part reads exactly the inputs declared with its kind
-(``kinds``, app.part), so what the page shows for a kind and what the kind measures with agree.
+(``kinds``, app.state.part), so what the page shows for a kind and what the kind measures with agree.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import itertools
 import pytest
 
 import core
-from app import sensors
-from app.derive import moments, read_by
-from app.scenario import MODELS, SENSORS, PART_OF, Scenario, ScenarioValues, parameter
+from app.state import sensors
+from app.state.derive import moments, read_by
+from app.state.scenario import MODELS, SENSORS, PART_OF, Scenario, ScenarioValues, parameter
 
 
 def built_before(v, kind):
@@ -46,7 +46,7 @@ def test_the_selector_offers_the_sensor_parts():
 
 
 def test_the_kinds_words_and_units_in_titles_are_the_parts():
-    from app.compute import KIND_NAMES
+    from app.tabs.maps.compute import KIND_NAMES
 
     assert KIND_NAMES == {"E": ("electric", "V/m"), "B": ("magnetometer", "nT"),
                           "G": ("gradiometer", "nT/m"), "BG": ("magnetometer + gradiometer", "nT, nT/m")}

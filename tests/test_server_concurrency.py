@@ -114,7 +114,7 @@ def test_a_new_page_being_built_does_not_hold_up_another_sessions_events(server)
                 quick.append((dt, t0 + (dt or 0)))
                 # A pause, as a person's: two events of one session sent back to back can be
                 # processed on two of Panel's threads at once (Panel's EditableFloatSlider, used
-                # here before app/inputs.py, then failed: "Constant parameter 'value_throttled'").
+                # here before app/kit/inputs.py, then failed: "Constant parameter 'value_throttled'").
                 time.sleep(0.1)
             opener.join(120)
             assert "time" in page, "the new page was not complete in time"

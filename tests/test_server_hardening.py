@@ -15,7 +15,7 @@ from bokeh.util.token import generate_jwt_token, generate_session_id
 from tornado.httpclient import HTTPClientError, HTTPRequest
 from tornado.websocket import websocket_connect
 
-from app.scenario import ACCEPTED, Scenario
+from app.state.scenario import ACCEPTED, Scenario
 from support.page import CHROMIUM, chromium_browser
 from support.server import close_websocket, served_app
 

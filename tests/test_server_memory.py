@@ -26,9 +26,9 @@ def probe(sessions=SESSIONS):
     """Print the number of live Scenario objects after each closed session."""
     import panel as pn
 
-    from app import server_threads
-    from app.dashboard import create_app, panel_extension
-    from app.scenario import Scenario
+    from app.page import create_app, panel_extension
+    from app.serve import threads as server_threads
+    from app.state.scenario import Scenario
     from bench.load_test import Client
     from support.server import close_client, free_port, on_thread
 

@@ -1,8 +1,8 @@
-"""Process-wide serving settings (app/server_threads.py)."""
+"""Process-wide serving settings (app/serve/threads.py)."""
 
 import sys
 
-from app import server_threads
+from app.serve import threads as server_threads
 
 #: Runs alone, after the rest (``pytest -m serial``; tests/conftest.py):
 SERIAL = "it counts the threads of the serving process"

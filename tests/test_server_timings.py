@@ -1,4 +1,4 @@
-"""The served app's per-update timings (app/timings.py, issue 40): with ``APP_TIMINGS`` set, an
+"""The served app's per-update timings (app/kit/timings.py, issue 40): with ``APP_TIMINGS`` set, an
 update of the maps is recorded with a timestamp for every leg, in order, matched to the session
 and the value that made it. Structural only (which legs, in which order, on one clock with the
 client's); the durations are bench/load_test.py's business."""
@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from app import timings
+from app.kit import timings
 from bench.load_test import Client
 from support.server import close_client, on_thread, served_app
 

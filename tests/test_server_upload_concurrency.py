@@ -24,9 +24,9 @@ from bokeh.models import ColumnDataSource
 from panel.models.file_dropper import UploadEvent
 
 import core
-from app.calibration import UPLOAD_CHUNK_BYTES
-from app.compute import colour_range
-from app.scenario import Scenario
+from app.state.scenario import Scenario
+from app.tabs.calibration.calibration import UPLOAD_CHUNK_BYTES
+from app.tabs.maps.compute import colour_range
 from bench.load_test import Client
 from core import calibration as cal
 from support.server import close_client, on_thread, served_app
@@ -43,7 +43,7 @@ ANSWER_WITHIN = 1.0
 B_ARGS = {"comparison": "Spacing d − reference d (Fig. 6)"}
 #: The css class of Panel's busy indicator (a component's ``loading``).
 LOADING = "pn-loading"
-#: The Calibration tab's index among the tabs (app.dashboard).
+#: The Calibration tab's index among the tabs (app.page).
 CALIBRATION_TAB = 3
 
 
@@ -80,7 +80,7 @@ def log_csv(seed):
 def expected_images(ph):
     """The normalised images of B's maps A and B at P_h = ``ph`` from core.evaluate_map: values
     (v − low) / (high − low) with the colour range the page gives A and B together
-    (app.compute.colour_range: 0.5–99.5 % of their finite values)."""
+    (app.tabs.maps.compute.colour_range: 0.5–99.5 % of their finite values)."""
     s = Scenario(**B_ARGS, Ph=ph)
     opts = s.snapshot().core_options()
     measure = opts.pop("measure")
@@ -164,7 +164,7 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
             assert busy_seen, "A's page never showed the busy indicator over the calibration's results"
             assert quick is not None, "B's slider change was not answered"
             # the indicator goes off with the result, in a message of its own right after it
-            # (app/offloop.py, changes): a few ms, 5 s allowed for a loaded machine
+            # (app/kit/offloop.py, changes): a few ms, 5 s allowed for a loaded machine
             uploader._pump(lambda: not busy(uploader.events[start:], last=True), 5)
             events = uploader.events[start:]
             assert not busy(events, last=True), "the busy indicator was left on after the result"
@@ -193,14 +193,14 @@ def test_an_uploaded_50000_reading_log_does_not_hold_up_another_session(server):
 
 
 def test_the_readme_the_container_and_the_cluster_serve_with_the_same_threads():
-    """The README's serve command, the container's and app.cluster's replicas pass the same
+    """The README's serve command, the container's and app.serve.cluster's replicas pass the same
     ``--num-threads`` as the served app of these tests (support.server): one way of serving."""
     import inspect
     import json
     import shlex
     from pathlib import Path
 
-    from app import cluster
+    from app.serve import cluster
 
     root = Path(__file__).resolve().parents[1]
 

@@ -1,13 +1,15 @@
-"""The Shape tab's pure functions (app/shape.py) and its parameters in the Scenario and the link."""
+"""The Shape tab's pure functions (app/tabs/shape/shape.py) and its parameters in the Scenario and the link."""
 
 import holoviews as hv
 import numpy as np
 import pytest
 
-from app import shape, url
-from app import design_compute, track
-from app.compute import READS
-from app.scenario import Scenario, preset_values
+from app.state import url
+from app.state.scenario import Scenario, preset_values
+from app.tabs.design import compute as design_compute
+from app.tabs.maps.compute import READS
+from app.tabs.shape import shape
+from app.tabs.track import track
 from core.shape.bound import shape_bound
 from core.shape.cases import CASES
 

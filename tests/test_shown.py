@@ -1,4 +1,4 @@
-"""A hidden tab computes nothing (issue 40, defect 3; app/shown.py): the Layout design tab built,
+"""A hidden tab computes nothing (issue 40, defect 3; app/kit/shown.py): the Layout design tab built,
 then hidden, does not recompute on a preset; shown again, it computes once, for the scenario as
 it then is. In-process (outside a server a deferred computation runs at once when shown); the
 same in the browser, timed against the maps: tests/test_browser_state.py."""
@@ -6,14 +6,14 @@ same in the browser, timed against the maps: tests/test_browser_state.py."""
 import panel as pn
 import pytest
 
-from app import design_compute
-from app.cache import PanelCache
-from app.compute import Snapshot
-from app.dashboard import _widgets
-from app.design import design_tab
-from app.design_compute import ERROR_MAP_READS
-from app.shown import WhenShown
-from app.scenario import Scenario
+from app.kit.cache import PanelCache
+from app.kit.shown import WhenShown
+from app.page import _widgets
+from app.state.scenario import Scenario
+from app.tabs.design import compute as design_compute
+from app.tabs.design.compute import ERROR_MAP_READS
+from app.tabs.design.design import design_tab
+from app.tabs.maps.compute import Snapshot
 
 
 class Counting(PanelCache):

@@ -4,7 +4,7 @@ computation reads the input that changed.
 For every cached computation of a tab, two sets of inputs are found independently and compared:
 
 - what its key depends on: each input of the scenario is changed in turn, and the key (the
-  :class:`app.compute.Snapshot` the tab builds, from the tab's own declaration) compared with the
+  :class:`app.tabs.maps.compute.Snapshot` the tab builds, from the tab's own declaration) compared with the
   default's;
 - what the computation reads: it runs on that key's values with every attribute read recorded,
   over scenarios that take each of its branches (each sensor kind, a layered sea, the x–z plane,
@@ -15,16 +15,19 @@ For every cached computation of a tab, two sets of inputs are found independentl
 
 The Shape tab's computation is given its key's values as a plain mapping (``dict(key.items)``), so
 it can read nothing else; what it reads of them is not recorded here. The Calibration tab keys its
-task on its own part's values (app/calibration.py) and is not in the shared cache.
+task on its own part's values (app/tabs/calibration/calibration.py) and is not in the shared cache.
 """
 
 from __future__ import annotations
 
 import pytest
 
-from app import compute, design_compute, shape, track
-from app.compute import Snapshot
-from app.scenario import PART_OF, Scenario, ScenarioValues, defaults, inputs
+from app.state.scenario import PART_OF, Scenario, ScenarioValues, defaults, inputs
+from app.tabs.design import compute as design_compute
+from app.tabs.maps import compute
+from app.tabs.maps.compute import Snapshot
+from app.tabs.shape import shape
+from app.tabs.track import track
 
 #: The inputs read by the computation running now (see :class:`Recorded`).
 READ = set()

@@ -4,7 +4,7 @@ as two scales), the same on the page (map_figures._TICK_JS, in Chromium) and in 
 
 import pytest
 
-from app import export, map_data, map_figures
+from app.tabs.maps import export, data as map_data, figures as map_figures
 from support.page import chromium_browser, chromium_missing
 
 #: Tick sets of a log10-metre bar (BasicTicker's steps) and of a plain bar.

@@ -363,7 +363,7 @@ def test_an_overconfident_filter_is_flagged_beside_its_nees():
 
     from scipy.stats import chi2
 
-    from app.track import nees_check, summary_text
+    from app.tabs.track.track import nees_check, summary_text
 
     summary = dict(filter="ekf", runs=5, diverged=0.0, trmse_final_m=3.0, pcrlb_final_m=1.0, nees=8710.0)
     out = {"res": SimpleNamespace(summary=summary), "breaks": np.zeros(3, dtype=bool)}

@@ -17,8 +17,8 @@ from core.tracking import montecarlo as tr
 def test_a_track_shorter_than_the_banks_start_window_is_tracked():
     # issue 40 defect 9: ?track_duration=5 (6 steps at T = 1 s, accepted by the inputs) raised
     # "init_steps must be an integer in [1, 3]; got 10" in the bank
-    from app import track
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.track import track
 
     s = Scenario()
     s.update(track_duration=5.0, track_runs=2)
@@ -65,8 +65,8 @@ def test_the_command_line_flags_an_inconsistent_nees(tmp_path, capsys):
 def test_divergence_is_not_judged_against_a_bound_that_predicts_nothing():
     # issue 40 (low): "diverged 0 %" beside a final error of 2.3 km: the final PCRLB (4.5 km)
     # is beyond its linearisation limit there, and 5 × it hid every error
-    from app import track
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.track import track
 
     s = Scenario()
     s.update(track_x0=-1000.0, track_y0=-900.0)
@@ -87,9 +87,9 @@ def test_divergence_is_not_judged_against_a_bound_that_predicts_nothing():
 def test_the_station_depth_h_moves_the_custom_stations_at_it():
     # issue 40 defect 6: h = 120 moved neither the Layout design nor the Track stations; three
     # clicked stations then sat at 120 m beside two at 100 m, unsaid
-    from app import track
-    from app.design import drawn_stations
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.design.design import drawn_stations
+    from app.tabs.track import track
 
     s = Scenario()
     assert [st[2] for st in s.stations.stations] == [100.0, 100.0]
@@ -125,10 +125,10 @@ def test_a_depth_error_beyond_the_water_column_is_flagged():
     # issue 40 (low): "depth error of 1.24e+04 m" was printed, unflagged, in 8.4 m of water
     import panel as pn
 
-    from app.cache import SHARED
-    from app.dashboard import _widgets
-    from app.design import design_tab
-    from app.scenario import Scenario
+    from app.kit.cache import SHARED
+    from app.page import _widgets
+    from app.state.scenario import Scenario
+    from app.tabs.design.design import design_tab
 
     s = Scenario()
     s.apply_preset("Seed 001 sea trial")

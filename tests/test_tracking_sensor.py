@@ -228,8 +228,8 @@ def test_the_track_tab_tracks_with_the_scenarios_magnetic_sensor():
     """The Track tab's case is the sidebar's sensor (issue 26 item 5): a magnetic kind gives an
     8-state case with the scenario's moment and core.Sensor, its PCRLB and map from the same
     model; seed 001's bank runs on it too (issue 36)."""
-    from app import track
-    from app.scenario import Scenario
+    from app.state.scenario import Scenario
+    from app.tabs.track import track
 
     s = Scenario()
     s.update(sensor="magnetometer + gradiometer (BG)", track_filter="ekf", track_runs=2,

@@ -1,4 +1,4 @@
-"""The page URL follows the scenario (app.url.sync_url), after the maps for map values; refused
+"""The page URL follows the scenario (app.state.url.sync_url), after the maps for map values; refused
 link values are reported and taken out of the address bar. Against Panel's own Location."""
 
 from urllib.parse import parse_qs
@@ -7,9 +7,9 @@ import panel as pn
 import pytest
 from panel.io.location import Location
 
-from app.compute import MAP_INPUTS
-from app.scenario import PART_OF, PRESETS, Scenario
-from app.url import query, sync_url, without
+from app.state.scenario import PART_OF, PRESETS, Scenario
+from app.state.url import query, sync_url, without
+from app.tabs.maps.compute import MAP_INPUTS
 
 TITLES = ("Maps", "Layout design", "Track", "Calibration")
 
@@ -80,7 +80,7 @@ def test_a_refused_value_never_reaches_the_url():
 
 
 def _served_like(search):
-    """A Scenario and Tabs opened from link ``search``, as the page does (app.dashboard)."""
+    """A Scenario and Tabs opened from link ``search``, as the page does (app.page)."""
     scenario, location = Scenario(), _location(search)
     tabs = pn.Tabs(*[(t, pn.pane.Markdown(t)) for t in TITLES])
     sync_url(scenario, location, _args(search), tabs=tabs, titles=TITLES)

@@ -5,12 +5,13 @@ import numpy as np
 import pytest
 from bokeh.colors import RGB
 
-from app import compute as c
-from app import design_compute as dc
-from app import map_data, maps, track
-from app.cache import SHARED
-from app.compute import Snapshot
-from app.scenario import Scenario
+from app.kit.cache import SHARED
+from app.state.scenario import Scenario
+from app.tabs.design import compute as dc
+from app.tabs.maps import compute as c
+from app.tabs.maps import data as map_data, maps
+from app.tabs.maps.compute import Snapshot
+from app.tabs.track import track
 
 CRLB = "CRLB position error (m)"
 
@@ -40,7 +41,7 @@ def test_the_design_and_track_maps_dot_runaway_points_as_the_maps_tab_does():
     d = dc.design(Snapshot.of(Scenario(resolution=41), dc.ERROR_MAP_READS))
     far = c.runaway(d.plane, d.stations, d.errors.position, d.errors.observable)
     assert far.any()
-    from app import views
+    from app.kit import views
 
     layer = np.flipud(views.runaway_layer(d).data) > 0
     np.testing.assert_array_equal(layer, far & map_data.runaway_dots(far.shape))
@@ -126,7 +127,7 @@ def test_the_track_help_quotes_the_moments_and_noise_and_where_they_are_set():
                                        ("", "empty"), ("nan", "not a finite number")])
 def test_text_typed_in_a_number_box_is_refused_with_its_reason(text, why):
     # Bokeh's numeric box dropped "abc" in the browser, silently
-    from app.inputs import number_input
+    from app.kit.inputs import number_input
 
     s = Scenario()
     column = number_input(s.target, "Ph", css_classes=["w-Ph"])
@@ -139,7 +140,7 @@ def test_text_typed_in_a_number_box_is_refused_with_its_reason(text, why):
 
 
 def test_a_whole_number_box_refuses_a_fraction_and_shows_values_exactly():
-    from app.inputs import number_input, shown_text
+    from app.kit.inputs import number_input, shown_text
 
     s = Scenario()
     box = number_input(s.region, "resolution").objects[0]
@@ -169,7 +170,7 @@ def test_the_png_export_is_high_resolution_and_draws_the_pages_numbers():
 
     from PIL import Image
 
-    from app import export
+    from app.tabs.maps import export
 
     p = c.compute(Snapshot.of(Scenario(resolution=41)))
     img = Image.open(io.BytesIO(export.to_png(p).getvalue()))
@@ -187,7 +188,7 @@ def test_the_png_export_is_high_resolution_and_draws_the_pages_numbers():
 
 
 def test_the_png_export_of_an_x_z_section_states_its_vertical_exaggeration():
-    from app import export
+    from app.tabs.maps import export
 
     p = c.compute(Snapshot.of(Scenario(resolution=31, plane="x–z", z_min=100.0, z_max=400.0)))
     fig = export.figure(p)
@@ -204,11 +205,11 @@ def test_the_preset_button_of_the_scenario_is_solid_and_no_other():
     # the scenario: ~half of a slider change's watcher time on the server)
     import panel as pn
 
-    from app.dashboard import create_app
-    from app.scenario import PRESETS
+    from app.page import create_app
+    from app.state.scenario import PRESETS
 
     app = create_app()
-    s = app.scenario
+    s = app.state.scenario
     buttons = [b for b in pn.Column(*app.sidebar).select(pn.widgets.Button) if b.name in PRESETS]
     assert len(buttons) == len(PRESETS)
 

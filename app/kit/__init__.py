@@ -1,0 +1,1 @@
+"""The tabs' shared kit: the off-loop task, the cache, shown rules, number boxes, timings, shared plots."""

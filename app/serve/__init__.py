@@ -1,0 +1,1 @@
+"""Serving: process settings, the kernels' warm-up, the warming page, the nginx cluster."""

@@ -1,0 +1,1 @@
+"""The dashboard's state: param parts, declarations, the scenario, the URL, what applies (no Panel, no Bokeh)."""

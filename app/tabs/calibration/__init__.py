@@ -1,0 +1,1 @@
+"""The Calibration tab: which manoeuvres calibrate a ship's magnetometer."""

@@ -1,0 +1,1 @@
+"""The Layout design tab: CRLB maps of a layout, spacing, optimised layouts, drag previews."""

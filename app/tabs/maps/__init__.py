@@ -1,0 +1,1 @@
+"""The Maps tab: maps A, B and their difference, redrawn in place."""

@@ -1,0 +1,1 @@
+"""The Shape tab: locating and sizing an extended magnetic target."""

@@ -1,0 +1,1 @@
+"""The Track tab: a straight track over the stations, its PCRLB and trackers."""
