@@ -1,7 +1,7 @@
 """A study's runs: one scenario, or its variants (a ``vary`` block), written to a folder.
 
 Each variant is the scenario with some inputs set otherwise; every variant is checked (as a
-link, :mod:`study.scenario_file`) before any runs. Variants run in worker processes or on a
+link, :mod:`app.state.scenario_file`) before any runs. Variants run in worker processes or on a
 Dask cluster, through core's one way of running independent evaluations
 (:func:`core.dask_backend.run_calls`, as ``core.sweep`` does), with a progress bar.
 """
@@ -12,10 +12,10 @@ import itertools
 import json
 from pathlib import Path
 
-from app.views import to_dataset
-
-from . import report, results
-from .scenario_file import MAX_VARIANTS, ScenarioFileError, applied, dumps
+from app.kit.views import to_dataset
+from app.report import html as report
+from app.report import results
+from app.state.scenario_file import MAX_VARIANTS, ScenarioFileError, applied, dumps
 
 #: The files of one run, in its folder.
 REPORT, SUMMARY, MAPS, SCENARIO = "report.html", "summary.json", "maps.nc", "scenario.yaml"

@@ -14,9 +14,9 @@ import datetime
 import sys
 from pathlib import Path
 
-from . import scenario_file as sf
+from app.state import scenario_file as sf
 
-EPILOG = "Example: python -m study study/presets/paper/05-fig-5.yaml --out fig5 --vary d=5,10,15,30"
+EPILOG = "Example: python -m study app/state/presets/paper/05-fig-5.yaml --out fig5 --vary d=5,10,15,30"
 
 
 def parser():
@@ -47,7 +47,7 @@ def _pairs(items, option):
 
 def overrides(sets, varies):
     """``--set`` and ``--vary`` as typed values (as a link reads them): (sets, vary)."""
-    from app.url import link_value
+    from app.state.url import link_value
 
     typed = {k: link_value(v, k) if k in sf.names() else v for k, v in _pairs(sets, "--set").items()}
     vary = {k: [link_value(x, k) if k in sf.names() else x for x in v.split(",")]
@@ -81,7 +81,9 @@ def main(argv=None):
     written = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     if loaded.vary:
         return _batch(args, loaded, out, title, written)
-    from . import batch, results, script
+    from app.report import results
+
+    from . import batch, script
 
     c = results.compute(loaded.values, loaded.log)
     summary = results.summary(c)

@@ -2,7 +2,7 @@
 
 :func:`text` writes a readable ``.py``: the scenario's core inputs as literals (the planes,
 stations, moments, the one ``core.Sensor``, the track's case, as the page builds them from its
-inputs), the core calls the page makes, and the summary of :mod:`study.results` computed from
+inputs), the core calls the page makes, and the summary of :mod:`app.report.results` computed from
 their results with numpy. Run as it is, it prints the numbers as JSON: the maps' (A and B, CRLB
 position error), the custom layout's, the best spacing and the track's, equal to the report's
 (tests/test_study.py). No ``app``, no Panel: a reader can check and extend them.
@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import json
 
-from app import track
-from app.compute import scenarios_ab
-from app.design_compute import SPACING_POINTS, SPACING_RANGE, REGION_RESOLUTION, xy_region
-from app.scenario import CRITERIA, ScenarioValues
+from app.state.scenario import CRITERIA, ScenarioValues
+from app.tabs.design.compute import REGION_RESOLUTION, SPACING_POINTS, SPACING_RANGE, xy_region
+from app.tabs.maps.compute import scenarios_ab
+from app.tabs.track import track
 
 HEAD = '''"""Reproduces the numbers of the observability study "{title}" through the public core API.
 
@@ -129,7 +129,7 @@ def text(values, log=None, *, title="study", name="study.py", project=""):
 
 
 def expected(summary):
-    """The numbers the script prints, read from a study's summary (:func:`study.results.summary`)."""
+    """The numbers the script prints, read from a study's summary (:func:`app.report.results.summary`)."""
     keys = ("share_within_threshold", "share_unobservable", "median_m", "p90_m")
     out = {k: {n: summary["maps"][k][n] for n in keys} for k in "AB"}
     if summary.get("layout_design"):

@@ -8,11 +8,11 @@ from pathlib import Path
 import param
 import pytest
 
-from app.part import declared
-from app.scenario import PART_OF, Scenario, parameter
-from app.url import query
-from study import scenario_file as sf
-from study.presets import FAMILIES, presets
+from app.state.part import declared
+from app.state.scenario import PART_OF, Scenario, parameter
+from app.state.url import query
+from app.state import scenario_file as sf
+from app.state.presets import FAMILIES, presets
 
 HEAD = f"format: {sf.FORMAT}\nversion: {sf.VERSION}\n"
 LOG = (Path(__file__).parents[1] / "data" / "seed004_table1.csv").read_bytes()
@@ -190,8 +190,8 @@ BEFORE = json.loads((Path(__file__).parent / "data" / "presets_before_files.json
 
 @pytest.mark.parametrize("family", FAMILIES)
 def test_each_preset_file_gives_exactly_the_preset_values_of_before(family):
-    # tests/data/presets_before_files.json: the presets' values as app.scenario.PRESETS and
-    # app.calibration.PRESETS held them before they moved into files (issue 48)
+    # tests/data/presets_before_files.json: the presets' values as app.state.scenario.PRESETS and
+    # app.tabs.calibration.calibration.PRESETS held them before they moved into files (issue 48)
     assert presets(family) == BEFORE[family]
 
 

@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from app.compute import READS, Snapshot, compute
-from app.scenario import Scenario
-from study import batch, cli, results, script
-from study import scenario_file as sf
+from app.tabs.maps.compute import READS, Snapshot, compute
+from app.state.scenario import Scenario
+from app.report import results
+from study import batch, cli, script
+from app.state import scenario_file as sf
 
 SERIAL = "it runs the study in processes of its own (a pool of two, fresh interpreters)"
 ROOT = Path(__file__).parents[1]

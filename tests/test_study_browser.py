@@ -3,8 +3,8 @@
 
 import pytest
 
-from app.scenario import Scenario
-from study import report, results
+from app.state.scenario import Scenario
+from app.report import html as report, results
 from support.page import CHROMIUM, chromium_browser, chromium_missing
 
 pytestmark = pytest.mark.skipif(chromium_missing(), reason=f"no Chromium at {CHROMIUM}")

@@ -4,8 +4,9 @@ processes (started by tests/test_dask.py's fixture): the batch's numbers equal t
 import json
 import time
 
-from study import batch, cli, results
-from study import scenario_file as sf
+from app.report import results
+from study import batch, cli
+from app.state import scenario_file as sf
 from tests.test_dask import cluster  # noqa: F401  (the fixture: a scheduler and two workers)
 from tests.test_study import _close, _file
 

@@ -1,7 +1,7 @@
 """The presets as scenario files (spec §12): the paper's figures and the seeds' cases of the
 shared scenario (``paper/``), and the Calibration tab's cases (``calibration/``).
 
-Each file is a scenario file (:mod:`study.scenario_file`) with a ``title`` (the button's label)
+Each file is a scenario file (:mod:`app.state.scenario_file`) with a ``title`` (the button's label)
 and, as ``inputs``, the preset's values: every input it sets, some at their defaults (a preset
 is whole: what one preset sets, another sets back). Files are read in their names' order.
 """

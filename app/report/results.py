@@ -19,12 +19,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import core
-from app import calibration, design_compute, shape, track
-from app.compute import READS as MAP_READS
-from app.compute import Snapshot
-from app.compute import compute as compute_maps
-from app.cache import SHARED
-from app.scenario import Scenario
+from ..kit.cache import SHARED
+from ..state.scenario import Scenario
+from ..tabs.calibration import calibration
+from ..tabs.design import compute as design_compute
+from ..tabs.maps.compute import READS as MAP_READS
+from ..tabs.maps.compute import Snapshot
+from ..tabs.maps.compute import compute as compute_maps
+from ..tabs.shape import shape
+from ..tabs.track import track
 
 #: The tabs a study covers, in the page's order.
 TABS = ("Maps", "Layout design", "Track", "Calibration", "Shape")

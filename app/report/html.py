@@ -8,7 +8,7 @@ inline resources (holoviz/panel#6759, open), and a report must open with no netw
 It holds the scenario (every input that differs from its default, with its label and unit; the
 format, the project's version, the date), each tab's figures as the page draws them (the app's
 own figure and view functions, interactive where the page is), with their captions, the
-summary numbers (:func:`study.results.summary`) and every warning and veil the page shows.
+summary numbers (:func:`app.report.results.summary`) and every warning and veil the page shows.
 """
 
 from __future__ import annotations
@@ -27,14 +27,17 @@ from bokeh.layouts import column, row
 from bokeh.models import Div, InlineStyleSheet
 from bokeh.resources import Resources
 
-from app import calibration, map_figures, shape, track, views
-from app.calibration_plots import Figures as CalFigures
-from app.calibration_plots import plot_data
-from app.maps import legend
-from app.scenario import defaults, parameter
-
+from ..kit import views
+from ..state.scenario import defaults, parameter
+from ..state.scenario_file import project_version
+from ..tabs.calibration import calibration
+from ..tabs.calibration.plots import Figures as CalFigures
+from ..tabs.calibration.plots import plot_data
+from ..tabs.maps import figures as map_figures
+from ..tabs.maps.maps import legend
+from ..tabs.shape import shape
+from ..tabs.track import track
 from .results import scenario_of
-from .scenario_file import project_version
 
 hv.extension("bokeh", logo=False)
 

@@ -31,8 +31,8 @@ import param
 import yaml
 
 import core
-from app.scenario import Scenario, defaults, parameter
-from app.url import link_problem, link_value, names, query, read_link
+from .scenario import Scenario, defaults, parameter
+from .url import link_problem, link_value, names, query, read_link
 
 #: The format's name, the file's first key.
 FORMAT = "dipole-observability scenario"
@@ -104,7 +104,7 @@ def _log_block(log, log_name, log_path):
 
 def dumps(scenario, *, log=None, log_name="", log_path=None, vary=None, now=None, title=None,
           inputs=None):
-    """The scenario file (text) of ``scenario`` (an :class:`app.scenario.Scenario`).
+    """The scenario file (text) of ``scenario`` (an :class:`app.state.scenario.Scenario`).
 
     ``log``: the uploaded calibration log's bytes (embedded up to :data:`MAX_EMBEDDED_LOG`);
     ``log_path``: reference it by this path (relative to the file) and its SHA-256 instead.
