@@ -201,3 +201,16 @@ def test_a_preset_file_applied_to_a_fresh_scenario_is_the_preset_applied():
         ref = Scenario()
         ref.apply_preset(name)
         assert problems == {} and _inputs(s) == _inputs(ref), name
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_every_preset_file_is_checked_as_a_link_and_is_what_the_page_loads(family):
+    from app.state import scenario as state
+    from app.state.presets import files
+    from app.tabs.calibration import calibration
+
+    shown = {"paper": state.PRESETS, "calibration": calibration.PRESETS}[family]
+    assert shown == presets(family) and len(shown) == len(files(family)) > 0
+    for path in files(family):
+        loaded = sf.loads(path.read_bytes(), where="page")  # refused, it would raise
+        assert loaded.inputs == shown[loaded.header["title"]]

@@ -3,14 +3,16 @@ shared scenario (``paper/``), and the Calibration tab's cases (``calibration/``)
 
 Each file is a scenario file (:mod:`app.state.scenario_file`) with a ``title`` (the button's label)
 and, as ``inputs``, the preset's values: every input it sets, some at their defaults (a preset
-is whole: what one preset sets, another sets back). Files are read in their names' order.
+is whole: what one preset sets, another sets back). Files are read in their names' order. They
+are read here with YAML's safe loader only, as the page's state is built (the scenario file's
+checks need that state: tests/test_scenario_file.py checks every preset file with them).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from ..scenario_file import loads
+import yaml
 
 #: The folder of the preset files.
 FOLDER = Path(__file__).parent
@@ -29,6 +31,7 @@ def presets(family):
     """The presets of ``family``: title -> the inputs it sets (name -> value), in order."""
     out = {}
     for path in files(family):
-        loaded = loads(path.read_bytes(), where="page")
-        out[loaded.header["title"]] = loaded.inputs
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        out[doc["title"]] = {k: [list(v) for v in val] if k == "stations" else val
+                             for k, val in doc["inputs"].items()}
     return out
