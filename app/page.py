@@ -16,6 +16,7 @@ import param
 from panel.io.state import set_curdoc
 
 from app.kit import offloop
+from app.kit.alerts import alert, refusal, with_refusal
 from app.kit.cache import SHARED
 from app.kit.inputs import number_input
 from app.kit.number_box import number_box
@@ -92,7 +93,7 @@ def freeze_startup_objects():
     gc.freeze()
 
 
-_alert = maps.alert
+_alert = alert
 
 
 #: Numbers typed or dragged (:func:`app.kit.inputs.number_input`): every number of the sidebar but
@@ -125,7 +126,7 @@ def _section(scenario, tabs, title, names, collapsed):
         if name == "noise":  # a box that says why it refuses (emptied, it raised in the server)
             return number_box(scenario.part_of(name), name, css_classes=[f"w-{name}"])
         if name in NUMBERS:
-            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"])
+            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"], on_slider=live.follow)
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
         return cls.from_param(scenario.ref(name), **spec)
@@ -138,7 +139,7 @@ def _section(scenario, tabs, title, names, collapsed):
             # of the sidebar it was out of sight when typing in Stations or Advanced).
             w = widget(name)
             column = w if name in NUMBERS else pn.Column(w, sizing_mode="stretch_width", margin=0)
-            rows[name] = maps.with_refusal(scenario, column, [name], f"w-message-{name}")
+            rows[name] = with_refusal(scenario, column, [name], f"w-message-{name}")
         return rows[name]
 
     # An input is built when it first applies, and a collapsed card's inputs when it is first
@@ -295,14 +296,131 @@ def first_visit(tabs, titles, holders, makers):
     fill(tabs.active, now=True)
 
 
+def _in_sidebar(scenario, side, parts):
+    """A maker of a tab whose inputs go to the sidebar's ``side`` column (on its first visit)."""
+    def make():
+        inputs, main = parts(scenario)
+        inputs.param.update(width=None, sizing_mode="stretch_width")
+        offloop.soon(pn.state.curdoc, partial(setattr, side, "objects", [inputs]))
+        return main
+    return make
+
+
+def _later_tabs(scenario, cache, titles, when_shown, sides):
+    """{title: maker} of the tabs built on their first visit (:func:`first_visit`)."""
+    return {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
+                                         design_tab(scenario, cache, _widgets(), when_shown[DESIGN_TAB]),
+                                         sizing_mode="stretch_width", margin=0),
+            titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB),
+                                         track_tab(scenario, when_shown[TRACK_TAB]),
+                                         sizing_mode="stretch_width", margin=0),
+            titles[3]: _in_sidebar(scenario, sides[titles[3]], calibration_parts),
+            titles[4]: _in_sidebar(scenario, sides[titles[4]], shape_parts)}
+
+
+def _preset_buttons(scenario, tabs):
+    """The paper figures' preset buttons, the one the scenario holds solid."""
+    buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
+                                       width=90 if len(name) <= 6 else 150,  # a seed's name is longer
+                                       css_classes=[f"w-preset-{name[-1]}"],
+                                       on_click=lambda e, n=name: scenario.apply_preset(n))
+               for name in PRESETS}
+
+    def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
+        active = scenario.active_preset()
+        for name, button in buttons.items():
+            button.button_style = "solid" if name == active else "outline"
+
+    for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
+        part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
+    restyle()
+    # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
+    # own (Calibration, Shape), where a click changed the hidden Maps state.
+    return pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
+                                      "the figure's map gets a red frame; the Layout design "
+                                      "and Track tabs' own settings stay)"),
+                     pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"),
+                     visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
+                     sizing_mode="stretch_width", margin=0)
+
+
+def _download(scenario, cache, ext, fn, label=None, suffix=""):
+    """A download button of the maps, named after the scenario (was always observability_maps.*),
+    set as the file is made."""
+    def make():
+        name = maps.download_name(scenario, cache, ext)
+        button.filename = name.removesuffix(f".{ext}") + f"_{suffix}.{ext}" if suffix else name
+        return fn(scenario, cache)
+
+    button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
+                                     label=label or {"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
+                                     button_type="light",
+                                     css_classes=[f"w-download-{ext}" + (f"-{suffix}" if suffix else "")])
+    return button
+
+
+def _download_buttons(scenario, cache, tabs):
+    """The maps' downloads, shown on the Maps tab."""
+    def download(*args, **kw):
+        return _download(scenario, cache, *args, **kw)
+
+    return pn.Column(
+        pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
+                         f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
+                         f"{export.MAP_WIDTH_PX} px wide)"),
+        pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
+        # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
+        pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
+                 for label, which, suffix in maps.MAP_PNGS]),
+        visible=tabs.param.active.rx() == MAPS_TAB, margin=0)
+
+
+def _fill_sidebar(scenario, cache, tabs):
+    """The sidebar, filled after the page's first step, in two parts, each in a turn of the
+    session's event loop of its own (in_parts): Bokeh runs the whole :func:`create_app` in one
+    step of the server's loop, which every other session waits for. The parts fill the Column
+    returned, in the page from the start: built before the browser pulls the document (it has
+    the page's HTML and scripts to load first), they reach it with the document, else as a
+    change. Panel applies a change to a page not yet connected in a turn of its own, in which
+    Bokeh walks the whole document's model graph again: so one change of the sidebar per part
+    (a change per card cost 8 more walks, ~15 % of a page's server CPU)."""
+    sidebar = pn.Column(sizing_mode="stretch_width", margin=0)
+
+    def cards(sections):
+        return [_section(scenario, tabs, *section) for section in sections]
+
+    def first_part():
+        sidebar.objects = [_preset_buttons(scenario, tabs), refusal(scenario, None, "w-message"),
+                           *cards(SECTIONS[:2])]
+
+    def second_part():
+        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), _download_buttons(scenario, cache, tabs)]
+
+    in_parts(pn.state.curdoc, [first_part, second_part])
+    return sidebar
+
+
+def _template(sidebar, sides, tabs, titles, busy):
+    """The page's Bootstrap template: the sidebar, the tabs, the busy spinner in the header."""
+    return pn.template.BootstrapTemplate(
+        title="Dipole observability explorer",
+        # the Calibration and Shape tabs' inputs, shown on their tabs (where nothing else is)
+        sidebar=[sidebar, *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
+                                      sizing_mode="stretch_width") for t, side in sides.items()]],
+        main=[tabs],
+        sidebar_width=360,
+        header_background="#1f5f8b",
+        header=[busy],
+        # Panel's own busy indicator follows a process-wide flag: every event of any session
+        # would restyle the spinner of every open session (Python work on the server for each).
+        busy_indicator=None,
+    )
+
+
 def create_app():
     scenario = Scenario()
     cache = SHARED  # results are shared by every session of the process (app.kit.cache)
-
-    def session_closed(ctx):
-        _schedule_trim()
-
-    pn.state.on_session_destroyed(session_closed)
+    pn.state.on_session_destroyed(lambda ctx: _schedule_trim())
 
     served = pn.state.location is not None  # no page URL outside a served page
     args = (pn.state.session_args or {}) if served else {}
@@ -329,26 +447,11 @@ def create_app():
     sides = {t: pn.Column(sizing_mode="stretch_width", margin=0, css_classes=[f"w-side-{t.lower()}"])
              for t in (titles[3], titles[4])}
 
-    def in_sidebar(title, parts):
-        def make():
-            inputs, main = parts(scenario)
-            inputs.param.update(width=None, sizing_mode="stretch_width")
-            offloop.soon(pn.state.curdoc, partial(setattr, sides[title], "objects", [inputs]))
-            return main
-        return make
-
     # A hidden tab computes nothing: the Layout design and Track tabs follow the scenario when
     # shown (a preset on the Maps tab waited 6-20 s for them, and its text and link 20-30 s:
     # app/kit/shown.py). Given the Tabs below, before any tab is built.
     when_shown = {}
-    later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
-                                          design_tab(scenario, cache, _widgets(), when_shown[DESIGN_TAB]),
-                                          sizing_mode="stretch_width", margin=0),
-             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB),
-                                          track_tab(scenario, when_shown[TRACK_TAB]),
-                                          sizing_mode="stretch_width", margin=0),
-             titles[3]: in_sidebar(titles[3], calibration_parts),
-             titles[4]: in_sidebar(titles[4], shape_parts)}
+    later = _later_tabs(scenario, cache, titles, when_shown, sides)
     # What a hidden tab says until its first visit has built it (~0.1-0.5 s)
     holders = {t: pn.Column(pn.pane.HTML(f"Opening the {t} tab…", css_classes=["w-tab-opening"],
                                          styles={"color": "#555", "font-size": "15px"}),
@@ -364,88 +467,8 @@ def create_app():
                                       tabs=tabs, titles=titles,
                                       waits=lambda names: bool(set(names) & MAP_INPUTS),
                                       link=link))
-
-    # The sidebar is built after the page's first step, in two parts, each in a turn of the
-    # session's event loop of its own (in_parts): Bokeh runs this whole function in one step of
-    # the server's loop, which every other session waits for. The parts fill ``sidebar``, in the
-    # page from the start: built before the browser pulls the document (it has the page's HTML
-    # and scripts to load first), they reach it with the document, else as a change. Panel
-    # applies a change to a page not yet connected in a turn of its own, in which Bokeh walks
-    # the whole document's model graph again: so one change of ``sidebar`` per part (a change
-    # per card cost 8 more walks, ~15 % of a page's server CPU).
-    sidebar = pn.Column(sizing_mode="stretch_width", margin=0)
-
-    def preset_buttons():
-        buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
-                                           width=90 if len(name) <= 6 else 150,  # a seed's name is longer
-                                           css_classes=[f"w-preset-{name[-1]}"],
-                                           on_click=lambda e, n=name: scenario.apply_preset(n))
-                   for name in PRESETS}
-
-        def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
-            active = scenario.active_preset()
-            for name, button in buttons.items():
-                button.button_style = "solid" if name == active else "outline"
-
-        for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
-            part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
-        restyle()
-        # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
-        # own (Calibration, Shape), where a click changed the hidden Maps state.
-        return pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
-                                          "the figure's map gets a red frame; the Layout design "
-                                          "and Track tabs' own settings stay)"),
-                         pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"),
-                         visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
-                         sizing_mode="stretch_width", margin=0)
-
-    def download(ext, fn, label=None, suffix=""):
-        # named after the scenario (was always observability_maps.*), set as the file is made
-        def make():
-            name = maps.download_name(scenario, cache, ext)
-            button.filename = name.removesuffix(f".{ext}") + f"_{suffix}.{ext}" if suffix else name
-            return fn(scenario, cache)
-
-        button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
-                                         label=label or {"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
-                                         button_type="light",
-                                         css_classes=[f"w-download-{ext}" + (f"-{suffix}" if suffix else "")])
-        return button
-
-    def download_buttons():
-        return pn.Column(
-            pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
-                             f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
-                             f"{export.MAP_WIDTH_PX} px wide)"),
-            pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
-            # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
-            pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
-                     for label, which, suffix in maps.MAP_PNGS]),
-            visible=tabs.param.active.rx() == MAPS_TAB, margin=0)
-
-    def cards(sections):
-        return [_section(scenario, tabs, *section) for section in sections]
-
-    def first_part():
-        sidebar.objects = [preset_buttons(), maps.refusal(scenario, None, "w-message"), *cards(SECTIONS[:2])]
-
-    def second_part():
-        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), download_buttons()]
-
-    in_parts(pn.state.curdoc, [first_part, second_part])
-    template = pn.template.BootstrapTemplate(
-        title="Dipole observability explorer",
-        # the Calibration and Shape tabs' inputs, shown on their tabs (where nothing else is)
-        sidebar=[sidebar, *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
-                                      sizing_mode="stretch_width") for t, side in sides.items()]],
-        main=[tabs],
-        sidebar_width=360,
-        header_background="#1f5f8b",
-        header=[busy],
-        # Panel's own busy indicator follows a process-wide flag: every event of any session
-        # would restyle the spinner of every open session (Python work on the server for each).
-        busy_indicator=None,
-    )
+    sidebar = _fill_sidebar(scenario, cache, tabs)
+    template = _template(sidebar, sides, tabs, titles, busy)
     template.scenario = scenario  # for tests and the load benchmark
     template.built_later = sidebar  # for tests
     return template

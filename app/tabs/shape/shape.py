@@ -38,11 +38,11 @@ from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
 from core.shape.model import LAG
 
 from app.kit import offloop
+from app.kit.alerts import alert, with_refusal
 from app.kit.cache import KERNEL_LOCK, SHARED
 from app.kit.inputs import number_input
 from app.state.scenario import Scenario, Shape, groups, inputs
-from app.tabs.maps.compute import Snapshot
-from app.tabs.maps.maps import alert, with_refusal
+from app.state.snapshot import Snapshot
 from .text import verdict_text
 
 hv.extension("bokeh", logo=False)
@@ -157,7 +157,7 @@ def preset_of(values):
 
 
 def key_of(scenario):
-    """The tab's inputs as a hashable key (its part's inputs' :class:`app.tabs.maps.compute.Snapshot`)."""
+    """The tab's inputs as a hashable key (its part's inputs' :class:`app.state.snapshot.Snapshot`)."""
     return Snapshot.of(scenario, inputs(*READS))
 
 
