@@ -20,12 +20,12 @@ from app.kit.alerts import alert, refusal, with_refusal
 from app.kit.cache import SHARED
 from app.kit.inputs import number_input
 from app.kit.number_box import number_box
-from app.kit.shown import WhenShown
+from app.kit.shown import ALWAYS, WhenShown
+from app.kit.tab import Mount
 from app.state import url
 from app.state.applies import (
     CALIBRATION_TAB,
     DECIDING,
-    DESIGN_TAB,
     MAPS_TAB,
     SHAPE_TAB,
     TRACK_TAB,
@@ -44,12 +44,17 @@ from app.state.scenario import (
     sidebar,
 )
 from app.state.sensors import BY_KIND
-from app.tabs.calibration.calibration import calibration_parts
-from app.tabs.design.design import design_tab
+from app.tabs.calibration.calibration import TAB as CALIBRATION
+from app.tabs.design.design import TAB as DESIGN
 from app.tabs.maps import export, live, maps
 from app.tabs.maps.compute import KIND_NAMES, MAP_INPUTS
-from app.tabs.shape.shape import shape_parts
-from app.tabs.track.track import track_tab
+from app.tabs.shape.shape import TAB as SHAPE
+from app.tabs.track.track import TAB as TRACK
+
+#: The page's tabs, in order (each an :class:`app.kit.tab.Tab`): the Tabs' titles, each tab's
+#: index, which are built on their first visit, which wait while hidden, which say the sensor
+#: kind over them and which put their inputs in the sidebar are derived from this list.
+TABS = (maps.TAB, DESIGN, TRACK, CALIBRATION, SHAPE)
 
 #: Sidebar sections: (title, parameters, collapsed?), as the inputs declare them (app.state.parts.sidebar).
 SECTIONS = sidebar()
@@ -157,7 +162,7 @@ def _section(scenario, tabs, title, names, collapsed):
         """Each input shown where it applies, the card where one does: one watcher per card (one
         binding per input re-read the scenario once per input, and carried its own watchers)."""
         s = scenario.snapshot()
-        shown = {name: applies(name, s, tabs.active) for name in names}
+        shown = {name: applies(name, s, TABS[tabs.active].key) for name in names}
         with lock:
             new = [name for name in names if opened_once[0] and shown[name] and name not in rows]
             for name in new:
@@ -296,29 +301,25 @@ def first_visit(tabs, titles, holders, makers):
     fill(tabs.active, now=True)
 
 
-def _in_sidebar(scenario, side, parts):
-    """A maker of a tab whose inputs go to the sidebar's ``side`` column (on its first visit)."""
+def _maker(tab, mount, sides):
+    """A maker of ``tab``'s content (``mount``: its :class:`app.kit.tab.Mount`, made when it is
+    built): with the sensor banner over it where it says so; a tab whose inputs go to the
+    sidebar puts them in its column of ``sides`` (on its first visit)."""
     def make():
-        inputs, main = parts(scenario)
-        inputs.param.update(width=None, sizing_mode="stretch_width")
-        offloop.soon(pn.state.curdoc, partial(setattr, side, "objects", [inputs]))
-        return main
+        m = mount(tab)
+        if tab.sidebar:
+            inputs, main = tab.view(m)
+            inputs.param.update(width=None, sizing_mode="stretch_width")
+            offloop.soon(pn.state.curdoc, partial(setattr, sides[tab.title], "objects", [inputs]))
+            return main
+        view = tab.view(m)
+        if not tab.banner:
+            return view
+        return pn.Column(sensor_banner(m.scenario, tab.key), view, sizing_mode="stretch_width", margin=0)
     return make
 
 
-def _later_tabs(scenario, cache, titles, when_shown, sides):
-    """{title: maker} of the tabs built on their first visit (:func:`first_visit`)."""
-    return {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
-                                         design_tab(scenario, cache, _widgets(), when_shown[DESIGN_TAB]),
-                                         sizing_mode="stretch_width", margin=0),
-            titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB),
-                                         track_tab(scenario, when_shown[TRACK_TAB]),
-                                         sizing_mode="stretch_width", margin=0),
-            titles[3]: _in_sidebar(scenario, sides[titles[3]], calibration_parts),
-            titles[4]: _in_sidebar(scenario, sides[titles[4]], shape_parts)}
-
-
-def _preset_buttons(scenario, tabs):
+def _preset_buttons(scenario, tabs, keys):
     """The paper figures' preset buttons, the one the scenario holds solid."""
     buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
                                        width=90 if len(name) <= 6 else 150,  # a seed's name is longer
@@ -340,7 +341,7 @@ def _preset_buttons(scenario, tabs):
                                       "the figure's map gets a red frame; the Layout design "
                                       "and Track tabs' own settings stay)"),
                      pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"),
-                     visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
+                     visible=pn.bind(lambda tab: keys[tab] not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
                      sizing_mode="stretch_width", margin=0)
 
 
@@ -359,7 +360,7 @@ def _download(scenario, cache, ext, fn, label=None, suffix=""):
     return button
 
 
-def _download_buttons(scenario, cache, tabs):
+def _download_buttons(scenario, cache, tabs, keys):
     """The maps' downloads, shown on the Maps tab."""
     def download(*args, **kw):
         return _download(scenario, cache, *args, **kw)
@@ -372,10 +373,10 @@ def _download_buttons(scenario, cache, tabs):
         # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
         pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
                  for label, which, suffix in maps.MAP_PNGS]),
-        visible=tabs.param.active.rx() == MAPS_TAB, margin=0)
+        visible=tabs.param.active.rx() == keys.index(MAPS_TAB), margin=0)
 
 
-def _fill_sidebar(scenario, cache, tabs):
+def _fill_sidebar(scenario, cache, tabs, keys):
     """The sidebar, filled after the page's first step, in two parts, each in a turn of the
     session's event loop of its own (in_parts): Bokeh runs the whole :func:`create_app` in one
     step of the server's loop, which every other session waits for. The parts fill the Column
@@ -390,11 +391,11 @@ def _fill_sidebar(scenario, cache, tabs):
         return [_section(scenario, tabs, *section) for section in sections]
 
     def first_part():
-        sidebar.objects = [_preset_buttons(scenario, tabs), refusal(scenario, None, "w-message"),
+        sidebar.objects = [_preset_buttons(scenario, tabs, keys), refusal(scenario, None, "w-message"),
                            *cards(SECTIONS[:2])]
 
     def second_part():
-        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), _download_buttons(scenario, cache, tabs)]
+        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), _download_buttons(scenario, cache, tabs, keys)]
 
     in_parts(pn.state.curdoc, [first_part, second_part])
     return sidebar
@@ -424,7 +425,7 @@ def create_app():
 
     served = pn.state.location is not None  # no page URL outside a served page
     args = (pn.state.session_args or {}) if served else {}
-    titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
+    keys, titles = tuple(t.key for t in TABS), tuple(t.title for t in TABS)
     # the link's values first: the first maps are the link's (read once, here)
     link = url.read_link(scenario, args, titles) if served else None
     flush_url = []  # set below, once the tabs exist
@@ -444,30 +445,36 @@ def create_app():
     # The Calibration and Shape tabs' inputs sit in the sidebar, which has nothing else for them
     # (at 1280 × 800 a blank sidebar beside inputs in the main area cut off the coefficient table
     # and shrank the Shape views to ~190 × 100 px): filled on the tab's first visit.
-    sides = {t: pn.Column(sizing_mode="stretch_width", margin=0, css_classes=[f"w-side-{t.lower()}"])
-             for t in (titles[3], titles[4])}
+    sides = {t.title: pn.Column(sizing_mode="stretch_width", margin=0, css_classes=[f"w-side-{t.title.lower()}"])
+             for t in TABS if t.sidebar}
 
     # A hidden tab computes nothing: the Layout design and Track tabs follow the scenario when
     # shown (a preset on the Maps tab waited 6-20 s for them, and its text and link 20-30 s:
     # app/kit/shown.py). Given the Tabs below, before any tab is built.
     when_shown = {}
-    later = _later_tabs(scenario, cache, titles, when_shown, sides)
+
+    def mount(tab):
+        return Mount(scenario, cache, _widgets(),
+                     when_shown.get(tab.key, ALWAYS), busy, after_draw)
+
+    makers = {t.title: _maker(t, mount, sides) for t in TABS}
+    later = {title: makers[title] for title in titles[1:]}
     # What a hidden tab says until its first visit has built it (~0.1-0.5 s)
     holders = {t: pn.Column(pn.pane.HTML(f"Opening the {t} tab…", css_classes=["w-tab-opening"],
                                          styles={"color": "#555", "font-size": "15px"}),
                             sizing_mode="stretch_width", margin=0)
                for t in later}
-    tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
-                   *holders.items(), sizing_mode="stretch_width")
-    when_shown.update({tab: WhenShown(tabs, tab) for tab in (DESIGN_TAB, TRACK_TAB)})
+    tabs = pn.Tabs((titles[0], makers[titles[0]]()), *holders.items(), sizing_mode="stretch_width")
+    when_shown.update({t.key: WhenShown(tabs, i) for i, t in enumerate(TABS) if t.waits})
     first_visit(tabs, titles, holders, later)
-    live.shown_with(tabs, MAPS_TAB)  # no previews of the maps while another tab is shown
+    if MAPS_TAB in keys:
+        live.shown_with(tabs, keys.index(MAPS_TAB))  # no previews of the maps while another tab is shown
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,
                                       waits=lambda names: bool(set(names) & MAP_INPUTS),
                                       link=link))
-    sidebar = _fill_sidebar(scenario, cache, tabs)
+    sidebar = _fill_sidebar(scenario, cache, tabs, keys)
     template = _template(sidebar, sides, tabs, titles, busy)
     template.scenario = scenario  # for tests and the load benchmark
     template.built_later = sidebar  # for tests

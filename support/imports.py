@@ -164,16 +164,15 @@ def folder_edges(edges: dict) -> dict:
 
 
 def table(package: str = "app") -> str:
-    """A markdown table: each folder of ``package``, its modules and lines, and the folders of
-    the package it imports."""
+    """A markdown table: each folder of ``package``, its modules, and the folders of the package
+    it imports (docs/architecture.md holds it; tests/test_layout.py checks it is current)."""
     edges, files = graph(package), modules(package)
     by_folder = folder_edges(edges)
-    rows = ["| folder | modules | lines | imports (of app/) |", "|---|---|---|---|"]
+    rows = ["| folder | modules | imports (of app/) |", "|---|---|---|"]
     for f in sorted(by_folder, key=lambda f: (_rank(f), f)):
-        mods = sorted(m for m in files if folder(m) == f)
-        lines = sum(len(files[m].read_text(encoding="utf-8").splitlines()) for m in mods)
+        mods = sorted(files[m].name for m in files if folder(m) == f and files[m].name != "__init__.py")
         uses = ", ".join(f"`{u}`" for u in sorted(by_folder[f], key=lambda f: (_rank(f), f)))
-        rows.append(f"| `{f}` | {len(mods)} | {lines} | {uses or '—'} |")
+        rows.append(f"| `{f}` | {', '.join(mods) or '`__init__.py`'} | {uses or '—'} |")
     return "\n".join(rows)
 
 

@@ -195,3 +195,11 @@ def _tree(root, files):
             (root / parent).mkdir(parents=True, exist_ok=True)
             (root / parent / "__init__.py").touch()
         path.write_text(text)
+
+
+def test_the_architecture_doc_shows_apps_imports_as_they_are():
+    """docs/architecture.md's table of app/'s folders is what ``python -m support.imports`` prints
+    (run it and paste its table after a change that moves a module or an import)."""
+    from support import ROOT
+
+    assert imports.table("app") in (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")

@@ -22,6 +22,7 @@ from core import calibration as cal
 from app.kit import offloop
 from app.kit.alerts import refusal
 from app.kit.number_box import number_box
+from app.kit.tab import Tab
 from app.state.part import declared
 from app.state.scenario import Calibration
 from .plots import Figures, plot_data
@@ -462,3 +463,8 @@ def _set(scenario, values):
     """Set what a diagnosis button offers, in one update (as a preset)."""
     with pn.io.hold():
         scenario.update(values)
+
+
+#: The Calibration tab, as the page mounts it (app.kit.tab): its inputs in the sidebar.
+TAB = Tab("calibration", "Calibration", reads=tuple(FIELDS), sidebar=True,
+          view=lambda m: calibration_parts(m.scenario))

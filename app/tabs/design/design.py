@@ -14,6 +14,7 @@ from app.kit.alerts import alert, refusal
 from app.kit.inputs import number_input
 from app.kit.runaway import RUNAWAY_LIMIT, nearest_range
 from app.kit.shown import ALWAYS
+from app.kit.tab import Tab
 from app.state.scenario import MAX_STATIONS, Design
 from app.state.snapshot import Snapshot
 from . import compute as design_compute, live as design_live
@@ -305,3 +306,8 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     )
     tab.follow = follow  # the drag's previews (tests, the benchmark)
     return tab
+
+
+#: The Layout design tab, as the page mounts it (app.kit.tab).
+TAB = Tab("design", "Layout design", reads=ERROR_MAP_READS, banner=True, waits=True,
+          view=lambda m: design_tab(m.scenario, m.cache, m.widgets, m.shown))

@@ -12,6 +12,7 @@ from bokeh.layouts import row
 from app.kit import offloop, timings
 from app.kit.alerts import alert
 from app.kit.runaway import RUNAWAY_LIMIT
+from app.kit.tab import Tab
 from app.state.applies import MAPS_TAB, applies
 from app.state.scenario import defaults
 from app.state.snapshot import Snapshot
@@ -317,3 +318,8 @@ def to_png(scenario, cache, which=export.ALL):
 
 #: The one-map PNG downloads: (label, map index, file name suffix).
 MAP_PNGS = (("A", 0, "A"), ("B", 1, "B"), ("B vs A", 2, "difference"))
+
+
+#: The Maps tab, as the page mounts it (app.kit.tab).
+TAB = Tab("maps", "Maps", reads=READS,
+          view=lambda m: maps_tab(m.scenario, m.cache, busy=m.busy, after_draw=m.after_draw))

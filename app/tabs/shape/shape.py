@@ -41,6 +41,7 @@ from app.kit import offloop
 from app.kit.alerts import alert, with_refusal
 from app.kit.cache import KERNEL_LOCK, SHARED
 from app.kit.inputs import number_input
+from app.kit.tab import Tab
 from app.state.scenario import Scenario, Shape, groups, inputs
 from app.state.snapshot import Snapshot
 from .text import verdict_text
@@ -442,3 +443,7 @@ def shape_tab(scenario: Scenario):
     """The Shape tab as one layout: its inputs beside its results (:func:`shape_parts`)."""
     inputs, outputs = _build(scenario)
     return pn.Row(inputs, outputs, sizing_mode="stretch_width")
+
+
+#: The Shape tab, as the page mounts it (app.kit.tab): its inputs in the sidebar.
+TAB = Tab("shape", "Shape", reads=tuple(Shape.names()), sidebar=True, view=lambda m: shape_parts(m.scenario))

@@ -45,6 +45,7 @@ from app.kit.cache import KERNEL_LOCK, SHARED
 from app.kit.inputs import number_input
 from app.kit.runaway import RUNAWAY_LIMIT, nearest_range
 from app.kit.shown import ALWAYS
+from app.kit.tab import Tab
 from app.kit.views import Design
 from app.state.scenario import SENSORS, Scenario, inputs
 from app.state.sensors import BY_KIND
@@ -418,3 +419,8 @@ def track_tab(scenario: Scenario, shown=ALWAYS):
         ),
         sizing_mode="stretch_width",  # stretch_both made Panel override the Tabs' sizing (logged)
     )
+
+
+#: The Track tab, as the page mounts it (app.kit.tab).
+TAB = Tab("track", "Track", reads=READS, banner=True, waits=True,
+          view=lambda m: track_tab(m.scenario, m.shown))
