@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import magnetic as mk
 from ..kernels.electric import N_COMPONENTS as ELECTRIC_COMPONENTS
 from ..kernels.electric import N_STATES as ELECTRIC_STATES
 from ..kernels.magnetic import N_STATE as MAGNETIC_STATES
@@ -45,9 +44,6 @@ KINDS = {
 MAGNETIC_NOISE = (0.01, 0.01)
 #: Default electric noise (V/m) per component, as core.DEFAULT_NOISE.
 ELECTRIC_NOISE = 1e-7
-#: Rows code of each magnetic kind in :mod:`core.kernels.gamma` (the electric kinds use their
-#: field model's code, 0 exact, 1 paper).
-_MAGNETIC_CODES = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}
 
 
 @dataclass(frozen=True)
@@ -205,7 +201,7 @@ class Sensor:
         noise = self.noise_vector
         wb, wg = (1.0 / noise[0], 1.0 / noise[-1]) if whiten else (1.0, 1.0)
         params = np.array([self.near, magnetic.baseline_value(self.baseline), wb, wg])
-        return (0.0, _MAGNETIC_CODES[self.kind], params), 1.0
+        return (0.0, magnetic.MAGNETIC_CODES[self.kind], params), 1.0
 
     def states(self, value):
         """Validated states of this kind as a contiguous (P, n_states) array, and the leading
