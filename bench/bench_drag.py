@@ -244,7 +244,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
 
     class Dragger(Client):
         def __init__(self, url):
-            import app.tabs.maps.live  # noqa: F401  (the Drag model's class, to read the page's document)
+            import app.kit.drag  # noqa: F401  (the Drag model's class, to read the page's document)
 
             super().__init__(url)
             models = list(self.doc.models)
