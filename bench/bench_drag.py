@@ -254,7 +254,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
         def drag_for(self, index, seconds, out):
             from bokeh.document.events import ModelChangedEvent
 
-            from app.tabs.maps.live import PATIENCE_MS, THROTTLE_MS
+            from app.kit.drag import PATIENCE_MS, THROTTLE_MS
 
             start = len(self.events)
             t0 = time.perf_counter()
