@@ -4,7 +4,10 @@ app/tabs/design/live.py).
 
 The page sends a value once the server has answered the previous one, at most one every
 THROTTLE_MS (:data:`LOOP_JS`); the server answers every value (:func:`answer`), drawn, replaced
-or refused, and sizes its previews to a budget of compute (:func:`next_n`).
+or refused, and sizes its previews to a budget of compute (:func:`next_n`). A slider's value is
+offered only while a hand is down on the page (:data:`FOLLOW_JS`, :data:`HAND_JS`: a typed value,
+a link or a preset moves the handle from the server and is not previewed), and its final value
+goes out when the hand lets go (issue 46 item 3).
 """
 
 from __future__ import annotations
