@@ -20,6 +20,7 @@ from app.kit.cache import SHARED
 from app.kit.inputs import number_input
 from app.kit.number_box import number_box
 from app.kit.shown import WhenShown
+from app.report.buttons import study_buttons
 from app.state import url
 from app.state.applies import (
     CALIBRATION_TAB,
@@ -432,7 +433,8 @@ def create_app():
         sidebar.objects = [preset_buttons(), maps.refusal(scenario, None, "w-message"), *cards(SECTIONS[:2])]
 
     def second_part():
-        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), download_buttons()]
+        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), download_buttons(),
+                           study_buttons(scenario)]
 
     in_parts(pn.state.curdoc, [first_part, second_part])
     template = pn.template.BootstrapTemplate(

@@ -79,7 +79,7 @@ def test_a_served_page_builds_its_sidebar_after_the_first_step_and_arrives_whole
     "ignore:.*deprecated and will be removed in version 2.0:PendingDeprecationWarning")
 def test_outside_a_server_the_page_is_built_at_once():
     template = create_app()
-    assert len(template.built_later.objects) == len(SECTIONS) + 3  # presets, message, cards, downloads
+    assert len(template.built_later.objects) == len(SECTIONS) + 4  # presets, message, cards, downloads, study
     s = Scenario().snapshot()
     shown = [n for _, names, collapsed in SECTIONS if not collapsed for n in names if applies(n, s, MAPS_TAB)]
     classes = {c for o in pn.Column(*template.sidebar).select() for c in (getattr(o, "css_classes", None) or [])}

@@ -209,7 +209,7 @@ def test_the_preset_button_of_the_scenario_is_solid_and_no_other():
     from app.state.scenario import PRESETS
 
     app = create_app()
-    s = app.state.scenario
+    s = app.scenario  # the template's (create_app)
     buttons = [b for b in pn.Column(*app.sidebar).select(pn.widgets.Button) if b.name in PRESETS]
     assert len(buttons) == len(PRESETS)
 

@@ -19,7 +19,6 @@ and the last good maps stay.
 
 from __future__ import annotations
 
-import math
 import threading
 import types
 from contextlib import ExitStack, contextmanager
@@ -30,6 +29,7 @@ from param.parameterized import batch_call_watchers
 import core
 
 from .derive import LAYERED, SEABED, groups, having, moments, on_seabed, read_by  # noqa: F401
+from .presets import presets
 from .sensors import BY_KIND
 
 # The parts live in app/state/parts.py (their base in app/state/part.py); their names are this module's too
@@ -68,42 +68,9 @@ from .parts import (  # noqa: F401
     sidebar,
 )
 
-_COMMON = dict(Ph=100.0, Pv=20.0, h=100.0, z=120.0, speed=2.0 * math.sqrt(2.0), heading=45.0,
-               T=1.0, plane="x–y", extent=300.0, measure="log10|det Γ| (paper)",
-               sea_model="whole space")
-#: The paper's figures (spec §5) as parameter sets.
-PRESETS = {
-    "Fig. 1": dict(_COMMON, layout="single", comparison="Dual − single (Fig. 5)", d=15.0),
-    "Fig. 2": dict(_COMMON, plane="x–z", y=50.0, z_min=100.0, z_max=400.0, layout="single",
-                   comparison="Moment split B − A (Fig. 4)", Ph_b=100.0, Pv_b=100.0),
-    "Fig. 3": dict(_COMMON, layout="single", comparison="Moments ×k − original (Fig. 3)", k=10.0),
-    "Fig. 4": dict(_COMMON, layout="single", comparison="Moment split B − A (Fig. 4)",
-                   Ph=100.0, Pv=0.0, Ph_b=70.7, Pv_b=70.7),
-    "Fig. 5": dict(_COMMON, layout="dual", comparison="Dual − single (Fig. 5)", d=15.0),
-    "Fig. 6": dict(_COMMON, layout="dual", comparison="Spacing d − reference d (Fig. 6)",
-                   d=50.0, d_ref=10.0),
-    # seed 001's sea trial (spec §8): 8.4 m of water, sensors 10 m apart on the seabed,
-    # a 100 A·m horizontal source 0.2 m deep; its speed is not printed (2 m/s assumed)
-    "Seed 001 sea trial": dict(sea_model="layered", sea_depth=8.4, seabed_sigma=0.4, sigma=4.0,
-                               h=8.4, d=10.0, z=0.2, Ph=100.0, Pv=0.0, speed=2.0, heading=90.0,
-                               T=1.0, plane="x–y", extent=300.0, layout="dual",
-                               comparison="Dual − single (Fig. 5)", z_min=0.0, z_max=8.4,
-                               measure="log10|det Γ| (paper)",
-                               # the Track tab's case is the command line's seed001-trial
-                               # (core.tracking.montecarlo.CASES): two 2-axis sensors on the seabed
-                               # at (0, ±5 m), the source from (−57.1, 280) m along −y, 300
-                               # measurements (0 … 299 s). The Maps tab's pair is core.dual_station's,
-                               # d = 10 m along x: the same pair, turned by 90° about its centre.
-                               stations=[[0.0, -5.0, 8.4], [0.0, 5.0, 8.4]], track_axes=2,
-                               track_x0=-57.1, track_y0=280.0, track_heading=-90.0,
-                               track_duration=299.0, track_speed=2.0),
-    # spec §11 at one station: magnetometer (A) against magnetometer + gradiometer (B); A alone
-    # is rank 7 of 8 (veiled), B + G is observable. Switch A to the gradiometer to see it veiled too.
-    "Seed 003 sensors": dict(_COMMON, measure="CRLB position error (m)", layout="single",
-                             comparison="Sensor kind B − A (seed 003)",
-                             sensor="magnetometer (B, nT)",
-                             sensor_b="magnetometer + gradiometer (BG)", z=110.0, extent=60.0),
-}
+#: The paper's figures (spec §5) and the seeds' cases as parameter sets: the scenario files of
+#: app/state/presets/paper/ (docs/study.md), one place for each.
+PRESETS = presets("paper")
 
 #: Which map shows each paper figure: preset -> (map index 0 A, 1 B, 2 difference, caption).
 PAPER_MAPS = {

@@ -2,9 +2,10 @@
 station from Γ's rows, computed once, then for each lost station k the diagonal of the inverse
 of the others' sum.
 
-Private: assumes a validated float64 Γ stack whose rows are time-major, then station-major,
-then component (:mod:`.gamma`'s order). Work is split into ``CHUNKS`` runs of points, run in
-parallel (``prange``); each run owns its workspace.
+Private: assumes validated float64 input. :func:`loss_measures` builds Γ's rows LANES points at
+a time through :mod:`.gamma` (the one place where a kind picks its rows), as
+:func:`core.kernels.measures.fisher_measures` does, without storing Γ. Work is split into
+``CHUNKS`` runs, run in parallel (``prange``); each run owns its workspace.
 """
 
 from __future__ import annotations
@@ -15,22 +16,8 @@ import numba as nb
 import numpy as np
 
 from .electric import JIT
-from .gamma import CHUNKS
-
-
-@nb.njit(inline="always", **JIT)
-def _station_information(g, p, n_st, n_comp, info):
-    """info[s] (upper triangle) = Γ_sᵀΓ_s of point p: the rows of station s over every instant."""
-    n = g.shape[2]
-    info[:] = 0.0
-    for t in range(g.shape[1] // (n_st * n_comp)):
-        for s in range(n_st):
-            for c in range(n_comp):
-                r = (t * n_st + s) * n_comp + c
-                for j in range(n):
-                    gj = g[p, r, j]
-                    for k in range(j, n):
-                        info[s, j, k] += gj * g[p, r, k]
+from .gamma import (BAD, CHUNKS, LANES, NX, ROWS, T, components, gamma_row_lanes, load_lanes,
+                    row_stride, rows_lanes)
 
 
 @nb.njit(inline="always", **JIT)
@@ -72,33 +59,56 @@ def _scaled_inverse_diag(a, d, low, linv, out):
 
 
 @nb.njit(**JIT)
-def _loss_points(g, first, last, n_st, n_comp, inv_diag, kappa):
-    n = g.shape[2]
-    info = np.empty((n_st, n, n))
+def _loss_groups(states, first, last, stations, step, kappa, model, medium, free, n_rows,
+                 inv_diag, cond):
+    """:func:`loss_measures` for the groups of LANES points ``first`` … ``last − 1``."""
+    n, n_st = free.shape[0], stations.shape[0]
+    n_c, stride = components(model), row_stride(model)
+    w = np.empty((max(ROWS, T + NX), LANES))
+    info = np.empty((n_st, n, n, LANES))  # per-station Γ_sᵀΓ_s, upper triangle, per lane
     a = np.empty((n, n))
     low = np.zeros((n, n))
     linv = np.zeros((n, n))
     d = np.empty(n)
-    for p in range(first, last):
-        _station_information(g, p, n_st, n_comp, info)
-        for k in range(n_st):
-            for i in range(n):  # Σ_{s≠k} F_s (no subtraction: no cancellation)
-                for j in range(i, n):
-                    acc = 0.0
-                    for s in range(n_st):
-                        if s != k:
-                            acc += info[s, i, j]
-                    a[i, j] = acc
-            kappa[p, k] = _scaled_inverse_diag(a, d, low, linv, inv_diag[p, k])
+    for group in range(first, last):
+        p0 = group * LANES
+        count = load_lanes(w, states, p0)
+        info[:] = 0.0
+        for i in range(n_rows // (n_c * n_st)):
+            for s in range(n_st):
+                rows_lanes(w, i * step, stations, s, kappa, model, medium)
+                for comp in range(n_c):
+                    gamma_row_lanes(w, T, comp, stride, i * step, free)
+                    for j in range(n):
+                        for k in range(j, n):
+                            for lane in range(LANES):
+                                info[s, j, k, lane] += w[T + j, lane] * w[T + k, lane]
+        for lane in range(count):
+            p = p0 + lane
+            if w[BAD, lane] != 0.0:  # on a station
+                inv_diag[p] = np.nan
+                cond[p] = np.nan
+                continue
+            for k in range(n_st):
+                for i in range(n):  # Σ_{s≠k} F_s
+                    for j in range(i, n):
+                        acc = 0.0
+                        for s in range(n_st):
+                            if s != k:
+                                acc += info[s, i, j, lane]
+                        a[i, j] = acc
+                cond[p, k] = _scaled_inverse_diag(a, d, low, linv, inv_diag[p, k])
 
 
 @nb.njit(parallel=True, nogil=True, **JIT)
-def loss_inverse_diag(g, n_st, n_comp, inv_diag, kappa):
-    """For Γ (P, R, n) of ``n_st`` stations of ``n_comp`` components: ``inv_diag`` (P, S, n) =
-    diag((Σ_{s≠k} Γ_sᵀΓ_s)⁻¹) and ``kappa`` (P, S) the bound n · trace(A_s⁻¹) on the condition
-    number of its unit-diagonal scaling A_s (+inf, ``inv_diag`` NaN, where Cholesky breaks)."""
-    npts = g.shape[0]
-    chunks = min(npts, CHUNKS)
+def loss_measures(states, stations, step, kappa, model, medium, free, n_rows, inv_diag, cond):
+    """All-rows Γ of every station (n_rows = N · components · S rows), per point: ``inv_diag``
+    (P, S, n_free) = diag((Σ_{s≠k} Γ_sᵀΓ_s)⁻¹) with station k lost, and ``cond`` (P, S) the
+    bound on the condition number of its unit-diagonal scaling (+inf, ``inv_diag`` NaN, where
+    Cholesky breaks down; NaN on a station). Arguments as
+    :func:`core.kernels.measures.fisher_measures`."""
+    groups = (states.shape[0] + LANES - 1) // LANES
+    chunks = min(groups, CHUNKS)
     for c in nb.prange(chunks):
-        _loss_points(g, c * npts // chunks, (c + 1) * npts // chunks, n_st, n_comp, inv_diag,
-                     kappa)
+        _loss_groups(states, c * groups // chunks, (c + 1) * groups // chunks, stations, step,
+                     kappa, model, medium, free, n_rows, inv_diag, cond)

@@ -88,7 +88,7 @@ class LayoutConstraints:
         lo, hi = self.band(sea)
         ok = (self.in_zone(p) < 0) & (p[:, 2] >= lo) & (p[:, 2] <= hi)
         if self.fixed.shape[0] and self.min_spacing > 0:
-            ok &= _distances(p, self.fixed).min(axis=1) >= self.min_spacing
+            ok &= distances(p, self.fixed).min(axis=1) >= self.min_spacing
         return ok
 
     def violations(self, stations, sea=None):
@@ -107,7 +107,7 @@ class LayoutConstraints:
             if not lo <= z <= hi:
                 out.append(f"station {i} at depth {z:g} m is outside the depth band "
                            f"[{lo:g}, {hi:g}] m")
-        d = _distances(st, st) + np.diag(np.full(st.shape[0], np.inf))
+        d = distances(st, st) + np.diag(np.full(st.shape[0], np.inf))
         for i, j in zip(*np.nonzero(np.triu(d < self.min_spacing, 1))):
             out.append(f"stations {i} and {j} are {d[i, j]:.3g} m apart, closer than the "
                        f"minimum spacing {self.min_spacing:g} m")
@@ -208,7 +208,7 @@ def _inside(poly, xy):
     return (np.count_nonzero(crosses, axis=1) % 2 == 1) | np.any(gap <= scale, axis=1)
 
 
-def _distances(a, b):
+def distances(a, b):
     return np.linalg.norm(a[:, None, :3] - b[None, :, :3], axis=-1)
 
 
@@ -230,7 +230,7 @@ def feasibility(constraints, n_new, h, box, sea=None):
         if not lo <= z <= hi:
             raise ValueError(f"fixed station {i} at depth {z:g} m is outside the allowed depth "
                              f"band [{lo:g}, {hi:g}] m")
-    d = _distances(c.fixed, c.fixed) + np.diag(np.full(nf, np.inf))
+    d = distances(c.fixed, c.fixed) + np.diag(np.full(nf, np.inf))
     if nf > 1 and d.min() < c.min_spacing:
         i, j = np.unravel_index(np.argmin(d), d.shape)
         raise ValueError(f"fixed stations {min(i, j)} and {max(i, j)} are {d[i, j]:.3g} m apart: "

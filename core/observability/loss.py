@@ -7,7 +7,8 @@ matrix without the cancellation of a subtraction (near station k, F_k exceeds th
 decades). Γ is built once per point; each loss is then a 7 × 7 factorisation, not a new map.
 
 Numerics. F_(−k) is column-scaled to unit diagonal (A = D⁻¹ F D⁻¹, D² = diag F: the scaling of
-the kernels' Γ_s) and factorised by Cholesky (:func:`core.kernels.loss.loss_inverse_diag`). The condition number of
+the kernels' Γ_s) and factorised by Cholesky, Γ's rows built in the same compiled kernel
+(:func:`core.kernels.loss.loss_measures`, as the Fisher map's, never stored). The condition number of
 A is at most n · trace(A⁻¹); where that bound exceeds :data:`KAPPA_MAX` (a normal-equations
 inverse would lose more than ~1e-10 of its digits), or the factorisation breaks down, the point
 is done exactly as :func:`core.crlb_maps` does it: the rank by the one criterion
@@ -23,8 +24,8 @@ import numpy as np
 
 from ..kernels import loss
 from ..model import validation
-from .crlb import _CHUNK_ENTRIES, _covariance_flat
-from .gamma import _gamma, _svd_rank
+from .crlb import _covariance_flat
+from .gamma import _gamma, _options, _svd_rank
 
 __all__: list = []
 
@@ -64,18 +65,13 @@ def _loss_position(states, stations, steps, T, known, sensor):
     out = np.full((npts, n_st), np.inf)
     if n_st == 1 or npts == 0:
         return out  # no station left
-    kappa = np.empty((npts, n_st))
-    _, noise = sensor.kernel_rows()
-    rows_per_point = sensor.n_components * n_st * validation.steps(steps, 1) * free.size
-    chunk = max(1, _CHUNK_ENTRIES // rows_per_point)
-    for c0 in range(0, npts, chunk):
-        sl = slice(c0, min(npts, c0 + chunk))
-        g = _gamma(states[sl], stations, T, sensor, steps, known)  # (p, N·S·C, n) R^-½ Γ
-        inv_diag = np.empty((g.shape[0], n_st, free.size))
-        loss.loss_inverse_diag(g, n_st, sensor.n_components, inv_diag, kappa[sl])
-        out[sl] = np.sqrt(inv_diag[:, :, pos].sum(axis=-1)) * noise  # F⁻¹ = noise² (ΓᵀΓ)⁻¹
+    options, n_rows, noise = _options(stations, T, sensor, known, steps)
+    inv_diag, kappa = np.empty((npts, n_st, free.size)), np.empty((npts, n_st))
+    loss.loss_measures(np.ascontiguousarray(states), *options, n_rows, inv_diag, kappa)
+    out[:] = np.sqrt(inv_diag[:, :, pos].sum(axis=-1)) * noise  # F⁻¹ = noise² (ΓᵀΓ)⁻¹
+    # NaN: the target meets a station at a later instant (the kernels' mask): left NaN
     for k in range(n_st):  # the ill-conditioned and the singular: exactly (module notes)
-        exact = np.flatnonzero(~(kappa[:, k] <= KAPPA_MAX))
+        exact = np.flatnonzero(~(kappa[:, k] <= KAPPA_MAX) & ~np.isnan(kappa[:, k]))
         if exact.size:
             out[exact, k] = _exact_position(states[exact], np.delete(stations, k, axis=0), steps,
                                             T, known, sensor, pos, kappa[exact, k])

@@ -172,12 +172,12 @@ def optimise_layout(kind, n_stations, problem, *, d_range=None, n_curve=25, x0=N
             fit = _largest_spacing(kind, n, box)
             d_range = (min(2.0, 0.5 * fit), fit)
         unbounded = np.array([[-np.inf, np.inf]] * 2)  # the scaled layout's box is d_range's
-        scorer = None if cons is None else search._Scorer(value, cons, unbounded, sensor.sea)
+        scorer = None if cons is None else search.Scorer(value, cons, unbounded, sensor.sea)
         d, best, nfev, at_bound = _optimise_spacing(kind, n, h, box, d_range, n_curve,
                                                     value if cons is None else scorer.score, client)
         st = _centred_layout(kind, n, d, h, box)
         if cons is not None:
-            if best <= search._INFEASIBLE:
+            if best <= search.INFEASIBLE:
                 raise ValueError(f"no spacing d in {tuple(map(float, d_range))} m puts a centred "
                                  f"{kind} of {n} stations where the constraints allow")
             st, best = np.vstack([cons.fixed, st]), value(np.vstack([cons.fixed, st]))
@@ -227,14 +227,14 @@ def _touching(st, box):
 
 def _constrained_free(value, cons, n, h, box, cand, sea, x0, maxfev):
     """The constrained free search (:mod:`.search`); returns (all stations, value, nfev)."""
-    scorer = search._Scorer(value, cons, box, sea)
+    scorer = search.Scorer(value, cons, box, sea)
     if x0 is not None:
         new = np.column_stack([_x0(x0, n), np.full(n, h)])
         if not scorer.feasible(new):
             raise ValueError("x0 breaks the constraints: " + "; ".join(
                 cons.violations(np.vstack([cons.fixed, new]), sea) or ["a station is outside the box"]))
     else:
-        coarse = search._grid(box, h, cons, sea, search.EXCHANGE_GRID)
+        coarse = search.grid(box, h, cons, sea, search.EXCHANGE_GRID)
         new, _ = search.exchange(scorer, coarse, n, h)
         if new is None:  # the coarse grid has no room: the feasibility check's finer one has
             new, _ = search.exchange(scorer, cand, n, h)

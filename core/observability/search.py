@@ -7,7 +7,7 @@ beside fixed ones, outside forbidden zones, in a depth band, a minimum spacing a
 2. **Exchange** (Fedorov's, as in optimal design): each new station in turn moved to the best
    candidate with the others held, until a pass changes nothing (at most :data:`PASSES`).
 3. **Powell polish** of the new stations' (x, y) within the box; a layout that breaks a
-   constraint scores :data:`_INFEASIBLE`, below every feasible one, so the search never leaves
+   constraint scores :data:`INFEASIBLE`, below every feasible one, so the search never leaves
    the feasible set that it starts in.
 
 The layout returned is checked against every constraint (:meth:`LayoutConstraints.violations`)
@@ -22,7 +22,7 @@ import numba
 import numpy as np
 from scipy import optimize
 
-from .constraints import _distances
+from .constraints import distances
 
 __all__: list = []
 
@@ -31,10 +31,10 @@ EXCHANGE_GRID = 11
 #: Most exchange passes.
 PASSES = 3
 #: Score of a layout that breaks a constraint (the criteria are all far above it).
-_INFEASIBLE = -1e12
+INFEASIBLE = -1e12
 #: Floor of a feasible layout's score (a criterion of −inf: an unobservable point with the A or
-#: worst-point criterion), so that Powell's arithmetic stays finite; above _INFEASIBLE.
-_FLOOR = -1e11
+#: worst-point criterion), so that Powell's arithmetic stays finite; above INFEASIBLE.
+FLOOR = -1e11
 
 
 @contextmanager
@@ -50,14 +50,14 @@ def serial():
         numba.set_num_threads(before)
 
 
-def _grid(box, h, cons, sea, per_side):
+def grid(box, h, cons, sea, per_side):
     (xlo, xhi), (ylo, yhi) = box
     gx, gy = np.meshgrid(np.linspace(xlo, xhi, per_side), np.linspace(ylo, yhi, per_side))
     cand = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, h)])
     return cand[cons.allowed(cand, sea)]
 
 
-class _Scorer:
+class Scorer:
     """The criterion of fixed + new stations, with the feasibility test and a count."""
 
     def __init__(self, value, cons, box, sea):
@@ -69,21 +69,21 @@ class _Scorer:
         if np.any(new[:, 0] < xlo) or np.any(new[:, 0] > xhi) or np.any(new[:, 1] < ylo) \
                 or np.any(new[:, 1] > yhi) or not np.all(c.allowed(new, self.sea)):
             return False
-        d = _distances(new, new) + np.diag(np.full(new.shape[0], np.inf))
+        d = distances(new, new) + np.diag(np.full(new.shape[0], np.inf))
         return bool(d.min() >= max(c.min_spacing, 0.0)) if new.shape[0] > 1 else True
 
     def score(self, new):
         if not self.feasible(new):
-            return _INFEASIBLE
+            return INFEASIBLE
         self.nfev += 1
-        return max(self.value(np.vstack([self.cons.fixed, new])), _FLOOR)
+        return max(self.value(np.vstack([self.cons.fixed, new])), FLOOR)
 
 
 def _spaced(cand, others, spacing):
     """Candidates at least ``spacing`` from every station of ``others`` (and not on one)."""
     if others.shape[0] == 0:
         return cand
-    return cand[_distances(cand, others).min(axis=1) >= max(spacing, 1e-9)]
+    return cand[distances(cand, others).min(axis=1) >= max(spacing, 1e-9)]
 
 
 def _best_site(scorer, cand, new, i):

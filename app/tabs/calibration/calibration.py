@@ -22,6 +22,7 @@ from core import calibration as cal
 from app.kit import offloop
 from app.kit.number_box import number_box
 from app.state.part import declared
+from app.state.presets import presets
 from app.state.scenario import Calibration
 from app.tabs.maps.maps import refusal
 from .plots import Figures, plot_data
@@ -33,28 +34,10 @@ FIELDS = Calibration.names()
 
 #: The geomagnetic field's inputs (north, east, down), as declared (``vector="Be"``).
 BE = tuple(n for n in FIELDS if declared(Calibration.param[n]).get("vector") == "Be")
-_SIM_BE = dict(zip(BE, cal.SEED004_SIMULATION["be"]))
-_T1_BE = dict(zip(BE, cal.SEED004_TABLE1["be"]))
-#: One click loads a case: seed 004's two, and the manoeuvres that make its observability point.
-PRESETS = {
-    "Seed 004 simulation": dict(_SIM_BE, cal_source="Seed 004 simulation", cal_n_attitudes=12,
-                                cal_noise_nt=100.0, cal_angle_noise_deg=0.05, cal_iterations=600,
-                                cal_p0_bp_nt=3000.0, cal_seed=4),
-    "Seed 004 Table 1": dict(_T1_BE, cal_source="Seed 004 Table 1", cal_noise_nt=100.0 * np.sqrt(3),
-                             cal_angle_noise_deg=0.0, cal_iterations=600, cal_p0_bp_nt=3000.0),
-    "Four level headings": dict(_SIM_BE, cal_source="Designed manoeuvre", cal_headings="0, 90, 180, 270",
-                                cal_roll_deg=0.0, cal_pitch_deg=0.0, cal_n_attitudes=4,
-                                cal_noise_nt=100.0, cal_angle_noise_deg=0.05),
-    "Headings with roll and pitch": dict(_SIM_BE, cal_source="Designed manoeuvre",
-                                         cal_headings="0, 90, 180, 270", cal_roll_deg=10.0,
-                                         cal_pitch_deg=5.0, cal_n_attitudes=12, cal_noise_nt=100.0,
-                                         cal_angle_noise_deg=0.05),
-    "Small P(0): slow filter": dict(_SIM_BE, cal_source="Seed 004 simulation", cal_n_attitudes=12,
-                                    cal_noise_nt=100.0, cal_angle_noise_deg=0.05,
-                                    cal_iterations=3000, cal_p0_bp_nt=30.0, cal_seed=4),
-}
-for _preset in PRESETS.values():  # seed 004's cases, in its eq. (2)
-    _preset["cal_convention"] = "seed004"
+#: One click loads a case: seed 004's two, and the manoeuvres that make its observability point
+#: (seed 004's eq. (2) convention): the scenario files of app/state/presets/calibration/.
+PRESETS = presets("calibration")
+
 
 def applies(name, source):
     """Whether the input of ``name`` (one of FIELDS) applies to the data source ``source``, as
