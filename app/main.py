@@ -5,6 +5,7 @@ import contextlib
 
 import panel as pn
 
+from app.kit.connection import watch_connection
 from app.page import create_app, freeze_startup_objects, panel_extension
 from app.serve import threads as server_threads
 from app.serve.warming import warming_page
@@ -20,6 +21,7 @@ FIRST_SESSION_WAIT = 5.0
 if WARMUP.start():  # False when app/server_lifecycle.py started it (``panel serve app``)
     freeze_startup_objects()
     WARMUP.done[0].wait(FIRST_SESSION_WAIT)
+watch_connection(pn.state.curdoc)  # a page whose server goes away says so (app/kit/connection.py)
 if not WARMUP.ready(0):
     warming_page().servable(title=WARMING_MARK)
 else:

@@ -33,6 +33,7 @@ from app.state.applies import (
 )
 from app.state.derive import MAGNETIC_READS
 from app.state.part import declared
+from app.tabs.calibration.source import bring_own_values
 from app.state.scenario import (
     ACCEPTED,
     PART_OF,
@@ -298,6 +299,7 @@ def first_visit(tabs, titles, holders, makers):
 
 def create_app():
     scenario = Scenario()
+    bring_own_values(scenario)  # before the link is read: a link naming only the source too
     cache = SHARED  # results are shared by every session of the process (app.kit.cache)
 
     def session_closed(ctx):

@@ -58,13 +58,18 @@ from .observability.crlb import CrlbErrors, crlb_covariance, crlb_maps, horizont
 from .observability.design import (
     CRITERIA,
     CriterionResult,
+    LayoutConstraints,
     LayoutProblem,
     LayoutResult,
     SpacingResult,
+    StationCount,
+    StationLoss,
     best_spacing,
     layout_criterion,
     optimise_layout,
     spacing_curve,
+    station_count_curve,
+    station_loss,
 )
 from .observability.fisher import (
     DEFAULT_NOISE,

@@ -14,6 +14,7 @@ install) it does nothing. A stamp speaks for the one cache location numba uses i
 
 from __future__ import annotations
 
+import ast
 import hashlib
 from pathlib import Path
 
@@ -23,7 +24,7 @@ import numba
 #: kernels. A module that gains a cached kernel must be listed here (tests/test_kernel_cache.py
 #: checks the list against every file under core/, subpackages included).
 KERNEL_SOURCES = ("kernels/electric.py", "kernels/sea.py", "kernels/gamma.py", "kernels/measures.py",
-                  "kernels/filters.py", "kernels/pcrlb.py", "kernels/magnetic.py")
+                  "kernels/filters.py", "kernels/pcrlb.py", "kernels/magnetic.py", "kernels/loss.py")
 #: Name of the file that records the sources' hash at the last refresh.
 STAMP = "kernel-sources.sha256"
 
@@ -69,11 +70,35 @@ def cache_files(root=_HERE):
     return found
 
 
+def _inlined(decorator):
+    """Whether a decorator is numba's ``njit``/``jit`` with ``inline="always"``."""
+    return isinstance(decorator, ast.Call) and any(
+        k.arg == "inline" and isinstance(k.value, ast.Constant) and k.value.value == "always"
+        for k in decorator.keywords)
+
+
+def writes_cache(path):
+    """Whether numba writes cache files for the module at ``path``: it has a jitted function
+    that is not ``inline="always"``. An inlined kernel is compiled into its callers and cached
+    with them; core/kernels/electric.py holds only such kernels, so it never has an index."""
+    tree = ast.parse(Path(path).read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef):
+            for d in node.decorator_list:
+                name = d.func if isinstance(d, ast.Call) else d
+                name = name.attr if isinstance(name, ast.Attribute) else getattr(name, "id", "")
+                if name in ("njit", "jit") and not _inlined(d):
+                    return True
+    return False
+
+
 def cached(root=_HERE):
-    """Whether every :data:`KERNEL_SOURCES` module has compiled kernels (an index, ``*.nbi``) in
-    the cache this process reads: what a start may honestly call "loading from the cache"."""
+    """Whether every :data:`KERNEL_SOURCES` module that numba writes cache files for
+    (:func:`writes_cache`) has compiled kernels (an index, ``*.nbi``) in the cache this process
+    reads: what a start may honestly call "loading from the cache". (Asking the same of a module
+    of inlined kernels only made every warm start say it was compiling: issue 46 defect 11.)"""
     have = {p.name.split(".")[0] for p in cache_files(root) if p.suffix == ".nbi"}
-    return have >= {Path(name).stem for name in KERNEL_SOURCES}
+    return have >= {Path(name).stem for name in KERNEL_SOURCES if writes_cache(Path(root) / name)}
 
 
 def refresh(root=_HERE):

@@ -238,8 +238,8 @@ def section(nums=None):
       "scale has two reads of the 4 dipoles: their span along the axis (eq. (18)) and their "
       "second moment along it (√(12 λ1 N/(N+1))); beside them the bound if the 4 dipoles were a "
       "rigid evenly spaced line (9 parameters), the position bound of a point dipole of the same "
-      f"total moment (6 parameters), and the verdict: **sizable** when the read that sizes best "
-      f"has σ ≤ {100 * bd.SIZABLE_FRACTION:g} % of the main scale:\n")
+      f"total moment (6 parameters), and the verdict ({bd.SIZABLE_RULE}; \"sizable\" below is "
+      "yes only for sizable):\n")
     w("| closest approach (m) | centroid (m) | main scale, span read (m) | main scale, second moment (m) "
       "| axis (°) | rigid line: main scale (m) | axis (°) | point dipole: position (m) | sizable |")
     w("|---|---|---|---|---|---|---|---|---|")
@@ -270,7 +270,8 @@ def section(nums=None):
       f"10 m above, {b14['closest_approach_m']:.1f} m) the span read's σ is "
       f"{b14['main_scale_m']:.2g} m but the second moment's {b14['spread_main_scale_m'] * 100:.1f} cm: "
       "sizable, and the filters and the fit do size the cylinder there; the rule is checked "
-      "against their Monte-Carlo on both sides of its edge (`tests/test_shape_sizable.py`; "
+      "against the batch fit's Monte-Carlo over closest approaches in steps of 0.5 m, for a "
+      "cylinder and a disc (`tests/test_shape_sizable_sweep.py`; "
       "`python -m core.shape --cpa-sweep` draws the curve and answers how close the pass must "
       "be). " + _spec_sentence(n) + "\n")
     return "\n".join(L)

@@ -158,24 +158,26 @@ def test_layout_search_with_client_equals_without(cluster):
     _, client = cluster
     region = core.Plane("xy", (-200, 200), (-200, 200), 120.0, 9)
     d = np.linspace(5, 300, 7)
-    assert_same_numbers(core.spacing_curve(d, region, client=client), core.spacing_curve(d, region))
+    problem = core.LayoutProblem(region)
+    assert_same_numbers(core.spacing_curve(d, problem, client=client), core.spacing_curve(d, problem))
     with distributed.get_task_stream(client) as stream:
-        remote = core.best_spacing(region, d_range=(5, 300), n_curve=7, kind="triangle",
+        remote = core.best_spacing(problem, d_range=(5, 300), n_curve=7, kind="triangle",
                                    n_stations=3, client=client)
     assert len(_evaluate_tasks(stream.data)) == 7  # the coarse curve ran on the cluster
-    assert_same_result(remote, core.best_spacing(region, d_range=(5, 300), n_curve=7,
+    assert_same_result(remote, core.best_spacing(problem, d_range=(5, 300), n_curve=7,
                                                  kind="triangle", n_stations=3))
-    kw = dict(d_range=(5, 300), n_curve=5, criterion="worst_dopt")
-    assert_same_result(core.optimise_layout("square", 4, region, client=client, **kw),
-                       core.optimise_layout("square", 4, region, **kw))
-    assert_same_result(core.optimise_layout("free", 3, region, maxfev=60, client=client, **kw),
-                       core.optimise_layout("free", 3, region, maxfev=60, **kw))
+    kw = dict(d_range=(5, 300), n_curve=5)
+    worst = core.LayoutProblem(region, criterion="worst_dopt")
+    assert_same_result(core.optimise_layout("square", 4, worst, client=client, **kw),
+                       core.optimise_layout("square", 4, worst, **kw))
+    assert_same_result(core.optimise_layout("free", 3, worst, maxfev=60, client=client, **kw),
+                       core.optimise_layout("free", 3, worst, maxfev=60, **kw))
 
 
 def test_client_must_be_a_dask_client():
     region = core.Plane("xy", (-200, 200), (-200, 200), 120.0, 5)
     with pytest.raises(ValueError, match="dask.distributed.Client"):
-        core.best_spacing(region, n_curve=3, client="tcp://127.0.0.1:8786")
+        core.best_spacing(core.LayoutProblem(region), n_curve=3, client="tcp://127.0.0.1:8786")
     with pytest.raises(ValueError, match="dask.distributed.Client"):
         sweep.run(("d", np.array([5.0])), ("z", np.array([120.0])), SETTINGS, BASE,
                   progress=False, client=object())

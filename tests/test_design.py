@@ -165,9 +165,10 @@ def test_layouts():
      "threshold"),
     (lambda: core.layout_criterion(DUAL15, "region"), "region must be a core.Plane"),
     (lambda: core.layout_criterion(DUAL15, REGION, velocity=(0, 0)), "speed"),
-    (lambda: core.spacing_curve([10, -5], REGION), "d_values"),
-    (lambda: core.best_spacing(REGION, d_range=(50, 10)), "d_range"),
-    (lambda: core.optimise_layout("free", 2, REGION, x0=[[0, 0]]), "x0"),
+    (lambda: core.spacing_curve([10, -5], core.LayoutProblem(REGION)), "d_values"),
+    (lambda: core.best_spacing(core.LayoutProblem(REGION), d_range=(50, 10)), "d_range"),
+    (lambda: core.optimise_layout("free", 2, core.LayoutProblem(REGION), x0=[[0, 0]]), "x0"),
+    (lambda: core.best_spacing(REGION), "must be a core.LayoutProblem"),
     (lambda: core.horizontal_error_ellipse(PAPER_STATE, DUAL15, noise=0), "noise"),
     (lambda: core.crlb_maps(REGION, DUAL15, velocity=(2, 2, 0), moments=(1, 1)), "velocity"),
 ])
@@ -205,11 +206,12 @@ def test_unobservable_points_get_the_eta_floor():
 
 @pytest.mark.parametrize("criterion", ["mean_dopt", "worst_dopt"])
 def test_best_spacing_is_an_optimum(criterion):
-    r = core.best_spacing(REGION, d_range=(5, 400), n_curve=9, criterion=criterion, xatol=0.01)
+    problem = core.LayoutProblem(REGION, criterion=criterion)
+    r = core.best_spacing(problem, d_range=(5, 400), n_curve=9, xatol=0.01)
     assert not r.at_bound and r.value >= r.curve.max()
     step = r.d_values[1] - r.d_values[0]
     fine = np.linspace(r.d - step, r.d + step, 41)
-    values = core.spacing_curve(fine, REGION, criterion=criterion)
+    values = core.spacing_curve(fine, problem)
     # Brent stops within xatol of the peak: the criterion, flat there, may gain at most a
     # curvature · xatol² sliver (measured < 1e-7); anything larger would be a missed optimum.
     assert np.all(values <= r.value + 1e-6)
@@ -219,13 +221,13 @@ def test_best_spacing_is_an_optimum(criterion):
 
 def test_optimise_layout_scaled_and_free():
     small = core.Plane("xy", (-200, 200), (-200, 200), 120.0, 9)
-    sq = core.optimise_layout("square", 4, small, d_range=(5, 300), n_curve=7)
+    sq = core.optimise_layout("square", 4, core.LayoutProblem(small), d_range=(5, 300), n_curve=7)
     lattice = core.station_layout("square", 4, d=sq.d, h=100)
     np.testing.assert_allclose(sq.stations, lattice - [[sq.d / 2, sq.d / 2, 0]])  # centred
-    free = core.optimise_layout("free", 3, small, d_range=(5, 300), n_curve=7, maxfev=150)
+    free = core.optimise_layout("free", 3, core.LayoutProblem(small), d_range=(5, 300), n_curve=7, maxfev=150)
     assert free.stations.shape == (3, 3) and np.all(free.stations[:, 2] == 100)
     assert np.all(np.abs(free.stations[:, :2]) <= 200)
-    square_start = core.optimise_layout("square", 3, small, d_range=(5, 300), n_curve=7)
+    square_start = core.optimise_layout("square", 3, core.LayoutProblem(small), d_range=(5, 300), n_curve=7)
     assert free.value >= square_start.value - 1e-12  # never worse than its start
     np.testing.assert_allclose(free.value, core.layout_criterion(free.stations, small).value)
 
@@ -279,6 +281,7 @@ def test_sweep_cli_refuses_depths_outside_the_sea(tmp_path, capsys, args, messag
 
 # Issue 16, defect 7: scaled layouts centred on the region, bounds from the region, bounds reported.
 APP_REGION = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 31)  # the app's Layout design grid
+APP_PROBLEM = core.LayoutProblem(APP_REGION)
 
 
 def _centred(kind, n, d, centre, h=100.0):
@@ -292,7 +295,7 @@ def _centred(kind, n, d, centre, h=100.0):
     (core.Plane("xy", (100, 700), (-200, 400), 120.0, 31), (400.0, 100.0)),
 ])
 def test_square_of_four_is_centred_on_the_region_and_not_capped(region, centre):
-    r = core.optimise_layout("square", 4, region)
+    r = core.optimise_layout("square", 4, core.LayoutProblem(region))
     np.testing.assert_allclose(r.stations[:, :2].mean(axis=0), centre, atol=1e-9)
     np.testing.assert_allclose(r.stations, _centred("square", 4, r.d, centre))
     # the old optimiser stopped at its 200 m cap (199.98 m, a corner at the origin)
@@ -307,45 +310,46 @@ def test_square_of_four_is_centred_on_the_region_and_not_capped(region, centre):
 
 
 def test_at_bound_names_the_spacing_bound_that_is_hit():
-    r = core.optimise_layout("square", 4, APP_REGION, d_range=(2.0, 200.0))
+    r = core.optimise_layout("square", 4, APP_PROBLEM, d_range=(2.0, 200.0))
     assert r.at_bound == ("d_max",) and abs(r.d - 200.0) < 0.1
     # the bound binds: a wider square does better
     wider = core.layout_criterion(_centred("square", 4, 220.0, (0, 0)), APP_REGION).value
     assert wider > r.value
-    lo = core.optimise_layout("line", 2, APP_REGION, d_range=(300.0, 500.0))
+    lo = core.optimise_layout("line", 2, APP_PROBLEM, d_range=(300.0, 500.0))
     assert lo.at_bound == ("d_min",) and abs(lo.d - 300.0) < 0.1
 
 
 def test_at_bound_names_the_box_sides_a_free_station_touches():
     box = ((-20.0, 20.0), (-20.0, 20.0))
-    r = core.optimise_layout("free", 2, APP_REGION, bounds=box, maxfev=150)
+    r = core.optimise_layout("free", 2, APP_PROBLEM, bounds=box, maxfev=150)
     assert len(r.at_bound) >= 1 and set(r.at_bound) <= {"x_min", "x_max", "y_min", "y_max"}
     sides = {"x_min": (0, -20.0), "x_max": (0, 20.0), "y_min": (1, -20.0), "y_max": (1, 20.0)}
     for name in r.at_bound:
         axis, edge = sides[name]
         assert np.min(np.abs(r.stations[:, axis] - edge)) <= 40.0 * 1e-3
     # the box binds: the same optimiser in a wider box finds a better layout
-    wide = core.optimise_layout("free", 2, APP_REGION, bounds=((-60, 60), (-60, 60)), maxfev=150)
+    wide = core.optimise_layout("free", 2, APP_PROBLEM, bounds=((-60, 60), (-60, 60)), maxfev=150)
     assert wide.value > r.value
-    interior = core.optimise_layout("free", 2, APP_REGION, maxfev=150)
+    interior = core.optimise_layout("free", 2, APP_PROBLEM, maxfev=150)
     assert interior.at_bound == ()
 
 
 def test_one_station_layout_reports_no_spacing_bound():
-    r = core.optimise_layout("line", 1, APP_REGION, n_curve=3)
+    r = core.optimise_layout("line", 1, APP_PROBLEM, n_curve=3)
     assert r.at_bound == () and r.stations.tolist() == [[0.0, 0.0, 100.0]]  # centred
 
 
-def test_optimise_layout_takes_the_problem_as_one_object():
-    """Issue 36 item 2: a LayoutProblem (region, target, criterion, measurement) instead of the
-    keywords gives the same layout; both at once is refused."""
+def test_layout_searches_take_only_the_problem():
+    """Issue 47 item 5: a LayoutProblem is the one way in; the old keyword forms are gone."""
     region = core.Plane("xy", (-60, 60), (-60, 60), 15.0, 7)
-    sensor = core.Sensor("BG")
-    kw = dict(h=0.0, moments=(1e3, -2e3, 5e2), criterion="worst_dopt", steps=2, sensor=sensor)
-    a = core.optimise_layout("line", 2, region, d_range=(2, 40), n_curve=4, **kw)
-    problem = core.LayoutProblem(region, **kw)
-    b = core.optimise_layout("line", 2, problem, d_range=(2, 40), n_curve=4)
-    np.testing.assert_array_equal(a.stations, b.stations)
-    assert (a.value, a.d, a.nfev, a.at_bound) == (b.value, b.d, b.nfev, b.at_bound)
-    with pytest.raises(ValueError, match="not both; got a LayoutProblem and steps"):
-        core.optimise_layout("line", 2, problem, steps=5)
+    problem = core.LayoutProblem(region, h=0.0, moments=(1e3, -2e3, 5e2), criterion="worst_dopt",
+                                 steps=2, sensor=core.Sensor("BG"))
+    r = core.optimise_layout("line", 2, problem, d_range=(2, 40), n_curve=4)
+    np.testing.assert_allclose(r.value, core.layout_criterion(
+        r.stations, region, moments=(1e3, -2e3, 5e2), criterion="worst_dopt", steps=2,
+        sensor=core.Sensor("BG")).value, rtol=0, atol=0)
+    for call in (lambda: core.optimise_layout("line", 2, problem, steps=5),
+                 lambda: core.best_spacing(problem, h=5.0),
+                 lambda: core.spacing_curve([5.0], problem, sensor="B")):
+        with pytest.raises(TypeError, match="unexpected keyword"):
+            call()

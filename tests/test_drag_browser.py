@@ -131,6 +131,34 @@ def test_a_click_on_the_track_draws_the_exact_maps_and_no_preview(chromium, serv
     assert errors == [], f"browser console errors: {errors}"
 
 
+#: Counts what the page sends to the session's Drag model (app.live): ``window.__sends``.
+SENDS_JS = """() => { window.__sends = [];
+  for (const m of Bokeh.documents[0].all_models)
+    if (m.properties && m.properties.ready && m.properties.state)
+      m.connect(m.properties.state.change, () => window.__sends.push(m.state.slice())); }"""
+
+
+def test_a_typed_value_and_a_preset_compute_the_exact_maps_and_no_preview(chromium, server):
+    # issue 46 item 3: a value that is final already (typed, a preset) moved the handle from the
+    # server, and the page offered it as a drag's: a message and a check per value, or a preview
+    errors = []
+    page = open_maps(chromium, server, errors)
+    page.evaluate(SENDS_JS)
+    box = page.locator(".w-Ph input").first
+    box.fill("150")
+    box.press("Enter")
+    log = settled(page, check=lambda lg: lg["value"] == 150 and any(c[2] == "map-image" for c in lg["changes"]))
+    exact_map(log, expected(150.0), 0)
+    page.get_by_role("button", name="Fig. 2").click()
+    settled(page, check=lambda lg: lg["value"] == 100 and sum(c[2] == "map-image" for c in lg["changes"]) >= 6)
+    time.sleep(1.0)  # a send would follow the handle's move within THROTTLE_MS
+    log = page.evaluate(COLLECT_JS)
+    assert [c for c in log["changes"] if c[2] == "map-preview"] == []
+    assert page.evaluate("() => window.__sends") == [], "the page offered a final value as a drag's"
+    page.close()
+    assert errors == [], f"browser console errors: {errors}"
+
+
 def test_with_previews_off_a_drag_draws_only_the_exact_maps_of_the_release(chromium, monkeypatch):
     # APP_PREVIEWS=off (app/tabs/maps/live.py): a replica for many analysts on few cores spares the CPU
     monkeypatch.setenv("APP_PREVIEWS", "off")

@@ -94,9 +94,9 @@ def test_an_edit_to_inlined_physics_reaches_the_cached_kernel(tmp_path):
 
 
 def _fake_tree(root):
-    for name in kernel_cache.KERNEL_SOURCES:
+    for name in kernel_cache.KERNEL_SOURCES:  # a kernel numba caches on its own, in each
         (root / name).parent.mkdir(parents=True, exist_ok=True)
-        (root / name).write_text(f"# {name}\n")
+        (root / name).write_text(f"# {name}\n@nb.njit(cache=True)\ndef kernel(x):\n    return x\n")
     cache = root / "kernels" / "__pycache__"
     cache.mkdir()
     files = []
@@ -133,6 +133,33 @@ def test_cached_needs_every_kernel_module(tmp_path, monkeypatch):
     assert kernel_cache.cached(tmp_path)
     files[0].unlink()  # one module's index gone: that module compiles, "loading" would be untrue
     assert not kernel_cache.cached(tmp_path)
+
+
+def test_a_module_of_inlined_kernels_only_is_not_asked_for_an_index(tmp_path, monkeypatch):
+    # issue 46 defect 11: core/kernels/electric.py's kernels are all inline="always": numba never
+    # writes an index for it, so cached() was never true and every warm start said "compiling"
+    monkeypatch.setattr(kernel_cache.numba.config, "CACHE_DIR", "")
+    files = _fake_tree(tmp_path)
+    electric = tmp_path / "kernels" / "electric.py"
+    electric.write_text('@nb.njit(inline="always", **JIT)\ndef f(x):\n    return x\n')
+    for p in files:
+        if p.name.startswith("electric."):
+            p.unlink()
+    assert kernel_cache.cached(tmp_path)
+    assert not kernel_cache.writes_cache(CORE / "kernels" / "electric.py")  # the real one too
+    assert all(kernel_cache.writes_cache(CORE / name) for name in kernel_cache.KERNEL_SOURCES
+               if not name.endswith("electric.py"))
+
+
+def test_the_install_s_cache_after_a_warm_up_counts_as_cached():
+    """Once every stage of the warm-up has run (minutes when the cache is cold, a second when
+    it is filled: the suite's served apps have run it), the next start says it loads."""
+    import io
+
+    from app.serve.warmup import compile_kernels
+
+    compile_kernels(out=io.StringIO())
+    assert kernel_cache.cached()
 
 
 def test_a_process_with_a_new_cache_dir_keeps_a_trees_kernels(tmp_path):

@@ -61,3 +61,20 @@ def test_a_lower_case_tab_opens_the_tab_and_unknown_keys_are_said(chromium, serv
     finally:
         pg.close()
     assert errors == []
+
+
+def test_a_link_too_long_for_the_page_is_refused_whole_and_said(chromium, server):
+    # issue 46 defect 5: a link the page did not make, longer than it opens, is refused whole
+    from app.state.url import MAX_LINK_CHARS
+
+    search = "?Ph=250&cal_headings=" + "+".join(["1"] * (MAX_LINK_CHARS // 2 + 500))
+    pg, errors = _open(chromium, server + "/app" + search)
+    try:
+        wait_maps(pg, lambda drawn: len(drawn) == 3)
+        text = _top_message(pg)
+        assert "Link refused, nothing of it applied" in text and "characters long" in text, text
+        wait_value(pg, "Ph", 100.0)
+        pg.wait_for_function("() => window.location.search === ''", timeout=15_000)
+    finally:
+        pg.close()
+    assert errors == []

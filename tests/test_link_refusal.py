@@ -78,3 +78,37 @@ def test_unknown_keys_and_a_bad_tab_are_ignored_and_said_and_leave_the_address_b
 def test_the_tab_name_is_matched_without_case(asked):
     link = read_link(Scenario(), _args(f"?tab={asked}"), TITLES)
     assert link.tab == "Track" and link.ignored == []
+
+
+def test_a_link_longer_than_the_page_opens_is_refused_whole_and_said():
+    # issue 46 defect 5: a 74 KB link got an empty response; one that reaches the page over
+    # MAX_LINK_CHARS is refused whole, with its length and the limit
+    from app.state.url import MAX_LINK_CHARS
+
+    search = "?Ph=250&cal_headings=" + "+".join(["1"] * (MAX_LINK_CHARS // 2))
+    s, location = _open(search)
+    assert _inputs(s) == _inputs(Scenario()) and location.search == ""
+    assert s.message.startswith("Link refused, nothing of it applied")
+    assert f"{len(search) - 1:,} characters long" in s.message and f"{MAX_LINK_CHARS:,}" in s.message
+
+
+def test_the_pages_own_longest_link_is_far_below_the_limit():
+    """Every input at its longest (8 stations at the edge, 72 headings, 20 outliers, every
+    number with its digits): the link the page writes stays under 3,000 characters, so the
+    limit refuses only links the page did not make."""
+    from app.state.url import MAX_LINK_CHARS
+
+    s = Scenario()
+    s.update(stations=[[-4999.9, -4999.9, 4999.9]] * 8)
+    s.update(cal_headings=", ".join(["-359.99"] * 72), shape_outliers=", ".join(["-99.5"] * 20))
+    longest = 0
+    for n in PART_OF:  # every number with its digits, where the other values let it be
+        accepted = type(s.part_of(n)).accepted.get(n)
+        if isinstance(s.value(n), float) and accepted:
+            lo, hi, _ = accepted
+            s.update({n: lo + (hi - lo) * 0.123456789})
+            longest += s.value(n) == lo + (hi - lo) * 0.123456789
+    assert longest >= 50  # of ~60 numbers
+    link = query(s, "Calibration")
+    assert s.values()["stations"] == [[-4999.9, -4999.9, 4999.9]] * 8 and "cal_headings" in link
+    assert len(link) < 3000 < MAX_LINK_CHARS, len(link)

@@ -185,6 +185,21 @@ def test_bad_input_raises_clear_value_error(fn, bad, message):
         fn(states, stations, **kw)
 
 
+def test_a_target_on_a_station_is_named_in_plain_numbers():
+    """Issue 46, defect 4: the refusal printed ``(np.float64(0.0), np.float64(0.0), ...)``
+    (numpy 2's repr inside a tuple); it must read ``(0, 0, 100)``. The same for the magnetic
+    sensors' check (a target within a gradiometer's baseline)."""
+    with pytest.raises(ValueError) as err:
+        core.gamma([[0.0, 0.0, 100.0, 1, 1, 1, 1]], SINGLE)
+    assert "target position (0, 0, 100) m coincides with station 0 at (0, 0, 100) m" in str(err.value)
+    assert "np." not in str(err.value)
+    stations = np.array([[0.0, 0.0, 100.0]])
+    with pytest.raises(ValueError) as err:
+        core.magnetic_jacobian([[0.0, 0.0, 100.2, 1, 1, 0, 0, 1]], stations, sensor="G", baseline=0.5)
+    assert "target position (0, 0, 100.2) m is within the gradiometer's baseline" in str(err.value)
+    assert "station 0 at (0, 0, 100) m" in str(err.value) and "np." not in str(err.value)
+
+
 @pytest.mark.parametrize("bad,message", [
     (dict(steps=0), "steps must be an integer"),
     (dict(steps=2.5), "steps must be an integer"),

@@ -217,15 +217,16 @@ def test_maps_for_every_measure_and_plane():
 @pytest.mark.parametrize("bad,why", [
     ([], "1 to 8 stations"),
     ([[0.0, 0.0, 100.0]] * 9, "At most 8 stations"),
-    ([[0.0, float("nan"), 100.0]], "three numbers"),
-    ([[0.0, 0.0]], "three numbers"),
-    ([[0.0, 0.0, 1e9]], "three numbers"),
+    ([[0.0, float("nan"), 100.0]], "m: its y is empty or not a number"),
+    ([[0.0, 0.0]], "m: it has 2 coordinates"),
+    ([[0.0, 0.0, 1e9]], "m: its z = 1000000000 m is outside that range"),
 ])
 def test_custom_layout_is_checked(bad, why):
     s = Scenario()
     before = s.stations.stations
     s.stations.stations = bad
     assert s.stations.stations == before and why in s.message
+    assert "[" not in s.message and "nan" not in s.message  # in words (issue 46 defect 7)
 
 
 def test_design_maps_and_best_spacing():
@@ -480,6 +481,17 @@ def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends()
     gone = drawn_stations({"x": [0.0, -134.0], "y": [0.0, -165.0], "z": [0.0, 0.0]},
                           [[*st[:2], 50.0 + i] for i, st in enumerate(layout)], 100.0)
     assert gone == [[0.0, 0.0, 50.0], [-134.0, -165.0, 53.0]]
+
+
+def test_a_dragged_station_is_rounded_as_the_table_shows_it_and_the_others_kept_exactly():
+    # issue 46 defect 9: the link held 206.999985918 after a drag while the table showed 207.0
+    from app.tabs.design.design import drawn_stations
+
+    layout = [[0.0, 0.0, 100.0], [15.123456, -3.25, 90.0]]  # typed in the table: kept as typed
+    moved = drawn_stations({"x": [206.999985918, 15.123456], "y": [-41.00000762, -3.25]}, layout, 100.0)
+    assert moved == [[207.0, -41.0, 100.0], [15.123456, -3.25, 90.0]]
+    added = drawn_stations({"x": [0.0, 15.123456, 12.3456789], "y": [0.0, -3.25, 1e-9]}, layout, 100.0)
+    assert added[2] == [12.3, 0.0, 100.0] and added[:2] == layout
 
 
 def test_each_map_is_captioned_with_its_own_moments():

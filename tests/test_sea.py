@@ -355,7 +355,7 @@ def test_maps_and_design_refuse_planes_outside_the_column():
     with pytest.raises(ValueError, match="station depth 120"):
         core.layout_criterion(core.dual_station(120.0, 10.0), region, sensor=E_SEA)
     with pytest.raises(ValueError, match="station depth 150"):
-        core.spacing_curve([10.0], region, h=150.0, sensor=E_SEA)
+        core.spacing_curve([10.0], core.LayoutProblem(region, h=150.0, sensor=E_SEA))
     assert np.isfinite(core.layout_criterion(core.dual_station(100.0, 10.0), region, sensor=E_SEA).value)
 
 

@@ -122,11 +122,6 @@ DEPRECATED = {
         _PLANE, core.dual_station(100, 15), **_MOTION, **kw)).values()),
     "layout_criterion": lambda **kw: tuple(vars(core.layout_criterion(
         core.dual_station(100, 15), _REGION, **kw)).values()),
-    "spacing_curve": lambda **kw: core.spacing_curve([10.0, 40.0], _REGION, **kw),
-    "best_spacing": lambda **kw: (lambda r: (r.d, r.value, r.curve))(core.best_spacing(
-        _REGION, d_range=(5.0, 100.0), n_curve=3, **kw)),
-    "optimise_layout": lambda **kw: (lambda r: (r.stations, r.value))(core.optimise_layout(
-        "line", 2, _REGION, d_range=(5.0, 100.0), n_curve=3, **kw)),
 }
 
 
@@ -261,13 +256,14 @@ def test_layout_optimisers_take_the_sensor():
     over d rises from the tiny spacings; the optimisers run on the magnetic kind."""
     region = core.Plane("xy", (-30, 30), (-30, 30), 12.0, 5)
     kw = dict(velocity=(1.0, 1.0), moments=(1e3, -2e3, 5e2), h=0.0, sensor="B")
-    curve = core.spacing_curve([0.5, 5.0, 20.0], region, **kw)
+    problem = core.LayoutProblem(region, **kw)
+    curve = core.spacing_curve([0.5, 5.0, 20.0], problem)
     assert np.all(np.isfinite(curve)) and curve[1] > curve[0]
-    best = core.best_spacing(region, d_range=(1.0, 40.0), n_curve=5, **kw)
+    best = core.best_spacing(problem, d_range=(1.0, 40.0), n_curve=5)
     assert 1.0 <= best.d <= 40.0
-    lay = core.optimise_layout("line", 2, region, d_range=(1.0, 40.0), n_curve=5, **kw)
+    lay = core.optimise_layout("line", 2, problem, d_range=(1.0, 40.0), n_curve=5)
     assert lay.stations.shape == (2, 3) and np.isfinite(lay.value)
-    free = core.optimise_layout("free", 2, region, x0=[[-5.0, 0.0], [5.0, 0.0]], maxfev=30, **kw)
+    free = core.optimise_layout("free", 2, problem, x0=[[-5.0, 0.0], [5.0, 0.0]], maxfev=30)
     assert free.value >= core.layout_criterion(
         [[-5.0, 0.0, 0.0], [5.0, 0.0, 0.0]], region, velocity=(1.0, 1.0),
         moments=(1e3, -2e3, 5e2), sensor="B").value - 1e-9

@@ -216,3 +216,9 @@ def test_the_readme_the_container_and_the_cluster_serve_with_the_same_threads():
     served = inspect.getsource(__import__("support.server", fromlist=["served_app"]).served_app)
     assert threads(command) == threads(cmd) == str(cluster.Cluster(replicas=1).num_threads) == "4"
     assert '"--num-threads", "4"' in served
+    # and all answer /liveness (issue 46 defect 13: the README's command had no --liveness)
+    replica = inspect.getsource(cluster.Cluster._replica)
+    assert "--liveness" in command and "--liveness" in cmd and '"--liveness"' in replica
+    assert '"--liveness"' in served
+    hosts = (root / "README.md").read_text().split("start `panel serve app", 1)[1].split("`")[0]
+    assert "--liveness" in hosts, "the README's command for replicas on several hosts"

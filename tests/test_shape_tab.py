@@ -1,5 +1,7 @@
 """The Shape tab's pure functions (app/tabs/shape/shape.py) and its parameters in the Scenario and the link."""
 
+import re
+
 import holoviews as hv
 import numpy as np
 import pytest
@@ -8,7 +10,7 @@ from app.state import url
 from app.state.scenario import Scenario, preset_values
 from app.tabs.design import compute as design_compute
 from app.tabs.maps.compute import READS
-from app.tabs.shape import shape
+from app.tabs.shape import shape, text as shape_text
 from app.tabs.track import track
 from core.shape.bound import shape_bound
 from core.shape.cases import CASES
@@ -186,7 +188,11 @@ def test_a_pass_that_cannot_size_the_target_gets_no_tick():
     out = shape.compute(shape.key_of(s))
     assert not out["bound"].sizable
     text = shape.verdict_text(out)
-    assert "✓" not in text.replace("Only then does a verdict get a ✓", "") and "** ✓" not in text
+    assert "✓" not in text.replace(shape_text.HOW, "") and "** ✓" not in text
     assert "**This pass cannot size the target**" in text and "second-moment read ±" in text
+    # Issue 46 defect 14: the axis bound there was "± 7.6e+03°"; past 90° it bounds nothing
+    assert out["bound"].axis_deg > shape_text.NO_ANGLE_BOUND_DEG
+    assert "(no bound)" in text and "°)" not in text
     near = shape.verdict_text(shape.compute(shape.key_of(Scenario())))
+    assert re.search(r"\(bound ± [0-9.e+-]+°\)", near)  # a near pass keeps its bound
     assert near.count("** ✓") >= 2  # at least the NHUKF and the fit: right kind and sizable

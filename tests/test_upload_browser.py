@@ -24,6 +24,8 @@ pytestmark = pytest.mark.skipif(
 #: Rows of the large upload (the issue's), and its least size: over Bokeh's 20 MB message limit.
 ROWS = 500_000
 LEAST_BYTES = 21_000_000
+#: The largest upload as every text states it: FilePond counts MB of 1000 kB.
+LIMIT = f"{cal.MAX_CSV_BYTES / 1e6:.1f} MB"
 #: FilePond's item: the file it shows, with its state in ``data-filepond-item-state``.
 ITEM = ".w-cal-upload .filepond--item"
 
@@ -110,7 +112,22 @@ def test_a_file_over_the_limit_is_refused_in_the_browser_before_it_is_sent(chrom
     before = sum(sent)
     pg.locator(".w-cal-upload input[type=file]").set_input_files(str(big))
     pg.get_by_text("File is too large").first.wait_for(timeout=30_000)  # FilePond says it
+    # the limit stated one way (issue 46 defect 10): FilePond's line and the tab's text agree
+    assert pg.get_by_text(f"Maximum file size is {LIMIT}").count() >= 1
+    assert pg.get_by_text(f"at most {cal.MAX_CSV_ROWS:,} rows and {LIMIT}").count() >= 1
     time.sleep(2.0)
     assert sum(sent) - before < 1_000_000  # nothing of the file went to the server
     assert pg.locator(".w-cal_source select").input_value() != "Uploaded CSV"
     pg.close()
+
+
+def test_the_readme_and_the_docs_state_the_upload_limit_as_the_page_does():
+    """Issue 46 defect 10: the README said ~15 MB (~200 000 readings), the page 128 MiB and the
+    browser 134.2 MB, while a 31 MB log went through: now all say the page's and core's limit."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    for name in ("README.md", "docs/cli.md"):
+        text = " ".join((root / name).read_text(encoding="utf-8").split())
+        assert f"1 000 000 readings and {LIMIT} (128 MiB)" in text, name
+        assert "15 MB" not in text and "200 000 readings" not in text, name

@@ -60,6 +60,6 @@ def number_input(owner, name, *, fmt=None, css_classes=(), visible=True):
 
     owner.param.watch(shown, [name])
     slider.param.watch(typed, ["value"])  # on release: the page's sliders are throttled
-    live.follow(slider, name)  # while dragged, the maps follow (app/tabs/maps/live.py)
+    live.follow(slider, name, box)  # while dragged, the maps and the box follow (app/tabs/maps/live.py)
     return pn.Column(box, slider, css_classes=list(css_classes), visible=visible,
                      sizing_mode="stretch_width", margin=0)

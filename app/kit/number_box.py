@@ -14,9 +14,24 @@ owner's :meth:`~app.state.part.Part.refuse`. The box then shows the value the ow
 from __future__ import annotations
 
 import threading
+import weakref
 
 import panel as pn
 import param
+
+#: Per box, its text of a value (:func:`show`), and the text shown for a slider's drag (not typed).
+_TEXT_OF: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_SHOWN: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def show(box, value):
+    """Show ``value`` in ``box`` (a :func:`number_box`) without setting it on its owner: the
+    value of a slider being dragged, that the maps preview (app/tabs/maps/live.py); the box kept the old
+    value while the maps followed the hand (issue 46 defect 8). A no-op for ``box`` None."""
+    text_of = _TEXT_OF.get(box) if box is not None else None
+    if text_of is not None and box.value != text_of(value):
+        _SHOWN[box] = text_of(value)
+        box.value = _SHOWN[box]
 
 
 def shown_text(value, integer=False, decimals=2):
@@ -81,8 +96,8 @@ def number_box(owner, name, *, decimals=2, label=None, **widget):
     one_at_a_time = threading.RLock()
 
     def typed(event):
-        if event.new == wanted():
-            return  # the owner's value shown (set by settle, or typed as it is shown)
+        if event.new == wanted() or event.new == _SHOWN.pop(box, None):
+            return  # the owner's value shown (set by settle, or typed as it is shown), or a drag's
         with one_at_a_time:
             if box.value != event.new:
                 return  # a later text has replaced this one; its own event takes it
@@ -97,4 +112,5 @@ def number_box(owner, name, *, decimals=2, label=None, **widget):
     # own watcher, so this event may already be stale.
     owner.param.watch(lambda _event: settle(), [name])
     box.param.watch(typed, ["value"])
+    _TEXT_OF[box] = lambda value: shown_text(value, integer, decimals)
     return box

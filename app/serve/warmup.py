@@ -64,6 +64,9 @@ def _crlb_maps():
     for sea in (None, _SEA):
         with KERNEL_LOCK:
             core.crlb_maps(_PLANE, _STATIONS, sensor=core.Sensor("E", sea=sea), **_MOTION)
+    with KERNEL_LOCK:  # survey design's loss of a station (core/kernels/loss.py): every kernel
+        # module compiled, so that a later start can say it loads them (core.kernel_cache.cached)
+        core.station_loss(_STATIONS, core.LayoutProblem(_PLANE, velocity=(2, 2), moments=(100, 20)))
 
 
 def _tracking():

@@ -94,6 +94,20 @@ class Target(Part):
         metadata=_in(seabed="within", card=("Target", 7), hard=(0.0, 5000.0, "m"), depth=True, shown=lambda w: w.plane == "x–y" or not w.on_maps))
 
 
+def _station_problem(st, lo, hi):
+    """What is wrong with one station of a layout, in words (never a Python list: issue 46
+    defect 7 quoted "got '[nan, 0.0, 100.0]'"), or None."""
+    if not isinstance(st, (list, tuple)) or len(st) != 3:
+        n = len(st) if isinstance(st, (list, tuple)) else 1
+        return f"it has {n} coordinate{'s' if n != 1 else ''}"
+    for axis, c in zip("xyz", st):
+        if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c):
+            return f"its {axis} is empty or not a number"
+        if not lo <= c <= hi:
+            return f"its {axis} = {c:.10g} m is outside that range"
+    return None
+
+
 class Stations(Part):
     """Where the sensors are: the paper's single / dual station at depth h and spacing d, and
     the custom layout of the Layout design and Track tabs."""
@@ -110,12 +124,9 @@ class Stations(Part):
                 return f"At most {MAX_STATIONS} stations: a {len(value)}th was refused"
             return f"A layout needs 1 to {MAX_STATIONS} stations; got {len(value)}"
         for i, st in enumerate(value):
-            ok = isinstance(st, (list, tuple)) and len(st) == 3 and all(
-                isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
-                and lo <= c <= hi for c in st)
-            if not ok:
-                return (f"Station {i + 1} must be three numbers (x, y, z) in {lo:g} … {hi:g} m; "
-                        f"got {str(st)[:60]!r}")
+            why = _station_problem(st, lo, hi)
+            if why:
+                return f"Station {i + 1} must be three numbers (x, y, z) in {lo:g} … {hi:g} m: {why}"
             if st[2] < 0:
                 return (f"Station {i + 1}: depth z = {st[2]:g} m is above the sea surface; depths are "
                         f"measured down from the surface (z ≥ 0)")

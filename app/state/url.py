@@ -27,6 +27,10 @@ from .scenario import PART_OF, PARTS, Scenario, defaults, parameter
 
 #: The query key of the tab shown.
 TAB = "tab"
+#: Longest link (its query, characters) the page opens: the page's own are under 3,000 (every
+#: input at its longest: tests/test_link_refusal.py), a proxy's header limit is often 8 KB and
+#: deploy/nginx.conf's 16 KB. A longer one is refused whole and said (issue 46 defect 5).
+MAX_LINK_CHARS = 8000
 
 
 def names():
@@ -113,6 +117,11 @@ def read_link(scenario, args, titles=()):
     all of them or, if one is refused, none (module notes). ``titles``: the page's tabs, to
     match ``tab=`` against."""
     good, problems, ignored = {}, {}, []
+    size = len(urlencode([(k, r) for k, raws in args.items() for r in raws]))
+    if size > MAX_LINK_CHARS:
+        return Link({"link": f"it is {size:,} characters long, and the page opens links of at most "
+                             f"{MAX_LINK_CHARS:,} (its own are far shorter): copy the link again "
+                             "from the address bar of the view you want"}, None, [])
     for key, raws in args.items():
         texts = [r.decode("utf-8", "replace") if isinstance(r, bytes) else r for r in raws]
         if key == TAB:

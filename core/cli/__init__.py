@@ -1,8 +1,8 @@
 """The command-line tools, the only modules of :mod:`core` that import argparse, matplotlib or
 tqdm (tests/test_layout.py checks it): :mod:`.sweep` (``python -m core.sweep``), :mod:`.track`
 (``python -m core.track``), :mod:`.calibration` (``python -m core.calibration``) and
-:mod:`.shape` (``python -m core.shape``, its figures in :mod:`.shape_plots`). ``import core``
-imports none of them.
+:mod:`.shape` (``python -m core.shape``, its figures in :mod:`.shape_plots`) and :mod:`.design`
+(``python -m core.design``). ``import core`` imports none of them.
 
 They (and ``python -m paper``) parse with :class:`ArgumentParser`, which names an unknown
 option before a missing required one.
@@ -22,6 +22,8 @@ class ArgumentParser(argparse.ArgumentParser):
     and never named ``--bogus``. Here a first pass parses with every required argument optional:
     anything it does not recognise is an error of its own (same wording and status as argparse:
     "unrecognized arguments: …", exit 2, through :meth:`error`), before the normal parse.
+    The usage and help texts are always formatted with the required arguments required (``-h``
+    in the first pass printed ``[--out OUT]``, as if it were optional: issue 46, defect 6).
     """
 
     def __init__(self, *args, **kwargs):
@@ -33,10 +35,29 @@ class ArgumentParser(argparse.ArgumentParser):
         self.added.append(action)
         return action
 
+    def _as_declared(self, fmt):
+        """``fmt()`` with every argument declared required marked so (the first pass of
+        :meth:`parse_args` lifts it)."""
+        lifted = [a for a in self.added if getattr(a, "declared_required", False) and not a.required]
+        for action in lifted:
+            action.required = True
+        try:
+            return fmt()
+        finally:
+            for action in lifted:
+                action.required = False
+
+    def format_usage(self):
+        return self._as_declared(super().format_usage)
+
+    def format_help(self):
+        return self._as_declared(super().format_help)
+
     def parse_args(self, args=None, namespace=None):
         args = sys.argv[1:] if args is None else list(args)
         required = [a for a in self.added if a.required]
         for action in required:
+            action.declared_required = True
             action.required = False
         try:
             _, extras = self.parse_known_args(args)

@@ -18,9 +18,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..shape.bound import SIZABLE_FRACTION, shape_bound
-from ..shape.cases import CASES, case_rows, describe
+from ..shape.bound import SIZABLE_FRACTION, SIZABLE_RULE, SIZABLE_Z, shape_bound
+from ..shape.cases import CASES, PAPER_LAG, case_rows, describe
 from ..shape.experiment import run_case
+from ..shape.model import N_DIPOLES
+from ..shape.sizing import sized as sized_passes
 from ..shape.targets import CLEARANCE, Pass, clearance
 from . import ArgumentParser
 from .shape_plots import plot_errors, plot_shape, plot_sweep
@@ -35,6 +37,9 @@ LIMITS = {"offset": (-100.0, 100.0, "m"), "above": (-100.0, 100.0, "m"),
           "noise": (1e-5, 10.0, "nT/m"), "speed": (0.5, 20.0, "m/s"), "rate": (0.1, 50.0, "Hz")}
 #: Most samples a pass may have (80 · rate / speed + 1): the filters' cost is linear in them.
 MAX_SAMPLES = 2001
+#: Fewest samples a pass may have: the 4-dipole model's 15 unknowns over 5 readings a sample
+#: (with fewer the Fisher matrix is singular, and the bound and the fit's σ mean nothing).
+MIN_SAMPLES = -(-(3 * N_DIPOLES + 3) // 5)
 #: Length of the pass along x (m): x = −40 … +40, as seed 003's.
 PASS_LENGTH = 80.0
 #: Most closest approaches of a --cpa-sweep.
@@ -75,7 +80,9 @@ def _parser():
     p.add_argument("--lag", type=_int(0, "seed 003's window lag n; 0 = one-sample update"), default=None,
                    help="the update's window lag n for every row: 0 = one-sample update, n > 0 = "
                         "seed 003's [k − 2n, k − n, k] with 2n below the sample count (81: n ≤ 40); "
-                        "default: the case's own (figures 0, tables 5)")
+                        f"default: the case's own, seed 003's window of lag {PAPER_LAG} for every "
+                        "case, with the one-sample update beside it for Figs. 4 and 5 (dropped "
+                        "when --lag is given)")
     for name, what in (("offset", "lateral offset y of the track from the target's centre"),
                        ("above", "height of the track above the target's centre (z is down)"),
                        ("noise", "noise σ of each tensor component"),
@@ -133,6 +140,12 @@ def geometry(row, offset=None, above=None, noise=None, speed=None, rate=None):
         samples = t.samples
     else:
         samples = int(round(PASS_LENGTH * hz / spd)) + 1
+        if samples < MIN_SAMPLES:
+            raise ValueError(f"--rate {hz:g} Hz at --speed {spd:g} m/s makes {samples} sample"
+                             f"{'s' if samples > 1 else ''} over the {PASS_LENGTH:g} m pass; the "
+                             f"4-dipole model has {3 * N_DIPOLES + 3} unknowns and a sample gives 5 "
+                             f"readings, so at least {MIN_SAMPLES} (rate / speed ≥ "
+                             f"{(MIN_SAMPLES - 1) / PASS_LENGTH:g} per m)")
         if samples > MAX_SAMPLES:
             raise ValueError(f"--rate {hz:g} Hz at --speed {spd:g} m/s makes {samples} samples over "
                              f"the {PASS_LENGTH:g} m pass; at most {MAX_SAMPLES} (rate / speed ≤ "
@@ -194,7 +207,9 @@ def _json_safe(v):
 def _row_summary(r, bound):
     return {"label": r.case.name, "comparison": r.case.comparison, "truth": r.summary["case"],
             "filters": r.summary["filters"], "outlier_samples": r.outlier_samples,
-            "bound": bound.to_dict(), "sizable": bound.sizable, "sizing": bound.sizing}
+            "settle_samples": r.summary["settle_samples"],
+            "bound": bound.to_dict(), "sizable": bound.sizable, "verdict": bound.verdict,
+            "sizing": bound.sizing}
 
 
 def run(case, runs=1, seed=0, lag=None, out=None, plots=True, **geo):
@@ -227,7 +242,7 @@ def cautions(row):
     truth = row["truth"]["target"]["kind"]
     out = []
     for name, v in row["filters"].items():
-        if "kind" in v and v["kind"] != truth:
+        if "kind" in v and v["kind"] not in (truth, "none"):  # none: no converged fit (fit_lines)
             share = v["kind_share"].get(v["kind"], 0.0) if v["kind"] != "tie" else 0.5
             out.append(f"CAUTION: {name} reads {'a tie' if v['kind'] == 'tie' else 'a ' + v['kind']}"
                        f" ({100 * share:.0f} % of runs) but the target is a {truth}: its main scale "
@@ -241,20 +256,35 @@ def warning(row):
         return ""
     b = row["bound"]
     truth = row["truth"]["target"]["main_scale_m"]
-    return (f"WARNING: this pass cannot size the target: the best read ({b['sizing']}) has σ "
-            f"{b['best_main_scale_m']:.3g} m, above {100 * SIZABLE_FRACTION:g} % of the main scale "
-            f"({truth:g} m); the main scales, axes and line / plane verdicts of {row['label']} "
-            "are noise, not a size (pass closer, or see --cpa-sweep)")
+    if b["verdict"] == "borderline":
+        return (f"WARNING: this pass is at the edge of sizing the target: for the best read "
+                f"({b['sizing']}) |model bias| {abs(b['best_bias_m']):.2g} m + {SIZABLE_Z:g} × σ "
+                f"{b['best_main_scale_m']:.3g} m = {b['margin_m']:.3g} m, above "
+                f"{100 * SIZABLE_FRACTION:g} % of the main scale ({truth:g} m), though σ itself is "
+                "below it; there the batch fit sizes some passes but not most (it falls into "
+                "wrong-axis minima): pass closer, or see --cpa-sweep")
+    head = (f"WARNING: this pass cannot size the target: for the best read ({b['sizing']}) "
+            f"|model bias| {abs(b['best_bias_m']):.2g} m + {SIZABLE_Z:g} × σ "
+            f"{b['best_main_scale_m']:.3g} m = {b['margin_m']:.3g} m, above "
+            f"{100 * SIZABLE_FRACTION:g} % of the main scale ({truth:g} m); ")
+    if abs(b["best_bias_m"]) > SIZABLE_FRACTION * truth:
+        return head + (f"the 4-dipole model's bias alone is more: the main scales of {row['label']} "
+                       "are off by it at any distance and noise (their axes and line / plane "
+                       "verdicts may still hold)")
+    return head + (f"the main scales, axes and line / plane verdicts of {row['label']} are noise, "
+                   "not a size (pass closer, or see --cpa-sweep)")
 
 
 #: Columns of cpa_sweep.csv: the bound's σ of the main scale (span read, second-moment read,
 #: rigid line), the verdict, and per estimator the Monte-Carlo medians of |main scale − truth|
-#: in both reads and of the axis error.
+#: in both reads and of the axis error (the fit's over its converged passes: NaN if none), the
+#: fit's share of converged passes and of passes it sized (:func:`core.shape.sizing.sized`).
 ESTIMATORS = ("ukf", "nhukf", "fit")
 SWEEP_COLUMNS = (["closest_approach_m", "bound_span_m", "bound_second_moment_m", "bound_rigid_line_m",
-                  "sizable"]
+                  "sizable", "verdict"]
                  + [f"{e}_{q}" for e in ESTIMATORS
-                    for q in ("span_error_m", "second_moment_error_m", "axis_error_deg")])
+                    for q in ("span_error_m", "second_moment_error_m", "axis_error_deg")]
+                 + ["fit_converged_share", "fit_sized_share"])
 #: An estimator sizes the target at a closest approach when the median error of its best read is
 #: within 10 % of the main scale and its median axis error within this (°): a length along the
 #: wrong axis is no size.
@@ -300,10 +330,19 @@ def cpa_sweep(case, lo, hi, n, runs=1, seed=0, lag=None, out=None, size_to=None,
         res = run_case(r, runs=runs, seed=seed)
         rec = {"closest_approach_m": b.closest_approach_m, "bound_span_m": b.main_scale_m,
                "bound_second_moment_m": b.spread_main_scale_m, "bound_rigid_line_m": b.rigid_main_scale_m,
-               "sizable": b.sizable}
+               "sizable": b.sizable, "verdict": b.verdict}
         ok = False
         for e in ESTIMATORS:
             f = res.final[e]
+            if e == "fit":  # a fit that did not converge (or ran off) is no answer
+                keep = np.asarray(f["converged"], bool)
+                f = {k: np.asarray(f[k])[keep] for k in ("main_scale_m", "spread_scale_m", "axis_error_deg")}
+                rec["fit_converged_share"] = float(np.mean(keep))
+                rec["fit_sized_share"] = float(np.mean(sized_passes(res, b)))
+                if not keep.any():
+                    rec.update({f"fit_{q}": float("nan") for q in
+                                ("span_error_m", "second_moment_error_m", "axis_error_deg")})
+                    continue
             second = f["spread_scale_m"] if r.target.kind == "line" else f["main_scale_m"]
             rec[f"{e}_span_error_m"] = float(np.median(np.abs(f["main_scale_m"] - truth)))
             rec[f"{e}_second_moment_error_m"] = float(np.median(np.abs(second - truth)))
@@ -324,7 +363,8 @@ def cpa_sweep(case, lo, hi, n, runs=1, seed=0, lag=None, out=None, size_to=None,
             w = csv.DictWriter(fh, fieldnames=SWEEP_COLUMNS)
             w.writeheader()
             for rec in records:
-                w.writerow({k: (str(v).lower() if isinstance(v, bool) else f"{v:.6g}") for k, v in rec.items()})
+                w.writerow({k: (str(v).lower() if isinstance(v, bool) else v if isinstance(v, str)
+                                else f"{v:.6g}") for k, v in rec.items()})
         if plots:
             plot_sweep(result, row, os.path.join(out, "cpa_sweep.png"))
     return result
@@ -351,6 +391,41 @@ def _fmt(v, spec):
     return "—" if v is None else format(v, spec)
 
 
+def _estimator_text(name, v):
+    """One estimator's medians in words (the fit: over its converged passes)."""
+    if name == "fit" and not v["converged_runs"]:
+        return "fit: no pass converged to a plausible answer (below)"
+    text = f"{name} centroid {_fmt(v['centroid_error_m'], '.3f')} m"
+    if "kind" in v:
+        text += (f", scale {_fmt(v['main_scale_m'], '.2f')} m (second moment "
+                 f"{_fmt(v['spread_scale_m'], '.2f')} m), axis {_fmt(v['axis_error_deg'], '.1f')}°, "
+                 f"{v['kind']}")
+    return text
+
+
+def fit_lines(v):
+    """The batch fit's lines under a row: its σ of the main scale beside the model's bias, and
+    how many passes did not converge to a plausible answer (summary's fit entry ``v``)."""
+    out = []
+    if v["converged_runs"]:
+        parts = []
+        for read, sig, bias in (("span", v["main_scale_sigma_m"], v["main_scale_bias_m"]),
+                                ("second moment", v["spread_scale_sigma_m"], v["spread_scale_bias_m"])):
+            ratio = f", {abs(bias) / sig:.2g}× the σ" if sig and bias is not None else ""
+            parts.append(f"{read} σ {_fmt(sig, '.2g')} m, bias {_fmt(bias, '+.2g')} m{ratio}")
+        out.append("fit main scale, σ (noise; median over passes) beside the model bias (4 dipoles "
+                   "for the target's cells: the fit of the noise-free readings; not in the σ): "
+                   + "; ".join(parts))
+    if v["converged_share"] < 1:
+        runs = v["runs"]
+        bad = runs - v["converged_runs"]
+        out.append(f"WARNING: the fit did not converge to a plausible answer in {bad} of {runs} "
+                   f"pass{'es' if runs > 1 else ''} ({1 - v['plausible_share']:.0%} ended with a dipole farther from the "
+                   "centroid than the track is, i.e. not one target beside the track); "
+                   "they are left out of its medians")
+    return out
+
+
 def main(argv=None):
     a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     geo = dict(offset=a.offset, above=a.above, noise=a.noise, speed=a.speed, rate=a.rate)
@@ -369,15 +444,16 @@ def main(argv=None):
     for row in s["rows"]:
         f = row["filters"]
         b = row["bound"]
-        print(f"{row['label']}: " + "; ".join(
-            f"{n} centroid {_fmt(v['centroid_error_m'], '.3f')} m" + (
-                f", scale {_fmt(v['main_scale_m'], '.2f')} m (second moment "
-                f"{_fmt(v['spread_scale_m'], '.2f')} m), axis {v['axis_error_deg']:.1f}°, {v['kind']}"
-                if "kind" in v else "") for n, v in f.items()))
+        print(f"{row['label']}: " + "; ".join(_estimator_text(n, v) for n, v in f.items()))
+        if "fit" in f:
+            for line in fit_lines(f["fit"]):
+                print("  " + line)
         print(f"  bound of the main scale (1σ): span {b['main_scale_m']:.3g} m, second moment "
               f"{b['spread_main_scale_m']:.3g} m, rigid line {_fmt(b['rigid_main_scale_m'], '.3g')} m; "
-              + ("sizable" if row["sizable"] else "NOT sizable") + f" ({b['sizing']} read)")
-        if "fit" in f:
+              + {"sizable": "sizable", "borderline": "BORDERLINE"}.get(b["verdict"], "NOT sizable")
+              + f" ({b['sizing']} read; rule: "
+              f"{SIZABLE_RULE})")
+        if "fit" in f and f["fit"]["converged_runs"]:
             band = f["fit"]["nees_band"]
             if not band[0] <= f["fit"]["nees"] <= band[1]:
                 print(f"  WARNING: the fit's centroid NEES {f['fit']['nees']:.3g} is outside its 99 % "

@@ -63,8 +63,8 @@ def check_distances(flat, stations, baseline):
                 f"within the gradiometer's baseline {baseline} m (its magnetometers sit "
                 f"±{baseline / 2} m along each axis)")
         raise ValueError(
-            f"target position {tuple(flat[p, :3])} m is {what}; station {s} at "
-            f"{tuple(stations[s])} m. Move the target or mask such points"
+            f"target position {validation.point_text(flat[p, :3])} m is {what}; station {s} at "
+            f"{validation.point_text(stations[s])} m. Move the target or mask such points"
         )
 
 

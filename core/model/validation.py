@@ -115,12 +115,18 @@ def station_distances(states, stations):
     return np.linalg.norm(states[:, None, :3] - stations[None, :, :], axis=-1)
 
 
+def point_text(v):
+    """A position as plain numbers, "(0, 0, 100)": ``tuple()`` of a numpy row prints
+    ``np.float64(0.0)`` for each coordinate (numpy ≥ 2), which a reader of an error should not see."""
+    return "(" + ", ".join(f"{float(c):g}" for c in np.ravel(v)) + ")"
+
+
 def no_target_on_station(states, stations):
     d = station_distances(states, stations)
     if np.any(d < ON_STATION):
         p, s = np.argwhere(d < ON_STATION)[0]
         raise ValueError(
-            f"target position {tuple(states[p, :3])} m coincides with station {s} at "
-            f"{tuple(stations[s])} m: the dipole field is singular at D = 0 (closer than {ON_STATION} m counts); "
+            f"target position {point_text(states[p, :3])} m coincides with station {s} at "
+            f"{point_text(stations[s])} m: the dipole field is singular at D = 0 (closer than {ON_STATION} m counts); "
             "move the target or mask such points (core.observability.maps does)"
         )

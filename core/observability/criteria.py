@@ -1,5 +1,7 @@
-"""Region criteria of a station layout (:func:`layout_criterion`, :data:`CRITERIA`): mean or
-worst D-optimal measure over a region, or the area whose CRLB position error is below a threshold.
+"""Region criteria of a station layout (:func:`layout_criterion`, :data:`CRITERIA`, spec §13):
+D (mean or worst D-optimal measure), A (mean CRLB position error), E (the worst direction),
+coverage (the share with CRLB position error ≤ T), the worst point, and coverage with any one
+station lost (N−1). Larger is better for every one of them (the errors are negated).
 
 Unobservable points
 -------------------
@@ -16,8 +18,8 @@ the largest D-optimal value that float64 round-off could fake at that point (D-o
 log10 η + Σ log10‖Γ_j‖ − n log10 noise where observable). The criterion stays finite and the
 floor grows with the column norms, so an optimiser sees a slope; an observable point may lie
 below it (η measures volume, not rank), so :attr:`CriterionResult.observable_fraction` says how
-much of the region is truly observable. For ``"area_crlb"`` an unobservable point simply
-fails the threshold.
+much of the region is truly observable. Every other criterion counts an unobservable point
+as an infinite error (spec §13): it fails every threshold, and A, E and the worst point are −inf.
 """
 
 from __future__ import annotations
@@ -27,10 +29,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import sensors, validation
-from .crlb import _plane_states
+from .crlb import _covariance_flat, _plane_states
 from .fisher import DEFAULT_STEPS, fisher_measures
 from .gamma import RANK_RTOL, _gamma
 from .grids import Plane
+from .loss import _loss_position
 
 __all__ = ["CRITERIA", "CriterionResult", "layout_criterion"]
 
@@ -38,7 +41,13 @@ __all__ = ["CRITERIA", "CriterionResult", "layout_criterion"]
 CRITERIA = {
     "mean_dopt": ("mean D-optimal ½·log10 det F over the region", "log10 of F's units"),
     "worst_dopt": ("worst (minimum) D-optimal ½·log10 det F over the region", "log10 of F's units"),
-    "area_crlb": ("fraction of the region with CRLB position error < threshold", "dimensionless"),
+    "mean_crlb": ("minus the mean CRLB position error over the region (A)", "m"),
+    "worst_direction": ("mean log10 of the smallest eigenvalue of the position information, the "
+                        "worst direction (E)", "log10(1/m²)"),
+    "area_crlb": ("fraction of the region with CRLB position error ≤ threshold", "dimensionless"),
+    "worst_crlb": ("minus the largest CRLB position error over the region (worst point)", "m"),
+    "area_crlb_n1": ("fraction of the region with CRLB position error ≤ threshold whichever one "
+                     "station is lost (N−1 coverage)", "dimensionless"),
 }
 
 
@@ -79,10 +88,21 @@ def _criterion(states, stations, criterion, threshold, steps, T, known, sensor):
     states = states[sensor.clear(states, stations, steps, T)]
     if states.shape[0] == 0:
         raise ValueError("every point of the region lies on a station; nothing to evaluate")
+    if criterion == "area_crlb_n1":
+        worst = _loss_position(states, stations, steps, T, known, sensor).max(axis=1)
+        frac = float(np.mean(np.isfinite(worst)))
+        return CriterionResult(float(np.mean(worst <= threshold)), frac)
     m = fisher_measures(states, stations, steps=steps, T=T, known=known, sensor=sensor)
     frac = float(np.mean(m.observable))
+    err = m.position_std  # +inf where unobservable (spec §13: an infinite error)
     if criterion == "area_crlb":
-        return CriterionResult(float(np.mean(m.position_std < threshold)), frac)
+        return CriterionResult(float(np.mean(err <= threshold)), frac)
+    if criterion in ("mean_crlb", "worst_crlb"):
+        return CriterionResult(-float(np.mean(err) if criterion == "mean_crlb" else np.max(err)),
+                               frac)
+    if criterion == "worst_direction":
+        return CriterionResult(float(np.mean(_log10_lambda_min(states, stations, m.observable,
+                                                               steps, T, known, sensor))), frac)
     d_opt = m.d_optimal.copy()
     bad = np.flatnonzero(~m.observable)
     if bad.size:  # the D-optimal floor of the module notes (R^-½ Γ of a magnetic kind: noise 1)
@@ -94,6 +114,21 @@ def _criterion(states, stations, criterion, threshold, steps, T, known, sensor):
         d_opt[bad] = np.log10(RANK_RTOL * np.sqrt(np.e * n)) + log_norms - n * np.log10(noise)
     value = np.mean(d_opt) if criterion == "mean_dopt" else np.min(d_opt)
     return CriterionResult(float(value), frac)
+
+
+def _log10_lambda_min(states, stations, observable, steps, T, known, sensor):
+    """(P,) log10 λ_min of the position information F_pos = (Cov_pos)⁻¹ (1/m²), the Schur
+    complement of F's position block: −log10 λ_max of the CRLB's position block; −inf where
+    unobservable or where no position state is unknown."""
+    free = sensor.free_columns(known)
+    pos = [j for j in free if j < 3]
+    out = np.full(states.shape[0], -np.inf)
+    if not pos or not np.any(observable):
+        return out
+    cov = _covariance_flat(states, stations, observable, steps, T, known, sensor)
+    block = cov[observable][:, pos][:, :, pos]  # (p, k, k), k ≤ 3 position states
+    out[observable] = -np.log10(np.linalg.eigvalsh(block)[:, -1])
+    return out
 
 
 def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 20.0),
@@ -111,13 +146,23 @@ def layout_criterion(stations, region, *, velocity=(2.0, 2.0), moments=(100.0, 2
         depths at y = ``fixed``.
     velocity, moments
         As for :func:`core.evaluate_map`, the same at every region point.
-    criterion : {"mean_dopt", "worst_dopt", "area_crlb"}
-        ``"mean_dopt"``: mean D-optimal measure over the region's points; ``"worst_dopt"``: its
-        minimum; ``"area_crlb"``: fraction of the points whose CRLB position error
-        sqrt(σx² + σy² + σz²) is below ``threshold``. Unobservable points count at their
-        D-optimal floor (module notes) or as failing the threshold.
+    criterion : str
+        One of :data:`CRITERIA` (docs/survey-design.md), larger is better; e is the CRLB
+        position error sqrt(σx² + σy² + σz²) (m) at each region point:
+
+        - ``"mean_dopt"`` (D): mean of ½ log10 det F; ``"worst_dopt"``: its minimum;
+        - ``"mean_crlb"`` (A): −mean e (m);
+        - ``"worst_direction"`` (E): mean log10 λ_min(F_pos) (log10 of 1/m²), F_pos the
+          position information (the Schur complement of F's position block);
+        - ``"area_crlb"`` (coverage): the fraction of points with e ≤ ``threshold``;
+        - ``"worst_crlb"`` (worst point): −max e (m);
+        - ``"area_crlb_n1"`` (N−1 coverage): the fraction with e ≤ ``threshold`` whichever one
+          station is lost (:func:`core.station_loss`).
+
+        Unobservable points count at their D-optimal floor (D, module notes) or as an infinite
+        error (every other criterion).
     threshold : float
-        Position error threshold (m) for ``"area_crlb"``, > 0.
+        Position error threshold T (m) of the coverage criteria, > 0.
     noise, steps, T, sigma, model, sea, known, sensor
         As for :func:`crlb_covariance`.
 

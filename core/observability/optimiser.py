@@ -8,56 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from ..model import sensors, validation
+from ..model import validation
 from .crlb import _pair
-from .criteria import _check_criterion, _criterion, _region_states
-from .fisher import DEFAULT_STEPS
+from .criteria import _criterion
 from .layouts import LAYOUTS, _n_stations, station_layout
+from .problem import check_problem
 from .spacing import _d_grid, _refine
+from . import search
+from .constraints import feasibility
 
-__all__ = ["LayoutProblem", "LayoutResult", "optimise_layout"]
-
-
-@dataclass(frozen=True)
-class LayoutProblem:
-    """What a layout is optimised for, as one object (issue 36): the region, the target, the
-    criterion and the measurement. Pass it as :func:`optimise_layout`'s third argument instead
-    of the keywords (which remain a convenience that builds the same problem).
-
-    Parameters
-    ----------
-    region : core.Plane
-        Surveillance region (see :func:`core.layout_criterion`).
-    h : float
-        Station depth (m).
-    velocity, moments, criterion, threshold, steps, T, known
-        As for :func:`core.layout_criterion`.
-    sensor : core.Sensor or str or None
-        The measurement (kind, noise, medium, baseline); None: the electric default.
-
-    Examples
-    --------
-    >>> import core
-    >>> problem = core.LayoutProblem(core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9))
-    >>> core.optimise_layout("line", 2, problem, d_range=(5, 300), n_curve=5).stations.shape
-    (2, 3)
-    """
-
-    region: object
-    h: float = 100.0
-    velocity: tuple = (2.0, 2.0)
-    moments: tuple = (100.0, 20.0)
-    criterion: str = "mean_dopt"
-    threshold: float = 10.0
-    steps: int = DEFAULT_STEPS
-    T: float = 1.0
-    known: tuple = ()
-    sensor: object = None
-
-    def keywords(self):
-        """The problem as :func:`optimise_layout`'s keywords."""
-        return {f: getattr(self, f) for f in ("h", "velocity", "moments", "criterion",
-                                              "threshold", "steps", "T", "known", "sensor")}
+__all__ = ["LayoutResult", "optimise_layout"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +41,8 @@ class LayoutResult:
         (the ends of ``d_range``) for the scaled kinds; for ``"free"`` the sides of the box that
         a station touches, from ``"x_min"``, ``"x_max"``, ``"y_min"``, ``"y_max"``. A bound
         that is hit means the optimum may lie beyond it.
+    fixed : int
+        The first ``fixed`` rows of ``stations`` are the problem's fixed stations (unmoved).
     """
 
     stations: np.ndarray
@@ -89,6 +51,7 @@ class LayoutResult:
     d: float | None
     nfev: int
     at_bound: tuple = ()
+    fixed: int = 0
 
 
 def _default_bounds(region):
@@ -133,19 +96,8 @@ def _optimise_spacing(kind, n, h, box, d_range, n_curve, objective, client=None)
     return best_d, best_v, nfev, at_bound if n > 1 else ()  # one station: d plays no part
 
 
-def _same(a, b):
-    """Whether a keyword holds its default (tuples and lists alike)."""
-    try:
-        return bool(np.array_equal(np.asarray(a, dtype=object), np.asarray(b, dtype=object)))
-    except (TypeError, ValueError):
-        return a is b
-
-
-def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
-                    moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                    noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None,
-                    sea=None, known=(), d_range=None, n_curve=25, x0=None, bounds=None,
-                    maxfev=400, client=None, sensor=None):
+def optimise_layout(kind, n_stations, problem, *, d_range=None, n_curve=25, x0=None,
+                    bounds=None, maxfev=400, client=None):
     """Optimise an N-station layout for a region criterion.
 
     Parameters
@@ -159,11 +111,8 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
         copes with the piecewise-constant ``"area_crlb"``).
     n_stations : int
         N, 1 … :data:`MAX_STATIONS`.
-    region : core.Plane or LayoutProblem
-        Surveillance region; or the whole problem (:class:`LayoutProblem`: region, target,
-        criterion, measurement), the keywords below then left at their defaults.
-    h, velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
-        As for :func:`spacing_curve`.
+    problem : core.LayoutProblem
+        Region, target, measurement, criterion, station depth h and constraints.
     d_range : (float, float), optional
         (min, max) spacing (m) of the scaled kinds, 0 < min < max, and of the default start of
         ``"free"``. Default: from min(2 m, d_fit / 2) to d_fit, the largest spacing at which the
@@ -193,58 +142,58 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
     --------
     >>> import core
     >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 9)
-    >>> r = core.optimise_layout("triangle", 3, region, d_range=(5, 300), n_curve=5)
+    >>> problem = core.LayoutProblem(region)
+    >>> r = core.optimise_layout("triangle", 3, problem, d_range=(5, 300), n_curve=5)
     >>> r.stations.shape
     (3, 3)
     """
-    if isinstance(region, LayoutProblem):  # the problem as one object: no keyword beside it
-        given = dict(h=h, velocity=velocity, moments=moments, criterion=criterion,
-                     threshold=threshold, noise=noise, steps=steps, T=T, sigma=sigma, model=model,
-                     sea=sea, known=known, sensor=sensor)
-        defaults = dict(LayoutProblem(None).keywords(), noise=None, sigma=None, model=None,
-                        sea=None)
-        twice = sorted(k for k, v in given.items() if not _same(v, defaults[k]))
-        if twice:
-            raise ValueError(f"pass the problem either as a core.LayoutProblem or as keywords, "
-                             f"not both; got a LayoutProblem and {', '.join(twice)}")
-        return optimise_layout(kind, n_stations, region.region, d_range=d_range, n_curve=n_curve,
-                               x0=x0, bounds=bounds, maxfev=maxfev, client=client,
-                               **region.keywords())
     if kind not in LAYOUTS:
         raise ValueError(f"layout kind must be one of {list(LAYOUTS)}; got {kind!r}")
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
     n = _n_stations(n_stations)
     validation.integer("maxfev", maxfev, 1)
-    states = _region_states(region, velocity, moments, sensor)
-    threshold = _check_criterion(criterion, threshold)
-    h = station_layout("line", 1, h=h)[0, 2]  # validates h
+    problem = check_problem(problem)
+    states, sensor, threshold, h, T = problem.prepared()
+    region = problem.region
     (xlo, xhi), (ylo, yhi) = _default_bounds(region) if bounds is None else (
         _pair("bounds[0]", bounds[0]), _pair("bounds[1]", bounds[1]))
     if not (xlo < xhi and ylo < yhi):
         raise ValueError(f"bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {bounds!r}")
     box = np.array([[xlo, xhi], [ylo, yhi]])
 
+    cons = problem.constraints
+    cand = None if cons is None else feasibility(cons, n, h, box, sensor.sea)  # said at once
+
     def value(st):
-        return _criterion(states, st, criterion, threshold, steps, T, known, sensor).value
+        return _criterion(states, st, problem.criterion, threshold, problem.steps, T,
+                          problem.known, sensor).value
 
     if kind != "free":
         if d_range is None:
             fit = _largest_spacing(kind, n, box)
             d_range = (min(2.0, 0.5 * fit), fit)
-        d, best, nfev, at_bound = _optimise_spacing(kind, n, h, box, d_range, n_curve, value, client)
-        return LayoutResult(_centred_layout(kind, n, d, h, box), best, kind, d, nfev, at_bound)
+        unbounded = np.array([[-np.inf, np.inf]] * 2)  # the scaled layout's box is d_range's
+        scorer = None if cons is None else search.Scorer(value, cons, unbounded, sensor.sea)
+        d, best, nfev, at_bound = _optimise_spacing(kind, n, h, box, d_range, n_curve,
+                                                    value if cons is None else scorer.score, client)
+        st = _centred_layout(kind, n, d, h, box)
+        if cons is not None:
+            if best <= search.INFEASIBLE:
+                raise ValueError(f"no spacing d in {tuple(map(float, d_range))} m puts a centred "
+                                 f"{kind} of {n} stations where the constraints allow")
+            st, best = np.vstack([cons.fixed, st]), value(np.vstack([cons.fixed, st]))
+        return LayoutResult(st, best, kind, d, nfev, at_bound, 0 if cons is None else len(cons.fixed))
+    if cons is not None:
+        with search.serial():
+            st, best, nfev = _constrained_free(value, cons, n, h, box, cand, sensor.sea, x0, maxfev)
+        return LayoutResult(st, best, kind, None, nfev, _touching(st[len(cons.fixed):], box),
+                            len(cons.fixed))
     nfev = 0
     if x0 is None:
-        start = optimise_layout("square", n, region, h=h, velocity=velocity, moments=moments,
-                                criterion=criterion, threshold=threshold, steps=steps, T=T,
-                                known=known, sensor=sensor, d_range=d_range, n_curve=n_curve,
+        start = optimise_layout("square", n, problem, d_range=d_range, n_curve=n_curve,
                                 bounds=((xlo, xhi), (ylo, yhi)), client=client)
         xy, nfev = start.stations[:, :2], start.nfev
     else:
-        xy = validation.as_array("x0", x0)
-        if xy.shape != (n, 2) or not np.all(np.isfinite(xy)):
-            raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
-                             f"got shape {xy.shape}")
+        xy = _x0(x0, n)
     xy = np.clip(xy, [xlo, ylo], [xhi, yhi])
 
     def objective(p):
@@ -255,8 +204,43 @@ def optimise_layout(kind, n_stations, region, *, h=100.0, velocity=(2.0, 2.0),
                             options={"maxfev": int(maxfev), "xtol": 1e-2, "ftol": 1e-6})
     p = res.x if res.fun <= objective(xy.ravel()) else xy.ravel()
     st = np.column_stack([p.reshape(n, 2), np.full(n, h)])
+    return LayoutResult(st, float(-objective(p)), kind, None, int(nfev + res.nfev + 2),
+                        _touching(st, box))
+
+
+def _x0(x0, n):
+    xy = validation.as_array("x0", x0)
+    if xy.shape != (n, 2) or not np.all(np.isfinite(xy)):
+        raise ValueError(f"x0 must be a finite (N, 2) = ({n}, 2) array of (x, y) in m; "
+                         f"got shape {xy.shape}")
+    return xy
+
+
+def _touching(st, box):
+    """The box sides that a station lies on (within _BOX_TOUCH of the box width)."""
+    (xlo, xhi), (ylo, yhi) = box
     near = _BOX_TOUCH * np.diff(box, axis=1)[:, 0]
-    at_bound = tuple(name for name, hit in (
+    return tuple(name for name, hit in (
         ("x_min", np.any(st[:, 0] - xlo <= near[0])), ("x_max", np.any(xhi - st[:, 0] <= near[0])),
         ("y_min", np.any(st[:, 1] - ylo <= near[1])), ("y_max", np.any(yhi - st[:, 1] <= near[1]))) if hit)
-    return LayoutResult(st, float(-objective(p)), kind, None, int(nfev + res.nfev + 2), at_bound)
+
+
+def _constrained_free(value, cons, n, h, box, cand, sea, x0, maxfev):
+    """The constrained free search (:mod:`.search`); returns (all stations, value, nfev)."""
+    scorer = search.Scorer(value, cons, box, sea)
+    if x0 is not None:
+        new = np.column_stack([_x0(x0, n), np.full(n, h)])
+        if not scorer.feasible(new):
+            raise ValueError("x0 breaks the constraints: " + "; ".join(
+                cons.violations(np.vstack([cons.fixed, new]), sea) or ["a station is outside the box"]))
+    else:
+        coarse = search.grid(box, h, cons, sea, search.EXCHANGE_GRID)
+        new, _ = search.exchange(scorer, coarse, n, h)
+        if new is None:  # the coarse grid has no room: the feasibility check's finer one has
+            new, _ = search.exchange(scorer, cand, n, h)
+    new, best = search.polish(scorer, new, maxfev)
+    st = np.vstack([cons.fixed, new])
+    broken = cons.violations(st, sea)
+    if broken:  # cannot happen: every step keeps the feasible layout it starts from
+        raise RuntimeError("the constrained search broke its constraints: " + "; ".join(broken))
+    return st, value(st), scorer.nfev + 1

@@ -9,29 +9,26 @@ import numpy as np
 from scipy import optimize
 
 from .. import dask_backend
-from ..model import sensors, validation
+from ..model import validation
 from .crlb import _pair
-from .criteria import _check_criterion, _criterion, _region_states
-from .fisher import DEFAULT_STEPS
+from .criteria import _criterion
 from .layouts import _n_stations, station_layout
+from .problem import check_problem
 
 __all__ = ["SpacingResult", "best_spacing", "spacing_curve"]
 
 
-def _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                             threshold, noise, steps, T, sigma, model, sea, known, sensor=None):
-    """Validate once; return f(d) -> criterion value for a scaled layout."""
+def _scaled_layout_objective(problem, kind, n_stations):
+    """Validate once; return f(d) -> criterion value for a scaled layout of the problem."""
     if kind not in ("line", "triangle", "square"):
         raise ValueError(f"a spaced layout kind must be 'line', 'triangle' or 'square'; got {kind!r}")
     n_stations = _n_stations(n_stations)
-    threshold = _check_criterion(criterion, threshold)
-    sensor = sensors.sensor_model(sensor, sigma=sigma, model=model, sea=sea, noise=noise)
-    states = _region_states(region, velocity, moments, sensor)
-    station_layout(kind, n_stations, d=1.0, h=h)  # validates h
+    p = check_problem(problem)
+    states, sensor, threshold, h, T = p.prepared()
 
     def value(d):
-        return _criterion(states, station_layout(kind, n_stations, d=d, h=h), criterion,
-                          threshold, steps, T, known, sensor).value
+        return _criterion(states, station_layout(kind, n_stations, d=d, h=h), p.criterion,
+                          threshold, p.steps, T, p.known, sensor).value
     return value
 
 
@@ -70,26 +67,20 @@ def _refine(f, d, client, xatol):
     return float(best_d), float(best_v), curve, i, int(d.size + res.nfev)
 
 
-def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0),
-                  moments=(100.0, 20.0), criterion="mean_dopt", threshold=10.0,
-                  noise=None, steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None,
-                  sea=None, known=(), client=None, sensor=None):
+def spacing_curve(d_values, problem, *, kind="line", n_stations=2, client=None):
     """Criterion against station spacing d (default: the paper's dual, a 2-station line).
 
     Parameters
     ----------
     d_values : array_like, shape (K,)
         Spacings (m), > 0.
-    region : core.Plane
-        Surveillance region (see :func:`layout_criterion`).
+    problem : core.LayoutProblem
+        Region, target, measurement, criterion and station depth h (its constraints play no
+        part: a scaled layout has no free station).
     kind : {"line", "triangle", "square"}
         Layout scaled by d (see :func:`station_layout`).
     n_stations : int
         N, 1 … :data:`MAX_STATIONS`.
-    h : float
-        Station depth (m).
-    velocity, moments, criterion, threshold, noise, steps, T, sigma, model, sea, known, sensor
-        As for :func:`layout_criterion`.
     client : distributed.Client, optional
         Evaluate the K spacings as tasks on this Dask cluster (see :mod:`core.dask_backend`);
         the values are the same as without it.
@@ -103,13 +94,11 @@ def spacing_curve(d_values, region, *, kind="line", n_stations=2, h=100.0, veloc
     --------
     >>> import core
     >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
-    >>> core.spacing_curve([10, 50], region).shape
+    >>> core.spacing_curve([10, 50], core.LayoutProblem(region)).shape
     (2,)
     """
     d = _d_values(d_values)
-    f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                                 threshold, noise, steps, T, sigma, model, sea, known, sensor)
-    return _map(f, d, client)
+    return _map(_scaled_layout_objective(problem, kind, n_stations), d, client)
 
 
 @dataclass(frozen=True)
@@ -138,17 +127,16 @@ class SpacingResult:
     nfev: int
 
 
-def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xatol=0.05,
-                 kind="line", n_stations=2, h=100.0, velocity=(2.0, 2.0), moments=(100.0, 20.0),
-                 criterion="mean_dopt", threshold=10.0, noise=None,
-                 steps=DEFAULT_STEPS, T=1.0, sigma=None, model=None, sea=None, known=(),
-                 client=None, sensor=None):
+def best_spacing(problem, *, kind="line", n_stations=2, d_values=None, d_range=(2.0, 200.0),
+                 n_curve=25, xatol=0.05, client=None):
     """Spacing d that maximises a region criterion.
 
     Parameters
     ----------
-    region : core.Plane
-        Surveillance region (see :func:`layout_criterion`).
+    problem : core.LayoutProblem
+        As for :func:`spacing_curve`.
+    kind, n_stations
+        As for :func:`spacing_curve`.
     d_values : array_like, shape (K,), optional
         Coarse spacings (m) for the bracketing curve; default ``n_curve`` points evenly spaced
         over ``d_range``.
@@ -158,9 +146,6 @@ def best_spacing(region, *, d_values=None, d_range=(2.0, 200.0), n_curve=25, xat
         Points of the default coarse curve, ≥ 3.
     xatol : float
         Absolute tolerance on d (m) of the bounded Brent search, > 0.
-    kind, n_stations, h, velocity, moments, criterion, threshold, noise, steps, T, sigma, \
-model, sea, known
-        As for :func:`spacing_curve`.
     client : distributed.Client, optional
         Evaluate the coarse curve on this Dask cluster (:func:`spacing_curve`); the Brent
         refinement is sequential and runs here. The result is the same as without it.
@@ -184,7 +169,7 @@ model, sea, known
     --------
     >>> import core
     >>> region = core.Plane("xy", (-300, 300), (-300, 300), 120.0, 11)
-    >>> r = core.best_spacing(region, d_range=(5, 300), n_curve=7)
+    >>> r = core.best_spacing(core.LayoutProblem(region), d_range=(5, 300), n_curve=7)
     >>> bool(r.d_values[0] <= r.d <= r.d_values[-1])
     True
     """
@@ -195,8 +180,7 @@ model, sea, known
         if d.size < 3:
             raise ValueError(f"d_values must hold at least 3 distinct spacings; got {d_values!r}")
     xatol = validation.positive("xatol", xatol, "m")
-    f = _scaled_layout_objective(region, kind, n_stations, h, velocity, moments, criterion,
-                                 threshold, noise, steps, T, sigma, model, sea, known, sensor)
+    f = _scaled_layout_objective(problem, kind, n_stations)
     best_d, best_v, curve, i, nfev = _refine(f, d, client, xatol)
     return SpacingResult(d=best_d, value=best_v, d_values=d, curve=curve,
                          at_bound=i in (0, d.size - 1), nfev=nfev)

@@ -7,8 +7,8 @@ outliers), so its Euler start, and hence the filters' start, differ. Run r uses
 
 Metrics (per filter; "position" is the centroid of the N dipoles, or Euler's point; what each
 field of the summary means: docs/shape.md, *Command line*): errors of the centroid at the last
-sample and at their peak after :data:`SETTLE` samples, the PCA of the final dipoles against the
-target's main scale and axis, and the centroid's NEES (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true),
+sample and at their peak after :data:`SETTLE` samples (:func:`settle_samples` on a shorter pass),
+the PCA of the final dipoles against the target's main scale and axis, and the centroid's NEES (c − c_true)ᵀ (A P Aᵀ)⁻¹ (c − c_true),
 3 degrees of freedom (A averages the dipole positions: the true target is not a 4-dipole state,
 so only the centroid has a truth to compare with). The batch fit (``"fit"``) has one estimate
 per pass, not a track.
@@ -24,6 +24,8 @@ from scipy import stats
 from ..model.magnetic import EULER_RCOND, euler_locate
 from ..tracking import unscented as uk
 from . import model as md
+from . import bound as bd
+from .bound import read_gradients
 from .fit import fit_pass
 from .pca import axis_angle_deg, pca_shape
 from .targets import Outliers, Pass, Target
@@ -32,7 +34,7 @@ __all__ = ["BASELINE", "NOISE_B", "NOISE_G", "SETTLE", "Case", "CaseResult", "eu
            "run_case", "simulate", "verdict"]
 
 #: Gradiometer baseline of the truth (m), seed 003's Ls.
-BASELINE = 0.5
+BASELINE = bd.BASELINE
 #: Noise σ of each tensor component (nT/m) and of each field component (nT): seed 003's
 #: "0.01 nT" measurement precision, read as nT/m for the tensor.
 NOISE_G = 0.01
@@ -76,9 +78,7 @@ def simulate(case):
     t = case.target
     st = case.track.positions
     B = md.dipole_field(t.positions, t.moments, st).sum(axis=0)  # (K, 3): the magnetometers' mean
-    G = md.dipole_tensor(t.positions, t.moments, st, case.baseline).sum(axis=0)  # (K, 3, 3)
-    i, j = zip(*md.G_COMPONENTS)
-    return B, G[:, i, j]
+    return B, md.cells_tensor5(t.positions, t.moments, st, case.baseline)
 
 
 def full_tensor(g5):
@@ -132,6 +132,8 @@ class CaseResult:
     dipoles: dict  # filter -> (R, N, 3) final dipole positions
     euler_cond: np.ndarray  # (R, K)
     nees: dict  # filter -> (R, K) centroid NEES
+    #: The batch fit's model bias (:func:`model_bias`); empty without the fit.
+    model_bias: dict = field(default_factory=dict)
     summary: dict = field(default_factory=dict)
 
 
@@ -161,6 +163,25 @@ def _final(s, x_moment, case):
             "axis_error_deg": axis_angle_deg(s.axis, case.target.axis),
             "eigenvalues": s.eigenvalues, "axes": s.axes, "centroid": s.centroid,
             "moment": x_moment}
+
+
+def scale_sigma(x, cov, n=md.N_DIPOLES):
+    """σ (m) of the span read and the second-moment read of the main scale of state ``x``
+    (3n + 3,) with covariance ``cov`` (delta method, :func:`core.shape.bound.read_gradients`;
+    a plane's two reads are both its diameter's); NaN if ``x`` is not finite."""
+    if not np.all(np.isfinite(x)) or not np.all(np.isfinite(cov)):
+        return float("nan"), float("nan")
+    _, dL, _, dS = read_gradients(x, n)
+    span = float(np.sqrt(max(dL @ cov @ dL, 0.0)))
+    line = str(pca_shape(x[: 3 * n].reshape(n, 3)).kind) == "line"
+    return span, float(np.sqrt(max(dS @ cov @ dS, 0.0))) if line else span
+
+
+def model_bias(case, g5=None):
+    """:func:`core.shape.bound.model_bias` of ``case`` (its target, pass, noise, array and
+    Huber's u), from its noise-free readings ``g5`` (K, 5) if given."""
+    return bd.model_bias(case.target, case.track, case.noise_g, baseline=case.baseline,
+                         u=case.huber_u, g5=g5)
 
 
 def run_case(case, runs=1, seed=0, filters=("ukf", "nhukf"), fit=True):
@@ -216,10 +237,13 @@ def run_case(case, runs=1, seed=0, filters=("ukf", "nhukf"), fit=True):
         cov = np.stack([f.cov for f in fits])
         score("fit", X[:, None], cov[:, None])  # one estimate per pass: K = 1
         final["fit"].update(misfit=np.array([f.misfit for f in fits]),
-                            converged=np.array([f.converged for f in fits]), covariance=cov, state=X)
+                            converged=np.array([f.converged for f in fits]),
+                            plausible=np.array([f.plausible for f in fits]),
+                            scale_sigma_m=np.array([scale_sigma(f.x, f.cov) for f in fits]),
+                            covariance=cov, state=X)
     out = CaseResult(case=case, runs=runs, times=trk.times, platform_x=st[:, 0],
                      outlier_samples=hit, errors=errors, final=final, dipoles=dipoles,
-                     euler_cond=cond, nees=nees)
+                     euler_cond=cond, nees=nees, model_bias=model_bias(case, g5) if fit else {})
     out.summary = summarise(out)
     return out
 
@@ -241,42 +265,88 @@ def verdict(kinds, scales):
     return kind, share, by_kind
 
 
+def settle_samples(samples):
+    """Samples skipped before a track's peak error and NEES are counted: :data:`SETTLE`, or on a
+    pass of ≤ SETTLE samples all but the last (issue 46: a 9-sample pass had no sample left, and
+    its summary crashed)."""
+    return min(SETTLE, int(samples) - 1)
+
+
+def _scores(f, nees, truth_scale):
+    """An estimator's medians over the runs given (``f``'s arrays and ``nees`` already chosen);
+    with no run, NaN and kind "none"."""
+    if len(f["kind"]) == 0:
+        return {"main_scale_m": float("nan"), "main_scale_by_kind_m": {}, "kind": "none",
+                "main_scale_error_m": float("nan"), "axis_error_deg": float("nan"),
+                "kind_share": {}, "spread_scale_m": float("nan"), "nees": float("nan"),
+                "nees_dof": 3, "moment_total_Am2": [float("nan")] * 3}
+    kind, share, by_kind = verdict(f["kind"], f["main_scale_m"])
+    return {
+        "main_scale_m": by_kind.get(kind, float("nan")),
+        "main_scale_by_kind_m": by_kind,
+        "main_scale_error_m": float(np.median(np.abs(f["main_scale_m"] - truth_scale))),
+        "axis_error_deg": float(np.median(f["axis_error_deg"])),
+        "kind": kind,
+        "kind_share": share,
+        "spread_scale_m": float(np.median(f.get("spread_scale_m", np.nan))),
+        "nees": float(np.nanmean(nees)),
+        "nees_dof": 3,
+        "moment_total_Am2": (np.median(f["moment"], axis=0) * md.N_DIPOLES).tolist(),
+    }
+
+
+def _fit_summary(res, d):
+    """The batch fit's entry (module notes): medians over its converged passes only (a fit that
+    did not converge, or ended implausibly far, is no answer: ``converged_share`` counts them),
+    its σ of the main scale and the model bias beside it."""
+    f = res.final["fit"]
+    keep = np.asarray(f["converged"], bool)
+    n = int(keep.sum())
+    sub = {k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
+           for k, v in f.items()}
+    with np.errstate(invalid="ignore"):
+        d["centroid_error_m"] = float(np.median(res.errors["fit"][keep, -1])) if n else float("nan")
+    d.update(_scores(sub, res.nees["fit"][keep], res.case.target.main_scale))
+    d["nees_band"] = ([float(v) for v in stats.chi2.ppf([0.005, 0.995], 3 * n) / n] if n else
+                      [float("nan")] * 2)
+    d["misfit"] = float(np.median(sub["misfit"])) if n else float("nan")
+    d["converged_share"] = float(np.mean(keep))
+    d["converged_runs"] = n
+    d["runs"] = int(keep.size)
+    d["plausible_share"] = float(np.mean(f["plausible"]))
+    sig = np.median(sub["scale_sigma_m"], axis=0) if n else [float("nan")] * 2
+    d["main_scale_sigma_m"], d["spread_scale_sigma_m"] = float(sig[0]), float(sig[1])
+    b = res.model_bias
+    d["main_scale_bias_m"] = b.get("main_scale_m", float("nan"))
+    d["spread_scale_bias_m"] = b.get("spread_scale_m", float("nan"))
+    d["model_bias"] = dict(b)
+    if res.runs > 1 and n:
+        d["centroid_error_p90_m"] = float(np.percentile(res.errors["fit"][keep, -1], 90))
+    return d
+
+
 def summarise(res):
     """summary.json's content (module notes); medians over runs where there are several."""
     case = res.case
-    truth_scale = case.target.main_scale
     out = {"case": case.to_dict(), "runs": res.runs, "outlier_samples": res.outlier_samples,
            "filters": {}}
+    settle = settle_samples(res.times.size)
+    out["settle_samples"] = settle
     for name, err in res.errors.items():
-        track = err.shape[1] > SETTLE  # a filter's or Euler's track; the batch fit: one estimate
+        track = name != "fit"  # a filter's or Euler's track; the batch fit: one estimate
         with np.errstate(invalid="ignore"):  # Euler is NaN where G is singular
             d = {"centroid_error_m": float(np.nanmedian(err[:, -1]))}
             if track:
-                d["peak_error_m"] = float(np.nanmedian(np.nanmax(err[:, SETTLE:], axis=1)))
-        if name in res.final:
-            f = res.final[name]
-            kind, share, by_kind = verdict(f["kind"], f["main_scale_m"])
-            nees = res.nees[name][:, SETTLE:] if track else res.nees[name]
-            d.update({
-                "main_scale_m": by_kind.get(kind, float("nan")),
-                "main_scale_by_kind_m": by_kind,
-                "main_scale_error_m": float(np.median(np.abs(f["main_scale_m"] - truth_scale))),
-                "axis_error_deg": float(np.median(f["axis_error_deg"])),
-                "kind": kind,
-                "kind_share": share,
-                "spread_scale_m": float(np.median(f.get("spread_scale_m", np.nan))),
-                "nees": float(np.nanmean(nees)),
-                "nees_dof": 3,
-                "moment_total_Am2": (np.median(f["moment"], axis=0) * md.N_DIPOLES).tolist(),
-            })
-            if not track:
-                d["nees_band"] = [float(v) for v in stats.chi2.ppf([0.005, 0.995], 3 * res.runs) / res.runs]
-                d["misfit"] = float(np.median(f["misfit"]))
-                d["converged_share"] = float(np.mean(f["converged"]))
+                d["peak_error_m"] = float(np.nanmedian(np.nanmax(err[:, settle:], axis=1)))
+        if name == "fit":
+            d = _fit_summary(res, d)
+        elif name in res.final:
+            d.update(_scores(res.final[name], res.nees[name][:, settle:], case.target.main_scale))
         else:
             d["median_condition_number"] = float(np.median(res.euler_cond))
             d["flagged_share"] = float(np.mean(res.euler_cond > EULER_FLAG_COND))
-        if res.runs > 1:
-            d["centroid_error_p90_m"] = float(np.nanpercentile(err[:, -1], 90))
+        if res.runs > 1 and name != "fit":
+            with np.errstate(invalid="ignore"):
+                d["centroid_error_p90_m"] = float(np.nanpercentile(err[:, -1], 90))
         out["filters"][name] = d
     return out

@@ -25,7 +25,7 @@ import numpy as np
 from ..model.magnetic import gradient_tensor, magnetic_field, magnetic_jacobian
 from ..model.validation import integer
 
-__all__ = ["G_COMPONENTS", "LAG", "N_DIPOLES", "P0_MOMENT_REL", "P0_POSITION", "Q_MOMENT",
+__all__ = ["G_COMPONENTS", "cells_tensor5", "LAG", "N_DIPOLES", "P0_MOMENT_REL", "P0_POSITION", "Q_MOMENT",
            "Q_POSITION", "START_SPREAD", "DipoleModel", "collapsed", "start_state",
            "tetrahedron"]
 
@@ -59,6 +59,14 @@ def dipole_field(sources, moments, stations):
     """B (P, S, 3) nT of P dipoles (positions, moments (P, 3)) at S stations:
     :func:`core.magnetic_field`, the one magnetic kernel."""
     return magnetic_field(_states8(sources, moments), stations)
+
+
+def cells_tensor5(sources, moments, stations, baseline=None):
+    """The 5 tensor components (K, 5) nT/m of all the cells ``sources`` (C, 3) with ``moments``
+    (C, 3) summed, at ``stations`` (K, 3): what the gradiometer reads without noise."""
+    G = dipole_tensor(sources, moments, stations, baseline).sum(axis=0)  # (K, 3, 3)
+    i, j = zip(*G_COMPONENTS)
+    return G[:, i, j]
 
 
 def dipole_tensor(sources, moments, stations, baseline=None):

@@ -441,7 +441,7 @@ def calibration_parts(scenario):
         refusal(scenario, FIELDS, "w-message-cal"),
         *[_input(scenario, f) for f in FIELDS],
         pn.pane.Markdown(f"**Upload a CSV** (B1, B2, B3 in nT; psi, theta, phi in rad; at most "
-                         f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES // 2 ** 20} MiB: a larger "
+                         f"{cal.MAX_CSV_ROWS:,} rows and {cal.MAX_CSV_BYTES / 1e6:.1f} MB: a larger "
                          "file is refused here, before it is sent)"), upload,
         sizing_mode="stretch_width", css_classes=["w-cal-inputs"])
     main = pn.Column(

@@ -89,8 +89,8 @@ def best_spacing(snapshot: Snapshot) -> Spacing:
     region = xy_region(s, REGION_RESOLUTION)
     common = dict(velocity=s.velocity(), moments=s.moments(), **_fisher_options(s))
     with KERNEL_LOCK:
-        result = core.best_spacing(region, d_range=SPACING_RANGE, n_curve=SPACING_POINTS, h=s.h,
-                                   criterion=key, threshold=s.threshold, **common)
+        problem = core.LayoutProblem(region, h=s.h, criterion=key, threshold=s.threshold, **common)
+        result = core.best_spacing(problem, d_range=SPACING_RANGE, n_curve=SPACING_POINTS)
 
     def at(d):
         stations = core.dual_station(s.h, d)
@@ -106,10 +106,10 @@ def optimised_layout(snapshot: Snapshot):
     """core.optimise_layout for the chosen shape and N over the x–y region: a core.LayoutResult."""
     s = snapshot.scenario()
     with KERNEL_LOCK:
-        return core.optimise_layout(s.layout_kind, int(s.n_stations), xy_region(s, 31), h=s.h,
-                                    velocity=s.velocity(), moments=s.moments(),
-                                    criterion=CRITERIA[s.criterion], threshold=s.threshold,
-                                    **_fisher_options(s))  # spacing up to what fits in the region
+        problem = core.LayoutProblem(xy_region(s, 31), h=s.h, velocity=s.velocity(),
+                                     moments=s.moments(), criterion=CRITERIA[s.criterion],
+                                     threshold=s.threshold, **_fisher_options(s))
+        return core.optimise_layout(s.layout_kind, int(s.n_stations), problem)  # fits the region
 
 
 __all__ = ["ERROR_MAP_READS", "LAYOUT_READS", "REGION_RESOLUTION", "SPACING_POINTS", "SPACING_RANGE",

@@ -43,6 +43,12 @@ COLUMNS = ["x (m)", "y (m)", "z (m)"]
 OWN = ("stations", *Design.names())
 
 
+#: Decimals of a station's coordinates in the table (its "0.0" format) and of a drawn one (m).
+DECIMALS = 1
+#: A drawn row within this of an old station (m) is that station, untouched: half the table's step.
+TOUCHED = 0.5 * 10 ** -DECIMALS
+
+
 def drawn_stations(data, old, h):
     """The custom layout after a PointDraw edit: ``data`` (columns x, y; any z is ignored) against
     the ``old`` layout (S, 3), m.
@@ -52,13 +58,15 @@ def drawn_stations(data, old, h):
     next one was added. So a depth comes from the layout itself: a row at an old station's (x, y)
     keeps that station's depth; a moved station keeps the depth of the old station it replaces;
     a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
-    rows = [(float(x), float(y)) for x, y in zip(data["x"], data["y"])]
+    # a dragged or clicked position to the table's 0.1 m: the browser's float noise
+    # (206.999985918) went into the link while the table showed 207.0 (issue 46 defect 9)
+    rows = [(round(float(x), DECIMALS), round(float(y), DECIMALS)) for x, y in zip(data["x"], data["y"])]
     unused = list(range(len(old)))
     depth = [None] * len(rows)
-    for i, (x, y) in enumerate(rows):  # unchanged stations, matched by position
-        j = next((j for j in unused if abs(old[j][0] - x) <= 1e-6 and abs(old[j][1] - y) <= 1e-6), None)
+    for i, (x, y) in enumerate(rows):  # unchanged stations, matched by position, kept exactly
+        j = next((j for j in unused if abs(old[j][0] - x) <= TOUCHED and abs(old[j][1] - y) <= TOUCHED), None)
         if j is not None:
-            depth[i] = float(old[j][2])
+            rows[i], depth[i] = (float(old[j][0]), float(old[j][1])), float(old[j][2])
             unused.remove(j)
     for i in range(len(rows)):
         if depth[i] is None:  # dragged (an old station is left over for it) or added (at the end)
@@ -187,7 +195,7 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     table = pn.widgets.Tabulator(
         frame(st.stations), show_index=False, sizing_mode="stretch_width", height=260,
         css_classes=["w-station-table"],
-        formatters={c: NumberFormatter(format="0.0") for c in COLUMNS})
+        formatters={c: NumberFormatter(format=f"0.{'0' * DECIMALS}") for c in COLUMNS})
 
     showing = [False]  # the table's value is being set from the layout: not an edit
 

@@ -202,12 +202,14 @@ def build():
             corners.append(fig.add_glyph(view_source, Scatter(x="x", y="y", size=0, line_alpha=0, fill_alpha=0)))
         fmt = CustomJSHover(code=_HOVER_JS, args=dict(img=img, bar=value_bar if which < 2 else diff_bar,
                                                       texts=HoverTexts()))
+        # On a station both tooltips show: the map's below the pointer, the station's above it
+        # (the station's covered the map's value, issue 46 defect 12).
         hover = HoverTool(renderers=[v], tooltips=[("x", "$x{0.0} m"), ("y", "$y{0.0} m"),
-                                                   ("value", "@image{custom}")],
+                                                   ("value", "@image{custom}")], attachment="below",
                           formatters={"@image": fmt}, visible=False)  # no toolbar icon: room for save
         save = SaveTool(filename="observability_map")
         fig.add_tools(hover, HoverTool(renderers=[s], tooltips=[("", "@name"), ("x", "@x m"), ("y", "@y m")],
-                                       visible=False), save)
+                                       attachment="above", point_policy="follow_mouse", visible=False), save)
         bar = ColorBar(color_mapper=value_bar if which < 2 else diff_bar, title="", orientation="horizontal",
                        height=10, padding=4, margin=8, title_standoff=3, title_text_font_size="11px",
                        title_text_font_style="normal", major_label_text_font_size="11px",

@@ -7,15 +7,16 @@ inputs is dragged, the path here is shorter, through public Bokeh and Panel only
 
 * in the browser, a ``CustomJS`` on the slider's ``value`` (Panel's ``jscallback``) offers
   ``[input, value, sequence, released]`` to :class:`Drag`, a Bokeh ``DataModel`` of the session,
-  through a closed loop (:data:`LOOP_JS`): a value goes out once the server has answered the
+  only while a hand is down on the page (:data:`HAND_JS`, on the document's ``document_ready``):
+  a typed value, a link or a preset moves the handle from the server, and is not offered.
+  Through a closed loop (:data:`LOOP_JS`): a value goes out once the server has answered the
   previous one (``Drag.ready``, set with the preview it drew, in the same message), and at most
   one every THROTTLE_MS (the first of a gesture THROTTLE_MS after it: a click on the track or a
   flick is released before then, and computes no preview); meanwhile the latest value waits in
   the page and replaces older ones. A busy server therefore gets no queue of values, only the
-  latest one when it can take it. A change of the slider model's ``value_throttled`` (its
-  release; connected through BokehJS's signal API in the slider's first callback: Panel's
-  ``jscallback`` does not offer that property) writes the final value at once, ``released``
-  set; ``APP_PREVIEWS=off`` in the server's environment turns all of this off (:data:`PREVIEWS`);
+  latest one when it can take it. When the hand lets go (:data:`HAND_JS`, installed with the
+  page: Panel's ``jscallback`` does not offer the slider's ``value_throttled``), the dragged
+  slider's final value is written at once, ``released`` set; ``APP_PREVIEWS=off`` in the server's environment turns all of this off (:data:`PREVIEWS`);
 * on the server, Bokeh's ``on_change`` of that model runs :meth:`Live.changed` on the event loop
   as the message arrives (no debounce). A preview is computed off the loop at PREVIEW_N² points
   (fewer when that takes longer than PREVIEW_BUDGET_S: :func:`next_n`) of the handle's value,
@@ -31,9 +32,10 @@ inputs is dragged, the path here is shorter, through public Bokeh and Panel only
   does; a preview still computing is dropped. A release where the scenario does not change
   (the hand came back, or the value is refused) redraws the exact maps of the scenario as it is.
 
-A change of the slider made by the server (a preset, a typed value) moves the handle in the
-browser too, and so reaches :class:`Drag`: a value the scenario already holds is not previewed
-unless a drag of it is under way. Nothing is previewed while the Maps tab is hidden.
+A change of the slider made by the server (a preset, a typed value, a link) moves the handle in
+the browser with no hand down: it is not offered, and the scenario's exact maps are all that is
+computed; on the server too, a value the scenario already holds is not previewed unless a drag
+of it is under way. Nothing is previewed while the Maps tab is hidden.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from bokeh.core.properties import Any, Int, List
 from bokeh.models import CustomJS
 from bokeh.model import DataModel
 
-from app.kit import offloop
+from app.kit import number_box, offloop
 from . import data as map_data, figures as map_figures
 from .compute import MAP_INPUTS, Snapshot, compute
 
@@ -133,17 +135,34 @@ if (loop === undefined) {
 #: In the slider's browser-side callback (``source``: the slider's model; ``drag``: the session's
 #: :class:`Drag`; ``name``: the input): the value into the loop; its release at once.
 FOLLOW_JS = LOOP_JS + """
-const hooked = window.__liveHooked || (window.__liveHooked = new WeakSet());
-if (!hooked.has(source)) {  // the release: the slider's value_throttled, set when the hand lets go
-  hooked.add(source);
-  source.connect(source.properties.value_throttled.change,
-                 () => loop.release(name, source.value_throttled));
-  // BokehJS runs this callback after the change that called it (it compiles it first): when that
-  // change was a click on the track (value and value_throttled set at once), its release has
-  // passed before the hook above was there
-  if (source.value_throttled === source.value) { loop.release(name, source.value); return; }
-}
+// a value is previewed only while the hand is down on the page and moving it (HAND_JS): a
+// typed value, a link or a preset moved the handle from the server and is the scenario's
+// already: exact maps only (issue 46 item 3)
+if (!(window.__liveHand && window.__liveHand.down)) return;
+loop.dragging = name;
+loop.source = source;
 loop.offer(name, source.value);
+"""
+
+#: On the document's ``document_ready`` (installed with the page; ``drag``, ``throttle``,
+#: ``patience`` as LOOP_JS's): whether a hand (mouse, pen, finger) is down on the page; when it
+#: lets go, the dragged slider's final value at once (its release: a click on the track too).
+HAND_JS = LOOP_JS + """
+if (window.__liveHand === undefined) {
+  const hand = window.__liveHand = {down: false};
+  const up = () => {
+    hand.down = false;
+    setTimeout(() => {  // after the slider's own handling of this event: its final value
+      if (!loop.dragging) return;
+      const name = loop.dragging;
+      loop.dragging = null;
+      loop.release(name, loop.source.value);
+    }, 0);
+  };
+  document.addEventListener("pointerdown", () => { hand.down = true; }, true);
+  document.addEventListener("pointerup", up, true);
+  document.addEventListener("pointercancel", up, true);
+}
 """
 
 #: On a change of ``drag.ready`` (the server's answer): what waits goes out.
@@ -185,7 +204,10 @@ class Live:
         self.generation = 0  # a release starts a new one: previews of an older one are dropped
         self.drawn = 0  # previews drawn (for tests and the benchmark)
         self.preview_n = PREVIEW_N  # points per axis of the next preview (PREVIEW_BUDGET_S)
+        self.boxes = {}  # input -> its number box, which shows the value previewed (follow)
         if doc is not None and doc.session_context is not None:
+            doc.js_on_event("document_ready", CustomJS(  # with the page (FOLLOW_JS)
+                args=dict(drag=self.drag, throttle=THROTTLE_MS, patience=PATIENCE_MS), code=HAND_JS))
             _SESSIONS[doc] = self
             doc.on_session_destroyed(lambda _ctx: self.close())
 
@@ -222,6 +244,7 @@ class Live:
         self.pending, self.dragging = None, None
         before = Snapshot.of(self.scenario)
         setattr(owner, name, value)  # the scenario may refuse it and keep its value
+        number_box.show(self.boxes.get(name), getattr(owner, name))  # what it holds, not a preview
         if self.previewed and Snapshot.of(self.scenario) == before:
             self.exact()  # nothing changed, so nothing redraws: the previews must go
 
@@ -237,9 +260,9 @@ class Live:
             answer(self.drag, seq)
             return
         future = _PREVIEWS.submit(_preview, snapshot)
-        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n, seq))
+        offloop.schedule(self.doc, partial(self._finish, self.generation, future, n, seq, name, value))
 
-    async def _finish(self, generation, future, n, seq):
+    async def _finish(self, generation, future, n, seq, name=None, value=None):
         try:
             prepared, seconds = await asyncio.wrap_future(future)
         except Exception:  # noqa: BLE001 (a value the scenario would refuse: no preview)
@@ -255,6 +278,7 @@ class Live:
         with pn.io.hold():
             if prepared is not None and generation == self.generation and self.shown:
                 map_figures.fill(self.figs, prepared)
+                number_box.show(self.boxes.get(name), value)  # the box says what the maps show
                 self.previewed = True
                 self.drawn += 1
             answer(self.drag, seq)
@@ -272,6 +296,7 @@ class Live:
         _SESSIONS.pop(self.doc, None)
         self.drag.remove_on_change("state", self.changed)
         self.scenario = self.figs = self.doc = self.exact = None
+        self.boxes = {}
 
     def drawn_exact(self):
         """Called by app/tabs/maps/maps.py when it has drawn exact maps: no preview is shown, and none
@@ -298,12 +323,14 @@ def next_n(n, seconds):
     return max(PREVIEW_MIN_N, min(PREVIEW_N, scaled))
 
 
-def follow(slider, name):
+def follow(slider, name, box=None):
     """Make the Panel ``slider`` of input ``name`` drive the current session's previews (a no-op
-    for an input the maps do not read, a page without a Maps tab, or previews off: PREVIEWS)."""
+    for an input the maps do not read, a page without a Maps tab, or previews off: PREVIEWS);
+    ``box`` (app.number_box) shows the value a preview draws."""
     live = _SESSIONS.get(pn.state.curdoc) if pn.state.curdoc is not None else None
     if live is None or not PREVIEWS or name not in MAP_INPUTS:
         return
+    live.boxes[name] = box
     args = dict(drag=live.drag, name=name, throttle=THROTTLE_MS, patience=PATIENCE_MS)
     slider.jscallback(args=args, value=FOLLOW_JS)
 
@@ -324,5 +351,5 @@ def shown_with(tabs, index):
     tabs.param.watch(active, ["active"])
 
 
-__all__ = ["Drag", "LOOP_JS", "Live", "PATIENCE_MS", "PREVIEWS", "PREVIEW_N", "THROTTLE_MS", "answer", "drag_model",
+__all__ = ["Drag", "HAND_JS", "LOOP_JS", "Live", "PATIENCE_MS", "PREVIEWS", "PREVIEW_N", "THROTTLE_MS", "answer", "drag_model",
            "follow", "next_n", "shown_with"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import html
+import time
 from functools import partial
 
 import numpy as np
@@ -15,6 +16,7 @@ from app.state.applies import MAPS_TAB, applies
 from app.state.scenario import defaults
 from . import export, live, data as map_data, figures as map_figures
 from .compute import READS, RUNAWAY_LIMIT, Snapshot, compute
+from app.serve.warmup import WARMUP
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
@@ -28,6 +30,31 @@ PAPER_HEIGHT = 52
 
 #: Seconds after the maps are sent that ``after_draw`` runs (the URL update: see app.state.url).
 URL_AFTER = 0.1
+
+#: Seconds the whole warm-up of a first start takes on a quiet 2-core machine (every kernel:
+#: docs/performance.md, "The first start"), for the estimate said while the maps wait for it.
+WARMUP_QUIET_S = 140.0
+#: Seconds between updates of that note while the maps wait.
+WAITING_POLL_S = 2.0
+
+
+def compiling_text(warmup):
+    """What the maps say while a change waits on a first start's warm-up (issue 46 defect 2: a
+    preset's maps came over a minute late, the old ones shown under its button without a word):
+    that they are the previous scenario's, which kernels are still compiling, and an estimate.
+    "" once every stage is ready (or the warm-up failed: the terminal says so)."""
+    pending = [what for (what, _), done in zip(warmup.stages, warmup.done) if not done.is_set()]
+    if not pending or warmup.started is None or warmup.error:
+        return ""
+    elapsed = time.monotonic() - warmup.started
+    left = WARMUP_QUIET_S - elapsed
+    estimate = (f"about {left:.0f} s more on a quiet 2-core machine, longer on a busy one" if left > 10
+                else "longer than on a quiet machine: this one is busy")
+    return ("These maps are still the previous scenario's: this is the server's first start, and "
+            "it is still compiling numerical kernels; the new maps are drawn as soon as theirs are "
+            f"ready. Still compiling: {'; '.join(pending)}. The warm-up started {elapsed:.0f} s "
+            f"ago; {estimate}.")
+
 
 #: Computes the maps of every session, off the event loop (core serialises the kernels anyway).
 _COMPUTE = offloop.pool("maps", 4)
@@ -148,11 +175,12 @@ def _paper_line(p):
     return alert(f"Paper {p.preset}: {p.paper[1]} (red frame).", "info")
 
 
-def maps_tab(scenario, cache, *, busy=None, after_draw=None):
+def maps_tab(scenario, cache, *, busy=None, after_draw=None, warmup=WARMUP):
     """The Maps tab of ``scenario``: its layout, kept current by a watcher on the maps' fields.
 
     ``busy``: a LoadingSpinner shown while a slow change computes; ``after_draw``: called
-    ``URL_AFTER`` s after a change's maps are sent (the URL update)."""
+    ``URL_AFTER`` s after a change's maps are sent (the URL update); ``warmup``: the first
+    start's (:func:`compiling_text`, said while a slow change waits on it)."""
     first = cache.get(Snapshot.of(scenario), compute)
     figs = map_figures.build()
     map_figures.fill(figs, first)
@@ -172,6 +200,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                          css_classes=["w-start"])
     paper = pn.pane.HTML(_paper_line(first), sizing_mode="stretch_width", min_height=PAPER_HEIGHT,
                          css_classes=["w-paper"])
+    waiting = pn.pane.HTML("", visible=False, sizing_mode="stretch_width", css_classes=["w-compiling"])
     known = pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
                               css_classes=["w-remedy-known"],
                               on_click=lambda e: scenario.update(state_set="moments known (5 states)",
@@ -241,10 +270,12 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
             if busy is not None:
                 await offloop.changes(doc, partial(spinner, True))
             try:
-                panels = await maps
+                panels = await wait_saying(maps)
             finally:
                 if busy is not None:
                     await offloop.changes(doc, partial(spinner, False))
+                if waiting.visible:
+                    await offloop.changes(doc, partial(say_waiting, ""))
         timings.stamp(rec, "resumed")
         # Each session's draw is a callback of its own on the loop (~10 ms of Python): other
         # sessions' events queued meanwhile go between them
@@ -266,6 +297,20 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
         # the panes under the maps, whose first update brings Panel's stylesheets: in order
         # with the threads' changes
         await offloop.changes(doc, partial(show, panels))
+
+    def say_waiting(text):
+        waiting.param.update(object=alert(text, "warning") if text else "", visible=bool(text))
+
+    async def wait_saying(maps):
+        """The maps, saying meanwhile what they wait for while the warm-up is not done."""
+        while True:
+            text = compiling_text(warmup)
+            if text or waiting.visible:
+                await offloop.changes(doc, partial(say_waiting, text))
+            try:
+                return await asyncio.wait_for(asyncio.shield(maps), WAITING_POLL_S)
+            except asyncio.TimeoutError:
+                continue
 
     def show(panels):
         p = panels.panels
@@ -293,7 +338,7 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None):
                       "max-width": f"min({MAP_MAX_PX}px, 50%)"}
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width", styles={"flex-wrap": "wrap"}),
                           sizing_mode="stretch_width")
-    tab = pn.Column(paper, plots, start, key, note,
+    tab = pn.Column(paper, waiting, plots, start, key, note,
                     pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                     sizing_mode="stretch_width")
     tab.figures = figs  # for tests

@@ -69,7 +69,8 @@ The batch fit has one estimate per pass: its square marks its final error. *Boun
 Cramér–Rao σ of the main scale (free 4-dipole model in its two reads, span and second moment,
 and a rigid line for a cylinder) and of the centroid against the closest approach of a pass in
 the same direction; the star is this pass's best read, the black dotted line the true main
-scale, the blue dotted line 10 % of it (below it: sizable).
+scale, the blue dotted line 10 % of it (sizable where |model bias| + 2.5 σ is below it,
+borderline where σ alone is: see the verdict).
 """
 
 HELP = """
