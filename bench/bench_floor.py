@@ -359,13 +359,15 @@ def main(argv=None):
                     help="websocket silence that ends a change (no later image can be missed)")
     ap.add_argument("--apps", default=",".join(APPS), help="which of project,panel,bokeh (panel is the reference)")
     ap.add_argument("--out", default=None, help="write the raw values and the summary as JSON here")
+    ap.add_argument("--serve-args", default="",
+                    help="extra `panel serve` options for the project only, e.g. '--reuse-sessions warm'")
     args = ap.parse_args(argv)
     load, apps, raw = started_on(APPS, args.apps)
     started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     with chromium_browser() as browser:
         for run in range(args.runs):
             for name in apps:
-                serve = served_app() if name == "project" else served_floor(name)
+                serve = served_app(*args.serve_args.split()) if name == "project" else served_floor(name)
                 with serve as (url, proc):
                     if name == "project":
                         url += "/app"
