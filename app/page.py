@@ -22,7 +22,7 @@ from app.kit.inputs import number_input
 from app.kit.number_box import number_box
 from app.kit.shown import ALWAYS, WhenShown
 from app.kit.tab import Mount
-from app.report.buttons import study_buttons
+from app.report.buttons import calibration_log, study_buttons
 from app.state import url
 from app.state.applies import (
     CALIBRATION_TAB,
@@ -45,7 +45,7 @@ from app.state.scenario import (
     sidebar,
 )
 from app.state.sensors import BY_KIND
-from app.tabs.calibration.calibration import TAB as CALIBRATION, uploaded_bytes
+from app.tabs.calibration.calibration import TAB as CALIBRATION
 from app.tabs.calibration.source import bring_own_values
 from app.tabs.design.design import TAB as DESIGN
 from app.tabs.maps import export, live, maps
@@ -378,28 +378,6 @@ def _download_buttons(scenario, cache, tabs, keys):
         visible=tabs.param.active.rx() == keys.index(MAPS_TAB), margin=0)
 
 
-def _calibration_log(sides):
-    """(uploaded_log, put_log) of the Calibration tab's upload, for the study buttons: the log it
-    holds, as (name, bytes) ("", None when none, or the tab not built yet), and handing it a
-    file's log (False when the tab is not built yet). ``sides``: the sidebar columns by title."""
-    def log_input():  # the Calibration tab's upload, once the tab is built
-        found = sides[CALIBRATION.title].select(pn.widgets.FileDropper)
-        return found[0] if found else None
-
-    def uploaded_log():
-        upload = log_input()
-        data = None if upload is None else uploaded_bytes(upload)
-        return (next(reversed(upload.value)) if data is not None else "", data)
-
-    def put_log(name, data):
-        upload = log_input()
-        if upload is not None:
-            upload.value = {name: data}
-        return upload is not None
-
-    return uploaded_log, put_log
-
-
 def _fill_sidebar(scenario, cache, tabs, keys, log):
     """The sidebar, filled after the page's first step, in two parts, each in a turn of the
     session's event loop of its own (in_parts): Bokeh runs the whole :func:`create_app` in one
@@ -409,7 +387,7 @@ def _fill_sidebar(scenario, cache, tabs, keys, log):
     change. Panel applies a change to a page not yet connected in a turn of its own, in which
     Bokeh walks the whole document's model graph again: so one change of the sidebar per part
     (a change per card cost 8 more walks, ~15 % of a page's server CPU). ``log``: the Calibration
-    tab's (uploaded_log, put_log), for the study buttons (:func:`_calibration_log`)."""
+    tab's (uploaded_log, put_log), for the study buttons (:func:`app.report.buttons.calibration_log`)."""
     sidebar = pn.Column(sizing_mode="stretch_width", margin=0)
 
     def cards(sections):
@@ -501,7 +479,7 @@ def create_app():
                                       tabs=tabs, titles=titles,
                                       waits=lambda names: bool(set(names) & MAP_INPUTS),
                                       link=link))
-    sidebar = _fill_sidebar(scenario, cache, tabs, keys, _calibration_log(sides))
+    sidebar = _fill_sidebar(scenario, cache, tabs, keys, calibration_log(sides[CALIBRATION.title]))
     template = _template(sidebar, sides, tabs, titles, busy)
     template.scenario = scenario  # for tests and the load benchmark
     template.built_later = sidebar  # for tests

@@ -13,6 +13,7 @@ import io
 import panel as pn
 
 from ..state import scenario_file as sf
+from ..tabs.calibration.calibration import uploaded_bytes
 from . import html as report
 from . import results
 
@@ -46,6 +47,29 @@ def open_file(scenario, data, name="", put_log=None):
     if not scenario.message:
         scenario.param.update(message=" ".join(said), refused=[])
     return loaded
+
+
+def calibration_log(column):
+    """(uploaded_log, put_log) of the Calibration tab's upload, found in ``column`` (the tab's
+    sidebar column, where its inputs go once it is built), for :func:`study_buttons`: the log it
+    holds as (name, bytes) (``("", None)`` when none, or the tab not built yet); handing it a
+    file's log (False when the tab is not built yet)."""
+    def log_input():
+        found = column.select(pn.widgets.FileDropper)
+        return found[0] if found else None
+
+    def uploaded_log():
+        upload = log_input()
+        data = None if upload is None else uploaded_bytes(upload)
+        return (next(reversed(upload.value)) if data is not None else "", data)
+
+    def put_log(name, data):
+        upload = log_input()
+        if upload is not None:
+            upload.value = {name: data}
+        return upload is not None
+
+    return uploaded_log, put_log
 
 
 def report_text(scenario, title="Observability study"):
