@@ -5,7 +5,6 @@ from __future__ import annotations
 from functools import partial
 
 import holoviews as hv
-import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
@@ -13,10 +12,11 @@ from app.kit import offloop, views
 from app.kit.inputs import number_input
 from app.kit.shown import ALWAYS
 from app.state.scenario import MAX_STATIONS, Design
+from app.state.survey import Survey
 from app.tabs.maps import compute
 from app.tabs.maps.compute import RUNAWAY_LIMIT, Snapshot
 from app.tabs.maps.maps import alert, refusal
-from . import compute as design_compute, live as design_live
+from . import compute as design_compute, live as design_live, survey
 from .compute import ERROR_MAP_READS, LAYOUT_READS, SPACING_READS
 
 #: What redraws the Layout design map's layers (:func:`design_tab`).
@@ -40,7 +40,7 @@ DESIGN_TITLE = "Custom layout: Cramér–Rao error"
 #: The station table's columns.
 COLUMNS = ["x (m)", "y (m)", "z (m)"]
 #: Inputs of this tab whose refusal is shown here, next to their inputs.
-OWN = ("stations", *Design.names())
+OWN = ("stations", *Design.names(), *Survey.names())
 
 
 #: Decimals of a station's coordinates in the table (its "0.0" format) and of a drawn one (m).
@@ -136,10 +136,15 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
             st.stations = drawn_stations(data, st.stations, st.h)
 
     draw.add_subscriber(drawn)
-    errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), design_compute.design),
-                                                       DESIGN_TITLE,
-                                                       scenario.design.error_quantity),
-                           streams=[redraw])
+    loss_line = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-loss-text"])
+
+    def error_layer(**_):  # the layout's map, or its worst single-loss map (app/tabs/design/survey.py)
+        d = survey.error_design(cache, scenario)
+        loss_line.object = survey.loss_text(d)
+        return views.error_map(d, DESIGN_TITLE, scenario.design.error_quantity)
+
+    errors = hv.DynamicMap(error_layer, streams=[redraw])
+    zones, _zone_streams = survey.zone_layer(scenario, Refresh())
 
     # The ellipse's point is an input of its own (a click on the map adds a station: it cannot
     # also move the ellipse)
@@ -176,7 +181,7 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     scenario.design.param.watch(shown(refresh), ["ellipse_x", "ellipse_y"])
 
     ell = hv.DynamicMap(ellipse, streams=[redraw])
-    map_pane = pn.pane.HoloViews(errors * points * ell)
+    map_pane = pn.pane.HoloViews(errors * zones * points * ell)
     # Shown again after a change made while hidden: the map computed off the event loop, a
     # spinner over it meanwhile, then redrawn (from the shared cache) on the loop
     map_task = offloop.Task("design-map", busy=[map_pane])
@@ -189,8 +194,8 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
         map_task.start(None, partial(cache.get, snapshot, design_compute.design),
                        lambda _: redraw.event())
 
-    def frame(stations):
-        return pd.DataFrame(stations, columns=COLUMNS, dtype=float)
+    def frame(stations):  # x, y, z and the survey's fixed column
+        return survey.frame(stations, scenario.survey.fixed_stations, COLUMNS)
 
     table = pn.widgets.Tabulator(
         frame(st.stations), show_index=False, sizing_mode="stretch_width", height=260,
@@ -207,6 +212,7 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
             showing[0] = False
 
     st.param.watch(shown(show_layout), ["stations"])
+    scenario.survey.param.watch(shown(show_layout), ["fixed_stations"])
     # the map after the table: a change shows its layout at once, before the map (a layered
     # sea's takes seconds) is computed
     scenario.watch_inputs(shown(redraw_now, redraw_later), ERROR_MAP_READS)
@@ -218,7 +224,10 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
         # into the next edit, which was refused with it: y = 130 was lost; issue 40 defect 4).
         if showing[0]:
             return
-        wanted = event.new.astype(float).values.tolist()
+        wanted = event.new[COLUMNS].astype(float).values.tolist()
+        fixed = survey.fixed_of(event.new)
+        if fixed != scenario.survey.fixed_stations:
+            scenario.survey.fixed_stations = fixed
         if wanted == st.stations:
             return
         st.stations = wanted
@@ -264,10 +273,12 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     criteria = pn.Column(
         pn.Param(scenario.design, parameters=["criterion"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
+        survey.criterion_unit(scenario),
         number_input(scenario.design, "threshold", css_classes=["w-threshold"]),
         pn.Param(scenario.design, parameters=["layout_kind"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
         number_input(scenario.design, "n_stations", css_classes=["w-n_stations"]),
+        survey.survey_inputs(scenario),
         sizing_mode="stretch_width", margin=0)
     optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
 
@@ -277,6 +288,7 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
 
     def optimised(result, criterion):
         st.stations = [[float(v) for v in station] for station in result.stations]
+        scenario.survey.fixed_stations = list(range(1, result.fixed + 1))  # the fixed come first
         outcome.object = optimise_text(result, criterion)
 
     def optimise_failed(exc):
@@ -289,16 +301,17 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
 
     optimise.on_click(optimise_clicked)
     tab = pn.Column(
-        pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
+        pn.pane.Markdown(DESIGN_HELP + "\n" + survey.ZONES_HELP, sizing_mode="stretch_width"),
         pn.FlexBox(map_pane,
                    pn.Column(pn.Param(scenario.design, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
                              number_input(scenario.design, "ellipse_x", css_classes=["w-ellipse_x"]),
                              number_input(scenario.design, "ellipse_y", css_classes=["w-ellipse_y"]),
-                             readout,
+                             readout, loss_line,
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(criteria, run, said, optimise, outcome, width=360), found,
+        pn.FlexBox(pn.Column(criteria, run, said, optimise, outcome, survey.count_section(scenario, cache),
+                             width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )
