@@ -5,8 +5,9 @@ the N−1 map's coverage line and the stations-count curve.
 The zones are drawn with Bokeh's polygon draw and edit tools through HoloViews' ``PolyDraw`` and
 ``PolyEdit`` streams (public API): what the tools leave in the page is read back as a list of
 polygons and set on the scenario's ``zones``, which refuses a bad one (fewer than 3 vertices,
-crossing edges: app/state/survey.py) with a message naming it; the layer is then redrawn with the
-last good zones.
+crossing edges: app/state/survey.py) with a message naming it and keeps the last good zones (the
+optimiser uses those). The layer is not redrawn on a refusal: a zone being drawn has fewer than
+3 vertices until its last corner is set, and a redraw wiped it.
 """
 
 from __future__ import annotations
@@ -34,9 +35,10 @@ DECIMALS = 1
 #: The station table's fixed column.
 FIXED = "fixed"
 #: Under the zones' tools on the page.
-ZONES_HELP = ("**Forbidden zones**: pick the polygon tool in the map's toolbar, double-click to "
-              "start a zone, click its corners, double-click to close it; drag a zone to move "
-              "it; select one and press Backspace to delete it; the vertex tool edits corners. "
+ZONES_HELP = ("**Forbidden zones**: pick the polygon tool in the map's toolbar, press and hold to "
+              "start a zone, click its corners, press and hold to close it; drag a zone to move "
+              "it; select one and press Backspace to delete it; the vertex tool edits corners "
+              "(press and hold a zone to show them). "
               "The optimiser puts no new station in a zone. Tick *fixed* in the table for "
               "stations that already exist: the optimiser keeps them and places N new ones.")
 
@@ -73,15 +75,24 @@ def zone_layer(scenario, redraw):
                                vertex_style={"size": 8, "fill_color": "white", "line_color": "#c0392b"})
     edit = hv.streams.PolyEdit(source=layer, vertex_style={"size": 8, "fill_color": "#c0392b"}, shared=True)
 
+    drawing = [False]  # the zones are being set from the map: the layer already shows them
+
     def drawn(data):
         if data is None:
             return
         zones = drawn_zones(data)
         if zones != sv.zones:
-            sv.zones = zones  # refused: said next to the table, the kept zones redrawn (below)
+            # a refused zone (said next to the table) leaves the scenario's last good zones;
+            # the layer is not redrawn with them: a zone being drawn has fewer than 3 vertices
+            # until its last corner, and a redraw wiped it from under the hand
+            drawing[0] = True
+            try:
+                sv.zones = zones
+            finally:
+                drawing[0] = False
 
-    # a link, a scenario file, a refusal's restore: the layer shows the scenario's zones
-    sv.param.watch(lambda _e: redraw.event(), ["zones"])
+    # a link, a scenario file, a preset: the layer shows the scenario's zones
+    sv.param.watch(lambda _e: None if drawing[0] else redraw.event(), ["zones"])
 
     draw.add_subscriber(drawn)
     edit.add_subscriber(drawn)
