@@ -137,3 +137,8 @@ def test_the_count_curve_plot_marks_the_knee_with_units():
         assert plot.VLine.I.data == curve.knee and f"N = {curve.knee}" in survey.count_text(count)
     else:
         assert "no knee" in survey.count_text(count)
+
+
+def test_the_fixed_rows_of_an_optimised_layout_are_found_by_position():
+    assert survey.rows_of([[1.0, 2.0, 3.0], [150.0, 0.0, 100.0], [4, 5, 6]], [[150, 0, 100]]) == [2]
+    assert survey.rows_of([[1.0, 2.0, 3.0]], []) == []

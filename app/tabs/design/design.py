@@ -286,9 +286,9 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
 
     optimise_task = offloop.Task("design", busy=[optimise, outcome])
 
-    def optimised(result, criterion):
+    def optimised(result, criterion, kept):
         st.stations = [[float(v) for v in station] for station in result.stations]
-        scenario.survey.fixed_stations = list(range(1, result.fixed + 1))  # the fixed come first
+        scenario.survey.fixed_stations = survey.rows_of(st.stations, kept)  # still ticked
         outcome.object = optimise_text(result, criterion)
 
     def optimise_failed(exc):
@@ -297,7 +297,8 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     def optimise_clicked(event):
         snapshot, criterion = Snapshot.of(scenario, LAYOUT_READS), scenario.design.criterion
         optimise_task.start(None, partial(cache.get, snapshot, design_compute.optimised_layout),
-                            partial(optimised, criterion=criterion), optimise_failed)
+                            partial(optimised, criterion=criterion, kept=survey.fixed_of_scenario(scenario)),
+                            optimise_failed)
 
     optimise.on_click(optimise_clicked)
     tab = pn.Column(

@@ -115,6 +115,19 @@ def fixed_of(df):
     return [i + 1 for i, v in enumerate(df[FIXED].tolist()) if bool(v)]
 
 
+def fixed_of_scenario(scenario):
+    """The fixed stations' positions (m) in the scenario's layout."""
+    stations = scenario.stations.stations
+    return [list(stations[i - 1]) for i in scenario.survey.fixed_stations if i <= len(stations)]
+
+
+def rows_of(stations, kept):
+    """The numbers (from 1) of the rows of ``stations`` that are the ``kept`` positions: the
+    fixed stations in an optimised layout (which puts them where it puts them)."""
+    return [i + 1 for i, row in enumerate(stations) if [float(v) for v in row] in
+            [[float(v) for v in k] for k in kept]]
+
+
 # -- the criterion and the N−1 map ----------------------------------------------------------------
 
 def unit_text(label):
@@ -202,5 +215,5 @@ def survey_inputs(scenario):
 
 
 __all__ = ["FIXED", "ZONES_HELP", "count_plot", "count_section", "count_text", "criterion_unit",
-           "drawn_zones", "error_design", "fixed_of", "frame", "loss_text", "survey_inputs",
+           "drawn_zones", "error_design", "fixed_of", "fixed_of_scenario", "frame", "rows_of", "loss_text", "survey_inputs",
            "unit_text", "zone_element", "zone_layer"]
