@@ -45,7 +45,7 @@ from app.state.scenario import (
     sidebar,
 )
 from app.state.sensors import BY_KIND
-from app.tabs.calibration.calibration import calibration_parts
+from app.tabs.calibration.calibration import calibration_parts, uploaded_bytes
 from app.tabs.design.design import design_tab
 from app.tabs.maps import export, live, maps
 from app.tabs.maps.compute import KIND_NAMES, MAP_INPUTS
@@ -434,7 +434,22 @@ def create_app():
 
     def second_part():
         sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), download_buttons(),
-                           study_buttons(scenario)]
+                           study_buttons(scenario, uploaded_log, put_log)]
+
+    def log_input():  # the Calibration tab's upload, once the tab is built
+        found = sides[titles[3]].select(pn.widgets.FileDropper)
+        return found[0] if found else None
+
+    def uploaded_log():
+        upload = log_input()
+        data = None if upload is None else uploaded_bytes(upload)
+        return (next(reversed(upload.value)) if data is not None else "", data)
+
+    def put_log(name, data):
+        upload = log_input()
+        if upload is not None:
+            upload.value = {name: data}
+        return upload is not None
 
     in_parts(pn.state.curdoc, [first_part, second_part])
     template = pn.template.BootstrapTemplate(

@@ -80,7 +80,7 @@ def sensors(pg, size):
 
 
 def shape(pg, size):
-    """The Shape tab with its four plots and the verdict (Fig. 4's pass, or offset 15 m)."""
+    """The Shape tab with its four plots and the verdict (Fig. 4's pass, or offset 12 m)."""
     pg.wait_for_function(_text_js("Truth"), timeout=SLOW)
     pg.wait_for_function(_title_js("Bound"), timeout=SLOW)
 
@@ -100,7 +100,7 @@ SHOTS = {
     "track": (track, "", ("", "-1280")),
     "sensors": (sensors, "", ("",)),
     "shape": (shape, "?tab=Shape", ("",)),
-    "shape-1280": (shape, "?tab=Shape&shape_offset=15", ("-1280",)),  # the span read cannot size it, the second moment can
+    "shape-1280": (shape, "?tab=Shape&shape_offset=12", ("-1280",)),  # closest approach 13 m: the span read cannot size it, the second moment can (sizable)
     "calibration": (calibration, "?tab=Calibration", ("", "-1280")),
 }
 SIZES = {"": VIEWPORT, "-1280": SMALL_VIEWPORT}

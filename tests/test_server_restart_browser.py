@@ -48,7 +48,7 @@ def test_a_page_left_open_across_a_restart_says_so_and_reloads_the_last_applied_
     with served_app(port=port):
         button = pg.get_by_role("button", name=RELOAD)
         button.wait_for(timeout=60_000)
-        assert BACK in banner.inner_text()
+        assert BACK in banner.inner_text() and "Ph=150" in banner.inner_text()
         button.click()
         pg.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=60_000)
         wait_maps(pg, lambda maps: len(maps) == 3)

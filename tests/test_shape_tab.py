@@ -160,6 +160,31 @@ def test_a_tie_between_line_and_plane_is_shown_as_such_with_both_scales():
     assert "nan" not in text and "100 %" not in text
 
 
+def test_a_fit_that_converged_on_no_pass_says_so_plainly():
+    """When no pass's batch fit converges plausibly, core's summary gives kind "none" with no
+    kind shares (core.shape.experiment); the tab printed "none (100 % of passes)", read as a
+    verdict. It must say that no fit converged, on how many passes, with no ✓, no share and no
+    "nan"; the filters' lines are unchanged."""
+    import copy
+    out = shape.compute(shape.key_of(Scenario()))
+    before = shape.verdict_text(out)
+    bare = dict(out, res=copy.deepcopy(out["res"]))
+    d = bare["res"].summary["filters"]["fit"]
+    runs = d["runs"]
+    d.update(kind="none", kind_share={}, main_scale_by_kind_m={}, converged_share=0.0,
+             converged_runs=0, **{k: float("nan") for k in (
+                 "main_scale_m", "main_scale_error_m", "axis_error_deg", "centroid_error_m", "nees")})
+    text = shape.verdict_text(bare)
+    fit_line = next(ln for ln in text.split("\n\n") if ln.startswith("**Batch fit (whole pass)**"))
+    assert "**no fit converged**" in fit_line
+    assert (f"none of {runs} passes" if runs > 1 else "the pass") in fit_line
+    assert "none (" not in text and "% of passes" not in fit_line
+    assert "✓" not in fit_line and "nan" not in text
+    for label in ("**UKF**", "**NHUKF (Huber)**"):  # the other estimators' lines stay as they were
+        assert [ln for ln in text.split("\n\n") if ln.startswith(label)] == \
+            [ln for ln in before.split("\n\n") if ln.startswith(label)]
+
+
 def test_the_defaults_run_the_papers_window_and_show_the_batch_fit():
     """The tab's default update is seed 003's window (the one-sample update is a choice, and its
     Fig. 4 preset a comparison); the verdict, the plan view and the error view show the batch

@@ -177,3 +177,15 @@ def test_a_vary_over_an_unknown_input_or_too_many_variants_is_refused(tmp_path, 
     many = ",".join(str(10 + i) for i in range(1001))
     assert cli.main([str(path), "--out", str(tmp_path / "o"), "--vary", f"Ph={many}"]) == 2
     assert "1,001 variants; at most 1,000" in capsys.readouterr().err
+
+
+def test_a_vary_block_in_the_file_runs_the_batch(tmp_path):
+    s = Scenario()
+    s.update(SMALL)
+    path = tmp_path / "vary.yaml"
+    path.write_text(sf.dumps(s, vary={"Ph": [60, 90]}), encoding="utf-8")
+    out = tmp_path / "out"
+    assert cli.main([str(path), "--out", str(out), "--workers", "1", "--no-progress"]) == 0
+    summaries = json.loads((out / batch.SUMMARY).read_text(encoding="utf-8"))
+    assert [s["variant"] for s in summaries] == [{"Ph": 60}, {"Ph": 90}]
+    assert summaries[0]["maps"]["B"]["median_m"] != summaries[1]["maps"]["B"]["median_m"]

@@ -35,14 +35,15 @@ bar.setAttribute("role", "alert");
 bar.style.cssText = "position:fixed;top:0;left:0;right:0;z-index:100000;padding:10px 16px;" +
   "font:15px/1.4 sans-serif;color:#fff;background:#a4000f;box-shadow:0 2px 6px rgba(0,0,0,.3)";
 const text = document.createElement("span");
-text.textContent = gone + (window.location.search ? " (" + decodeURIComponent(window.location.search) + ")" : " (the defaults)");
+const scenario = window.location.search ? " (" + decodeURIComponent(window.location.search) + ")" : " (the defaults)";
+text.textContent = gone + scenario;
 bar.appendChild(text);
 document.body.appendChild(bar);
 const liveness = new URL("liveness", window.location.href).href;
 const poll = () => fetch(liveness, {cache: "no-store"}).then((r) => {
   if (r.status >= 500) return setTimeout(poll, poll_ms);  // a proxy's "no upstream": still gone
   bar.style.background = "#1b5e20";
-  text.textContent = back + " ";
+  text.textContent = back + " Its last applied scenario" + scenario + " is in this page's address. ";
   const button = document.createElement("button");
   button.textContent = reload;
   button.style.cssText = "margin-left:8px;font:inherit;padding:2px 10px;cursor:pointer";

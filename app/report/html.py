@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import html
 import json
+import warnings
 from pathlib import Path
 
 import holoviews as hv
@@ -245,15 +246,25 @@ def write(path, c, summary, **kw):
 SMALL_POINTS = 80
 
 
-def _small(values, plane, vdim, title, clim):
-    k = max(1, -(-values.shape[0] // SMALL_POINTS))  # every k-th point: at most SMALL_POINTS
+def _small(result, plane, vdim, title, clim):
+    """One small multiple: a CRLB map (core.MapResult) in log10 m, unobservable points blank."""
+    k = max(1, -(-result.value.shape[0] // SMALL_POINTS))  # every k-th point: at most SMALL_POINTS
+    values = np.where(result.observable, result.value, np.nan)[::k, ::k]
     with np.errstate(divide="ignore", invalid="ignore"):
-        logged = np.log10(values[::k, ::k]).astype(np.float32)
+        logged = np.log10(values).astype(np.float32)
     u, v = plane.axes
     img = hv.Image((u[::k], v[::k], logged), kdims=list(views.axes(plane)),
                    vdims=[vdim])
     return img.opts(cmap="viridis_r", clim=clim, colorbar=True, tools=["hover"], title=title,
                     frame_width=220, frame_height=220, clipping_colors={"NaN": "white"})
+
+
+def _tiles(tiles):
+    """The small multiples as Bokeh. A map unobservable everywhere is all blank (NaN): HoloViews
+    asks numpy for its range, which warns of an all-NaN slice; the colour range is given."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "All-NaN slice encountered", RuntimeWarning)
+        return _plot(hv.Layout(tiles).cols(4))
 
 
 def comparison_rows(runs, summaries):
@@ -284,21 +295,23 @@ def write_comparison(path, runs, out, *, title="Observability study: variants", 
     summaries = [s for s, _, _ in out]
     T = summaries[0]["threshold_m"]
     crlbs = [c for _, _, c in out]
-    logs = [np.log10(m.value[np.isfinite(m.value) & (m.value > 0)]) for c in crlbs for m in (c.a, c.b)]
+    logs = [np.log10(m.value[m.observable & np.isfinite(m.value) & (m.value > 0)])
+            for c in crlbs for m in (c.a, c.b)]
     logs = np.concatenate([x for x in logs if x.size]) if any(x.size for x in logs) else np.zeros(1)
     clim = (float(np.percentile(logs, 1)), float(np.percentile(logs, 99)))
     vdim = hv.Dimension("log10_crlb", label="log10 CRLB position error", unit="log10 m")
     tiles = []
     for (variant, _), c in zip(runs, crlbs):
         name = ", ".join(f"{k} = {v}" for k, v in variant.items()) or "as given"
-        tiles += [_small(c.a.value, c.plane, vdim, f"A ({name})", clim),
-                  _small(c.b.value, c.plane, vdim, f"B ({name})", clim)]
+        tiles += [_small(c.a, c.plane, vdim, f"A ({name})", clim),
+                  _small(c.b, c.plane, vdim, f"B ({name})", clim)]
     warn = sorted({w for s in summaries for w in s["warnings"]})
     body = [_md(f"# {html.escape(title)}\n\nProject {project_version()}; written {written}; "
                 f"{len(runs)} variants of the scenario (scenario.yaml, its vary block)."),
             _md(f"## The numbers per variant\n\nCRLB position error (1σ, m); threshold T = {T:g} m."),
             _table(comparison_rows(runs, summaries), COMPARISON_HEAD),
-            _md("## CRLB position error maps, A and B of each variant (one colour range)"),
-            _plot(hv.Layout(tiles).cols(4)),
+            _md("## CRLB position error maps, A and B of each variant (one colour range; "
+                "unobservable points blank)"),
+            _tiles(tiles),
             _md("## Warnings and veils\n\n" + ("\n".join(f"- {w}" for w in warn) if warn else "None."))]
     Path(path).write_text(html_of(column(*body), title), encoding="utf-8")

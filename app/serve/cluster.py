@@ -36,7 +36,8 @@ from pathlib import Path
 
 from app.serve.warmup import WARMING_MARK
 
-ROOT = Path(__file__).resolve().parents[1]
+#: The repository (this file is app/serve/cluster.py): where `panel serve app` runs and deploy/ is.
+ROOT = Path(__file__).resolve().parents[2]
 NGINX_CONF = ROOT / "deploy" / "nginx.conf"
 NGINX = shutil.which("nginx") or "/usr/sbin/nginx"
 #: One failed connection takes a replica out of rotation for this long (see deploy/upstreams.conf).

@@ -31,7 +31,7 @@ import param
 import yaml
 
 import core
-from .scenario import Scenario, defaults, parameter
+from .scenario import Scenario, parameter
 from .url import link_problem, link_value, names, query, read_link
 
 #: The format's name, the file's first key.
@@ -372,4 +372,4 @@ def defaults_text():
 
 
 __all__ = ["FORMAT", "VERSION", "MAX_BYTES", "Loaded", "ScenarioFileError", "apply", "dumps",
-           "load", "loads", "link_inputs", "defaults", "defaults_text"]
+           "load", "loads", "link_inputs", "defaults_text", "with_inputs"]

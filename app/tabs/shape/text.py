@@ -14,7 +14,7 @@ import numpy as np
 from core.shape.bound import SIZABLE_FRACTION, SIZABLE_RULE
 from core.shape.experiment import EULER_FLAG_COND, SETTLE
 
-__all__ = ["ESTIMATORS", "HOW", "sizing_text", "verdict_text"]
+__all__ = ["ESTIMATORS", "HOW", "no_answer_line", "sizing_text", "verdict_text"]
 
 #: Estimators of the verdict: key of the summary -> label.
 ESTIMATORS = {"ukf": "UKF", "nhukf": "NHUKF (Huber)", "fit": "Batch fit (whole pass)"}
@@ -70,6 +70,15 @@ def sizing_text(case, b):
             "(the bound against the closest approach is plotted below).")
 
 
+def no_answer_line(label, d, runs):
+    """An estimator with no answer on any pass (core's kind ``"none"``: the batch fit converged
+    plausibly on none): say so plainly, with no kind, scale, axis or centroid to read."""
+    n = d.get("runs", runs)
+    passes = f"none of {n} passes" if n > 1 else "the pass"
+    return (f"**{label}**: **no fit converged** ({passes}: each ended unconverged or implausibly "
+            "far from the track), so it reads no kind, scale, axis or centroid here.")
+
+
 def verdict_text(out):
     """The verdict of each estimator against the truth and the bound (markdown)."""
     case, res, b = out["case"], out["res"], out["bound"]
@@ -88,6 +97,9 @@ def verdict_text(out):
         if name not in s:
             continue
         d = s[name]
+        if d["kind"] == "none":  # core's kind when no pass gave an answer (experiment._scores)
+            lines.append(no_answer_line(label, d, runs))
+            continue
         if d["kind"] == "tie":  # as many passes say line as plane: both, with their scales
             by_kind = d.get("main_scale_by_kind_m", {})
             kind = "line or plane: a tie (" + ", ".join(
