@@ -54,8 +54,6 @@ def zone_problem(i, zone):
 class Survey(Part):
     """Where the optimiser may put stations: the Layout design tab's constraints."""
 
-    also_checked = ("zones", "fixed_stations")
-
     @classmethod
     def problem(cls, name, value):
         if name == "zones":
@@ -81,6 +79,9 @@ class Survey(Part):
                                    "layout, m (0: none).",
                                metadata=dict(hard=(0.0, 5000.0, "m")))
 
+
+#: Its lists are checked by :meth:`Survey.problem` (its numbers by their declared limits).
+Survey.also_checked = tuple(n for n in Survey.names() if isinstance(Survey.param[n], param.List))
 
 __all__ = ["MAX_VERTICES", "MAX_ZONES", "N1_MAP", "SURVEY_CRITERIA", "SURVEY_QUANTITIES", "Survey",
            "zone_problem"]

@@ -11,8 +11,11 @@ import numpy as np
 
 import core
 
-#: The survey inputs the constraints read (the computations that use them add these to their keys).
-CONSTRAINT_READS = ("stations", "zones", "fixed_stations", "min_spacing")
+from app.state.parts import inputs
+
+#: The inputs the constraints read: the layout (the fixed stations are rows of it) and the
+#: survey part's (the computations that use them add these to their keys).
+CONSTRAINT_READS = ("stations", *inputs("survey"))
 
 
 def fixed_rows(s):

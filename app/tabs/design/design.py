@@ -200,7 +200,8 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     table = pn.widgets.Tabulator(
         frame(st.stations), show_index=False, sizing_mode="stretch_width", height=260,
         css_classes=["w-station-table"],
-        formatters={c: NumberFormatter(format=f"0.{'0' * DECIMALS}") for c in COLUMNS})
+        formatters={**{c: NumberFormatter(format=f"0.{'0' * DECIMALS}") for c in COLUMNS},
+                    survey.FIXED: {"type": "tickCross"}})
 
     showing = [False]  # the table's value is being set from the layout: not an edit
 
@@ -302,7 +303,7 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
 
     optimise.on_click(optimise_clicked)
     tab = pn.Column(
-        pn.pane.Markdown(DESIGN_HELP + "\n" + survey.ZONES_HELP, sizing_mode="stretch_width"),
+        pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
         pn.FlexBox(map_pane,
                    pn.Column(pn.Param(scenario.design, parameters=["error_quantity"], show_name=False, widgets=widgets),
                              message, table,
@@ -311,7 +312,8 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
                              readout, loss_line,
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(criteria, run, said, optimise, outcome, survey.count_section(scenario, cache),
+        pn.FlexBox(pn.Column(pn.pane.Markdown(survey.ZONES_HELP, sizing_mode="stretch_width"), criteria, run,
+                             said, optimise, outcome, survey.count_section(scenario, cache),
                              width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
