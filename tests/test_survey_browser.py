@@ -75,7 +75,8 @@ def _until(fn, what, timeout=60.0):
         if got:
             return got
         if time.time() > deadline:
-            raise AssertionError(f"{what}: not reached in {timeout:g} s")
+            said = what() if callable(what) else what  # a callable says the state at the end
+            raise AssertionError(f"{said}: not reached in {timeout:g} s")
         time.sleep(0.3)
 
 
@@ -158,7 +159,8 @@ def test_a_fixed_station_does_not_move_when_the_layout_is_optimised(chromium, ap
         assert len(stations) == 3 and STATIONS[1] in stations  # kept, exactly
         row = stations.index(STATIONS[1])
         # the table still says it is fixed, and only it
-        _until(lambda: pg.evaluate(FIXED_JS) == [i == row for i in range(3)], "the kept station ticked", 15)
+        _until(lambda: pg.evaluate(FIXED_JS) == [i == row for i in range(3)],
+               lambda: f"the kept station (row {row + 1}) ticked: {pg.evaluate(FIXED_JS)}", 15)
     finally:
         pg.close()
     assert errors == [], errors
