@@ -16,16 +16,17 @@ import param
 from panel.io.state import set_curdoc
 
 from app.kit import offloop
+from app.kit.alerts import alert, refusal, with_refusal
 from app.kit.cache import SHARED
 from app.kit.inputs import number_input
 from app.kit.number_box import number_box
-from app.kit.shown import WhenShown
+from app.kit.shown import ALWAYS, WhenShown
+from app.kit.tab import Mount
 from app.report.buttons import study_buttons
 from app.state import url
 from app.state.applies import (
     CALIBRATION_TAB,
     DECIDING,
-    DESIGN_TAB,
     MAPS_TAB,
     SHAPE_TAB,
     TRACK_TAB,
@@ -33,7 +34,6 @@ from app.state.applies import (
 )
 from app.state.derive import MAGNETIC_READS
 from app.state.part import declared
-from app.tabs.calibration.source import bring_own_values
 from app.state.scenario import (
     ACCEPTED,
     PART_OF,
@@ -45,12 +45,18 @@ from app.state.scenario import (
     sidebar,
 )
 from app.state.sensors import BY_KIND
-from app.tabs.calibration.calibration import calibration_parts, uploaded_bytes
-from app.tabs.design.design import design_tab
+from app.tabs.calibration.calibration import TAB as CALIBRATION, uploaded_bytes
+from app.tabs.calibration.source import bring_own_values
+from app.tabs.design.design import TAB as DESIGN
 from app.tabs.maps import export, live, maps
 from app.tabs.maps.compute import KIND_NAMES, MAP_INPUTS
-from app.tabs.shape.shape import shape_parts
-from app.tabs.track.track import track_tab
+from app.tabs.shape.shape import TAB as SHAPE
+from app.tabs.track.track import TAB as TRACK
+
+#: The page's tabs, in order (each an :class:`app.kit.tab.Tab`): the Tabs' titles, each tab's
+#: index, which are built on their first visit, which wait while hidden, which say the sensor
+#: kind over them and which put their inputs in the sidebar are derived from this list.
+TABS = (maps.TAB, DESIGN, TRACK, CALIBRATION, SHAPE)
 
 #: Sidebar sections: (title, parameters, collapsed?), as the inputs declare them (app.state.parts.sidebar).
 SECTIONS = sidebar()
@@ -94,7 +100,7 @@ def freeze_startup_objects():
     gc.freeze()
 
 
-_alert = maps.alert
+_alert = alert
 
 
 #: Numbers typed or dragged (:func:`app.kit.inputs.number_input`): every number of the sidebar but
@@ -127,7 +133,7 @@ def _section(scenario, tabs, title, names, collapsed):
         if name == "noise":  # a box that says why it refuses (emptied, it raised in the server)
             return number_box(scenario.part_of(name), name, css_classes=[f"w-{name}"])
         if name in NUMBERS:
-            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"])
+            return number_input(scenario.part_of(name), name, css_classes=[f"w-{name}"], on_slider=live.follow)
         spec = dict(_widgets()[name])
         cls = spec.pop("type", pn.widgets.Select)
         return cls.from_param(scenario.ref(name), **spec)
@@ -140,7 +146,7 @@ def _section(scenario, tabs, title, names, collapsed):
             # of the sidebar it was out of sight when typing in Stations or Advanced).
             w = widget(name)
             column = w if name in NUMBERS else pn.Column(w, sizing_mode="stretch_width", margin=0)
-            rows[name] = maps.with_refusal(scenario, column, [name], f"w-message-{name}")
+            rows[name] = with_refusal(scenario, column, [name], f"w-message-{name}")
         return rows[name]
 
     # An input is built when it first applies, and a collapsed card's inputs when it is first
@@ -158,7 +164,7 @@ def _section(scenario, tabs, title, names, collapsed):
         """Each input shown where it applies, the card where one does: one watcher per card (one
         binding per input re-read the scenario once per input, and carried its own watchers)."""
         s = scenario.snapshot()
-        shown = {name: applies(name, s, tabs.active) for name in names}
+        shown = {name: applies(name, s, TABS[tabs.active].key) for name in names}
         with lock:
             new = [name for name in names if opened_once[0] and shown[name] and name not in rows]
             for name in new:
@@ -297,19 +303,156 @@ def first_visit(tabs, titles, holders, makers):
     fill(tabs.active, now=True)
 
 
+def _maker(tab, mount, sides):
+    """A maker of ``tab``'s content (``mount``: its :class:`app.kit.tab.Mount`, made when it is
+    built): with the sensor banner over it where it says so; a tab whose inputs go to the
+    sidebar puts them in its column of ``sides`` (on its first visit)."""
+    def make():
+        m = mount(tab)
+        if tab.sidebar:
+            inputs, main = tab.view(m)
+            inputs.param.update(width=None, sizing_mode="stretch_width")
+            offloop.soon(pn.state.curdoc, partial(setattr, sides[tab.title], "objects", [inputs]))
+            return main
+        view = tab.view(m)
+        if not tab.banner:
+            return view
+        return pn.Column(sensor_banner(m.scenario, tab.key), view, sizing_mode="stretch_width", margin=0)
+    return make
+
+
+def _preset_buttons(scenario, tabs, keys):
+    """The paper figures' preset buttons, the one the scenario holds solid."""
+    buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
+                                       width=90 if len(name) <= 6 else 150,  # a seed's name is longer
+                                       css_classes=[f"w-preset-{name[-1]}"],
+                                       on_click=lambda e, n=name: scenario.apply_preset(n))
+               for name in PRESETS}
+
+    def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
+        active = scenario.active_preset()
+        for name, button in buttons.items():
+            button.button_style = "solid" if name == active else "outline"
+
+    for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
+        part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
+    restyle()
+    # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
+    # own (Calibration, Shape), where a click changed the hidden Maps state.
+    return pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
+                                      "the figure's map gets a red frame; the Layout design "
+                                      "and Track tabs' own settings stay)"),
+                     pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"),
+                     visible=pn.bind(lambda tab: keys[tab] not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
+                     sizing_mode="stretch_width", margin=0)
+
+
+def _download(scenario, cache, ext, fn, label=None, suffix=""):
+    """A download button of the maps, named after the scenario (was always observability_maps.*),
+    set as the file is made."""
+    def make():
+        name = maps.download_name(scenario, cache, ext)
+        button.filename = name.removesuffix(f".{ext}") + f"_{suffix}.{ext}" if suffix else name
+        return fn(scenario, cache)
+
+    button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
+                                     label=label or {"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
+                                     button_type="light",
+                                     css_classes=[f"w-download-{ext}" + (f"-{suffix}" if suffix else "")])
+    return button
+
+
+def _download_buttons(scenario, cache, tabs, keys):
+    """The maps' downloads, shown on the Maps tab."""
+    def download(*args, **kw):
+        return _download(scenario, cache, *args, **kw)
+
+    return pn.Column(
+        pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
+                         f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
+                         f"{export.MAP_WIDTH_PX} px wide)"),
+        pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
+        # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
+        pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
+                 for label, which, suffix in maps.MAP_PNGS]),
+        visible=tabs.param.active.rx() == keys.index(MAPS_TAB), margin=0)
+
+
+def _calibration_log(sides):
+    """(uploaded_log, put_log) of the Calibration tab's upload, for the study buttons: the log it
+    holds, as (name, bytes) ("", None when none, or the tab not built yet), and handing it a
+    file's log (False when the tab is not built yet). ``sides``: the sidebar columns by title."""
+    def log_input():  # the Calibration tab's upload, once the tab is built
+        found = sides[CALIBRATION.title].select(pn.widgets.FileDropper)
+        return found[0] if found else None
+
+    def uploaded_log():
+        upload = log_input()
+        data = None if upload is None else uploaded_bytes(upload)
+        return (next(reversed(upload.value)) if data is not None else "", data)
+
+    def put_log(name, data):
+        upload = log_input()
+        if upload is not None:
+            upload.value = {name: data}
+        return upload is not None
+
+    return uploaded_log, put_log
+
+
+def _fill_sidebar(scenario, cache, tabs, keys, log):
+    """The sidebar, filled after the page's first step, in two parts, each in a turn of the
+    session's event loop of its own (in_parts): Bokeh runs the whole :func:`create_app` in one
+    step of the server's loop, which every other session waits for. The parts fill the Column
+    returned, in the page from the start: built before the browser pulls the document (it has
+    the page's HTML and scripts to load first), they reach it with the document, else as a
+    change. Panel applies a change to a page not yet connected in a turn of its own, in which
+    Bokeh walks the whole document's model graph again: so one change of the sidebar per part
+    (a change per card cost 8 more walks, ~15 % of a page's server CPU). ``log``: the Calibration
+    tab's (uploaded_log, put_log), for the study buttons (:func:`_calibration_log`)."""
+    sidebar = pn.Column(sizing_mode="stretch_width", margin=0)
+
+    def cards(sections):
+        return [_section(scenario, tabs, *section) for section in sections]
+
+    def first_part():
+        sidebar.objects = [_preset_buttons(scenario, tabs, keys), refusal(scenario, None, "w-message"),
+                           *cards(SECTIONS[:2])]
+
+    def second_part():
+        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), _download_buttons(scenario, cache, tabs, keys),
+                           study_buttons(scenario, *log)]
+
+    in_parts(pn.state.curdoc, [first_part, second_part])
+    return sidebar
+
+
+def _template(sidebar, sides, tabs, titles, busy):
+    """The page's Bootstrap template: the sidebar, the tabs, the busy spinner in the header."""
+    return pn.template.BootstrapTemplate(
+        title="Dipole observability explorer",
+        # the Calibration and Shape tabs' inputs, shown on their tabs (where nothing else is)
+        sidebar=[sidebar, *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
+                                      sizing_mode="stretch_width") for t, side in sides.items()]],
+        main=[tabs],
+        sidebar_width=360,
+        header_background="#1f5f8b",
+        header=[busy],
+        # Panel's own busy indicator follows a process-wide flag: every event of any session
+        # would restyle the spinner of every open session (Python work on the server for each).
+        busy_indicator=None,
+    )
+
+
 def create_app():
     scenario = Scenario()
     bring_own_values(scenario)  # before the link is read: a link naming only the source too
     cache = SHARED  # results are shared by every session of the process (app.kit.cache)
-
-    def session_closed(ctx):
-        _schedule_trim()
-
-    pn.state.on_session_destroyed(session_closed)
+    pn.state.on_session_destroyed(lambda ctx: _schedule_trim())
 
     served = pn.state.location is not None  # no page URL outside a served page
     args = (pn.state.session_args or {}) if served else {}
-    titles = ("Maps", "Layout design", "Track", "Calibration", "Shape")
+    keys, titles = tuple(t.key for t in TABS), tuple(t.title for t in TABS)
     # the link's values first: the first maps are the link's (read once, here)
     link = url.read_link(scenario, args, titles) if served else None
     flush_url = []  # set below, once the tabs exist
@@ -329,142 +472,37 @@ def create_app():
     # The Calibration and Shape tabs' inputs sit in the sidebar, which has nothing else for them
     # (at 1280 × 800 a blank sidebar beside inputs in the main area cut off the coefficient table
     # and shrank the Shape views to ~190 × 100 px): filled on the tab's first visit.
-    sides = {t: pn.Column(sizing_mode="stretch_width", margin=0, css_classes=[f"w-side-{t.lower()}"])
-             for t in (titles[3], titles[4])}
-
-    def in_sidebar(title, parts):
-        def make():
-            inputs, main = parts(scenario)
-            inputs.param.update(width=None, sizing_mode="stretch_width")
-            offloop.soon(pn.state.curdoc, partial(setattr, sides[title], "objects", [inputs]))
-            return main
-        return make
+    sides = {t.title: pn.Column(sizing_mode="stretch_width", margin=0, css_classes=[f"w-side-{t.title.lower()}"])
+             for t in TABS if t.sidebar}
 
     # A hidden tab computes nothing: the Layout design and Track tabs follow the scenario when
     # shown (a preset on the Maps tab waited 6-20 s for them, and its text and link 20-30 s:
     # app/kit/shown.py). Given the Tabs below, before any tab is built.
     when_shown = {}
-    later = {titles[1]: lambda: pn.Column(sensor_banner(scenario, DESIGN_TAB),
-                                          design_tab(scenario, cache, _widgets(), when_shown[DESIGN_TAB]),
-                                          sizing_mode="stretch_width", margin=0),
-             titles[2]: lambda: pn.Column(sensor_banner(scenario, TRACK_TAB),
-                                          track_tab(scenario, when_shown[TRACK_TAB]),
-                                          sizing_mode="stretch_width", margin=0),
-             titles[3]: in_sidebar(titles[3], calibration_parts),
-             titles[4]: in_sidebar(titles[4], shape_parts)}
+
+    def mount(tab):
+        return Mount(scenario, cache, _widgets(),
+                     when_shown.get(tab.key, ALWAYS), busy, after_draw)
+
+    makers = {t.title: _maker(t, mount, sides) for t in TABS}
+    later = {title: makers[title] for title in titles[1:]}
     # What a hidden tab says until its first visit has built it (~0.1-0.5 s)
     holders = {t: pn.Column(pn.pane.HTML(f"Opening the {t} tab…", css_classes=["w-tab-opening"],
                                          styles={"color": "#555", "font-size": "15px"}),
                             sizing_mode="stretch_width", margin=0)
                for t in later}
-    tabs = pn.Tabs((titles[0], maps.maps_tab(scenario, cache, busy=busy, after_draw=after_draw)),
-                   *holders.items(), sizing_mode="stretch_width")
-    when_shown.update({tab: WhenShown(tabs, tab) for tab in (DESIGN_TAB, TRACK_TAB)})
+    tabs = pn.Tabs((titles[0], makers[titles[0]]()), *holders.items(), sizing_mode="stretch_width")
+    when_shown.update({t.key: WhenShown(tabs, i) for i, t in enumerate(TABS) if t.waits})
     first_visit(tabs, titles, holders, later)
-    live.shown_with(tabs, MAPS_TAB)  # no previews of the maps while another tab is shown
+    if MAPS_TAB in keys:
+        live.shown_with(tabs, keys.index(MAPS_TAB))  # no previews of the maps while another tab is shown
     if served:
         flush_url.append(url.sync_url(scenario, pn.state.location, args, onload=pn.state.onload,
                                       tabs=tabs, titles=titles,
                                       waits=lambda names: bool(set(names) & MAP_INPUTS),
                                       link=link))
-
-    # The sidebar is built after the page's first step, in two parts, each in a turn of the
-    # session's event loop of its own (in_parts): Bokeh runs this whole function in one step of
-    # the server's loop, which every other session waits for. The parts fill ``sidebar``, in the
-    # page from the start: built before the browser pulls the document (it has the page's HTML
-    # and scripts to load first), they reach it with the document, else as a change. Panel
-    # applies a change to a page not yet connected in a turn of its own, in which Bokeh walks
-    # the whole document's model graph again: so one change of ``sidebar`` per part (a change
-    # per card cost 8 more walks, ~15 % of a page's server CPU).
-    sidebar = pn.Column(sizing_mode="stretch_width", margin=0)
-
-    def preset_buttons():
-        buttons = {name: pn.widgets.Button(name=name, button_type="primary", button_style="outline",
-                                           width=90 if len(name) <= 6 else 150,  # a seed's name is longer
-                                           css_classes=[f"w-preset-{name[-1]}"],
-                                           on_click=lambda e, n=name: scenario.apply_preset(n))
-                   for name in PRESETS}
-
-        def restyle(*_):  # the preset the scenario holds is solid: worked out once per change
-            active = scenario.active_preset()
-            for name, button in buttons.items():
-                button.button_style = "solid" if name == active else "outline"
-
-        for part in {scenario.part_of(n) for n in PRESET_INPUTS}:  # one call per part a change sets
-            part.param.watch(restyle, [n for n in PRESET_INPUTS if scenario.part_of(n) is part])
-        restyle()
-        # The paper's figures set the maps' scenario: not offered on the tabs with inputs of their
-        # own (Calibration, Shape), where a click changed the hidden Maps state.
-        return pn.Column(pn.pane.Markdown("**Paper figures** (one click loads a figure's scenario; "
-                                          "the figure's map gets a red frame; the Layout design "
-                                          "and Track tabs' own settings stay)"),
-                         pn.FlexBox(*buttons.values(), sizing_mode="stretch_width"),
-                         visible=pn.bind(lambda tab: tab not in (CALIBRATION_TAB, SHAPE_TAB), tabs.param.active),
-                         sizing_mode="stretch_width", margin=0)
-
-    def download(ext, fn, label=None, suffix=""):
-        # named after the scenario (was always observability_maps.*), set as the file is made
-        def make():
-            name = maps.download_name(scenario, cache, ext)
-            button.filename = name.removesuffix(f".{ext}") + f"_{suffix}.{ext}" if suffix else name
-            return fn(scenario, cache)
-
-        button = pn.widgets.FileDownload(callback=make, filename=f"observability_maps.{ext}",
-                                         label=label or {"csv": "CSV", "nc": "NetCDF", "png": "PNG"}[ext],
-                                         button_type="light",
-                                         css_classes=[f"w-download-{ext}" + (f"-{suffix}" if suffix else "")])
-        return button
-
-    def download_buttons():
-        return pn.Column(
-            pn.pane.Markdown("**Download the maps** (PNG: the three maps, "
-                             f"{export.WIDTH_PX} px wide; PNG A, B, B vs A: one map, "
-                             f"{export.MAP_WIDTH_PX} px wide)"),
-            pn.Row(download("csv", maps.to_csv), download("nc", maps.to_netcdf), download("png", maps.to_png)),
-            # one map at a useful resolution (its save tool writes the canvas as shown, ~200-400 px)
-            pn.Row(*[download("png", lambda s, c, which=which: maps.to_png(s, c, (which,)), f"PNG {label}", suffix)
-                     for label, which, suffix in maps.MAP_PNGS]),
-            visible=tabs.param.active.rx() == MAPS_TAB, margin=0)
-
-    def cards(sections):
-        return [_section(scenario, tabs, *section) for section in sections]
-
-    def first_part():
-        sidebar.objects = [preset_buttons(), maps.refusal(scenario, None, "w-message"), *cards(SECTIONS[:2])]
-
-    def second_part():
-        sidebar.objects = [*sidebar.objects, *cards(SECTIONS[2:]), download_buttons(),
-                           study_buttons(scenario, uploaded_log, put_log)]
-
-    def log_input():  # the Calibration tab's upload, once the tab is built
-        found = sides[titles[3]].select(pn.widgets.FileDropper)
-        return found[0] if found else None
-
-    def uploaded_log():
-        upload = log_input()
-        data = None if upload is None else uploaded_bytes(upload)
-        return (next(reversed(upload.value)) if data is not None else "", data)
-
-    def put_log(name, data):
-        upload = log_input()
-        if upload is not None:
-            upload.value = {name: data}
-        return upload is not None
-
-    in_parts(pn.state.curdoc, [first_part, second_part])
-    template = pn.template.BootstrapTemplate(
-        title="Dipole observability explorer",
-        # the Calibration and Shape tabs' inputs, shown on their tabs (where nothing else is)
-        sidebar=[sidebar, *[pn.Column(side, visible=tabs.param.active.rx() == titles.index(t), margin=0,
-                                      sizing_mode="stretch_width") for t, side in sides.items()]],
-        main=[tabs],
-        sidebar_width=360,
-        header_background="#1f5f8b",
-        header=[busy],
-        # Panel's own busy indicator follows a process-wide flag: every event of any session
-        # would restyle the spinner of every open session (Python work on the server for each).
-        busy_indicator=None,
-    )
+    sidebar = _fill_sidebar(scenario, cache, tabs, keys, _calibration_log(sides))
+    template = _template(sidebar, sides, tabs, titles, busy)
     template.scenario = scenario  # for tests and the load benchmark
     template.built_later = sidebar  # for tests
     return template

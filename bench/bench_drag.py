@@ -244,7 +244,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
 
     class Dragger(Client):
         def __init__(self, url):
-            import app.tabs.maps.live  # noqa: F401  (the Drag model's class, to read the page's document)
+            import app.kit.drag  # noqa: F401  (the Drag model's class, to read the page's document)
 
             super().__init__(url)
             models = list(self.doc.models)
@@ -254,7 +254,7 @@ def multi(url, proc, sessions, seconds, loop="closed"):
         def drag_for(self, index, seconds, out):
             from bokeh.document.events import ModelChangedEvent
 
-            from app.tabs.maps.live import PATIENCE_MS, THROTTLE_MS
+            from app.kit.drag import PATIENCE_MS, THROTTLE_MS
 
             start = len(self.events)
             t0 = time.perf_counter()

@@ -128,7 +128,7 @@ class Client:
         attr, new = getattr(ev, "attr", None), getattr(ev, "new", None)
         self.events.append((attr, getattr(getattr(ev, "model", None), "id", None), new))
         if attr == "children":  # a pane put into the page (a refusal's message, made on the first
-            for m in new or ():  # refusal: app.tabs.maps.maps.with_refusal) comes with its text
+            for m in new or ():  # refusal: app.kit.alerts.with_refusal) comes with its text
                 if isinstance(getattr(m, "text", None), str):
                     self.events.append(("text", m.id, m.text))
 

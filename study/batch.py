@@ -12,10 +12,10 @@ import itertools
 import json
 from pathlib import Path
 
-from app.kit.views import to_dataset
 from app.report import html as report
 from app.report import results
 from app.state.scenario_file import MAX_VARIANTS, ScenarioFileError, applied, dumps
+from app.tabs.maps.downloads import to_dataset
 
 #: The files of one run, in its folder.
 REPORT, SUMMARY, MAPS, SCENARIO = "report.html", "summary.json", "maps.nc", "scenario.yaml"
@@ -52,7 +52,7 @@ def run_one(values, log=None):
 
 
 def maps_dataset(maps, crlb, values):
-    """The maps as NetCDF data: the page's export (app.views.to_dataset) of the maps shown,
+    """The maps as NetCDF data: the page's export (app.tabs.maps.downloads.to_dataset) of the maps shown,
     and of the CRLB position error when another measure is shown (``crlb_`` variables)."""
     params = {k: v for k, v in values.items() if isinstance(v, (int, float, str))}
     ds = to_dataset(maps, params)

@@ -70,9 +70,9 @@ DESIGN = '''
 stations = {stations!r}
 errors = core.crlb_maps({plane!r}, stations, velocity=velocity, moments={moments!r}, **{options})
 numbers["layout_design"] = map_summary(errors.position, np.isfinite(errors.position))
-spacing = core.best_spacing({region!r}, d_range={d_range!r}, n_curve={n_curve!r}, h={h!r},
-                            criterion={criterion!r}, threshold=THRESHOLD, velocity=velocity,
-                            moments={moments!r}, **{options})
+problem = core.LayoutProblem({region!r}, h={h!r}, criterion={criterion!r}, threshold=THRESHOLD,
+                             velocity=velocity, moments={moments!r}, **{options})
+spacing = core.best_spacing(problem, d_range={d_range!r}, n_curve={n_curve!r})
 numbers["best_d_m"] = float(spacing.d)
 '''
 

@@ -171,7 +171,7 @@ DESIGN_INSTALL_JS = """() => {
   if (preview === undefined) return null;
   watch(preview, log.previews, true);
   for (const m of Bokeh.documents[0].all_models)
-    if (m.properties && m.properties.ready && m.properties.state)  // app.tabs.maps.live.Drag models
+    if (m.properties && m.properties.ready && m.properties.state)  // app.kit.drag.Drag models
       m.connect(m.properties.state.change, () => {
         if (m.state[0] !== 'stations') return;
         log.drag = m;

@@ -50,9 +50,9 @@ def test_stations_added_by_clicks_keep_the_station_depth(page):
 def expected_readout(presets, x, y, z=None):
     """The ellipse text at (x, y) after the ``presets`` applied in turn, from the library."""
     from app.kit import views
+    from app.kit.runaway import nearest_range
     from app.state.scenario import Scenario
     from app.tabs.design import compute as design_compute
-    from app.tabs.maps import compute
     from app.tabs.maps.compute import Snapshot
 
     s = Scenario(resolution=21)
@@ -61,7 +61,7 @@ def expected_readout(presets, x, y, z=None):
     if z is not None:
         s.target.z = z
     snap = Snapshot.of(s, design_compute.ERROR_MAP_READS)
-    rng = float(compute.nearest_range([x, y, s.target.z], s.stations.stations))
+    rng = float(nearest_range([x, y, s.target.z], s.stations.stations))
     column = s.medium.sea_depth if s.medium.sea_model == "layered" else None  # the water column
     return views.error_ellipse(design_compute.error_at(snap, x, y), x, y, s.region.extent, rng,
                                column)[1]

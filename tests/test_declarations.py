@@ -33,6 +33,8 @@ VARIANTS = [{}, dict(sensor="magnetometer (B, nT)"), dict(sensor="gradiometer (G
             dict(comparison="Spacing d − reference d (Fig. 6)"),
             dict(comparison="Sensor kind B − A (seed 003)"), dict(measure="CRLB position error (m)")]
 TABS = (applies.MAPS_TAB, applies.DESIGN_TAB, applies.TRACK_TAB)
+#: Each tab's index on the page, from its list of tabs (app.page.TABS).
+INDEX = {tab.key: i for i, tab in enumerate(dashboard.TABS)}
 
 
 def on_a_card():
@@ -60,7 +62,7 @@ def test_the_sidebar_built_shows_each_input_where_its_declared_rule_says():
         built = {title: dashboard._section(s, tabs, title, names, collapsed=False)
                  for title, names, _ in sidebar()}
         for tab in TABS:
-            tabs.active = tab
+            tabs.active = INDEX[tab]
             w = applies.where(s.snapshot(), tab)
             for title, names, _ in sidebar():
                 card = built[title][0]
@@ -260,7 +262,7 @@ def test_the_numbers_formats_are_the_declared_ones():
         for title, names, _ in sidebar():
             built[title, k] = dashboard._section(Scenario(**values), tabs, title, names, collapsed=False)
         for tab in TABS:
-            tabs.active = tab
+            tabs.active = INDEX[tab]
     built["shape"] = shape._inputs(s)
     built["track"] = track.track_tab(s)
     sliders = {}

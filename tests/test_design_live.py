@@ -7,12 +7,11 @@ import panel as pn
 import pytest
 from bokeh.models import HoverTool
 
-from app.kit import views
+from app.kit import drag as loop, views
 from app.kit.cache import SHARED
 from app.state.scenario import Scenario
 from app.tabs.design import live as design_live
 from app.tabs.design.compute import ERROR_MAP_READS, design
-from app.tabs.maps import live
 from app.tabs.maps.compute import Snapshot
 
 pytestmark = [
@@ -64,7 +63,7 @@ def test_a_dragged_station_is_previewed_and_the_drop_hides_the_preview(tab):
     # the hover reads the preview instead of the exact layer under it
     assert all(error in h.renderers and exact not in h.renderers for h in hovers)
     assert scenario.stations.stations == old  # the scenario keeps its layout until the drop
-    n = min(live.PREVIEW_N, int(scenario.value("resolution")))
+    n = min(loop.PREVIEW_N, int(scenario.value("resolution")))
     want = design(Snapshot.of_values(scenario, {"stations": [[0.0, 0.0, 100.0], [40.0, 25.0, 100.0]],
                                                 "resolution": n}, ERROR_MAP_READS))
     quantity = scenario.design.error_quantity

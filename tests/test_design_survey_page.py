@@ -13,7 +13,7 @@ from app.state import url
 from app.state.scenario import CRITERIA, Scenario
 from app.state.survey import N1_MAP, SURVEY_CRITERIA
 from app.tabs.design import compute as dc, constraints, survey, survey_compute
-from app.tabs.maps.compute import Snapshot
+from app.state.snapshot import Snapshot
 
 SQUARE = [[0.0, -50.0], [80.0, -50.0], [80.0, 50.0], [0.0, 50.0]]
 

@@ -21,7 +21,7 @@ import param
 import pytest
 
 from app.state.scenario import ACCEPTED, MAX_STATIONS, Scenario, parameter
-from app.tabs.calibration import calibration
+from app.tabs.calibration import calibration, sources
 from app.tabs.design import compute as design_compute
 from app.tabs.maps import compute
 from app.tabs.maps.compute import Snapshot
@@ -209,7 +209,7 @@ def test_the_calibration_headings_at_their_extremes():
         for noise in (0.0, 2.0):  # the largest angle error pushes a heading past ±360° before wrapping
             s.calibration.cal_angle_noise_deg = noise
             assert check(s, tab, "cal_headings", text, True)[0] == "computed", (text, noise)
-    assert np.allclose(calibration.parse_headings("360, -360, 180, -180, 270, -270"), [0, 0, 180, 180, -90, 90])
+    assert np.allclose(sources.parse_headings("360, -360, 180, -180, 270, -270"), [0, 0, 180, 180, -90, 90])
     bad = ["", "north", "360.01", "-360.5", ", ".join(["0"] * 73), "nan", "1e400"]
     for text in bad:
         outcome, said = check(s, tab, "cal_headings", text, True)

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from app.kit import drag as loop
 from app.kit.cache import SHARED
 from app.state.scenario import Scenario
 from app.tabs.maps import live, figures as map_figures, maps
@@ -75,12 +76,12 @@ def test_previews_come_from_explicit_values_not_the_scenario():
 
 
 def test_the_preview_grid_follows_the_compute_time():
-    n, budget = live.PREVIEW_N, live.PREVIEW_BUDGET_S
-    assert live.next_n(n, budget) == n  # within budget: kept
-    assert live.next_n(n, budget / 10) == n  # never above PREVIEW_N
-    assert live.next_n(n, 0.6) == 30  # a magnetic preview at 100² (~0.6 s): ~√(0.06 / 0.6) × 100
-    assert live.next_n(30, 0.6 * 0.09 * 2) == live.PREVIEW_MIN_N  # never below the minimum
-    assert live.next_n(30, 0.005) == 100  # fast again: back to PREVIEW_N
+    n, budget = loop.PREVIEW_N, loop.PREVIEW_BUDGET_S
+    assert loop.next_n(n, budget) == n  # within budget: kept
+    assert loop.next_n(n, budget / 10) == n  # never above PREVIEW_N
+    assert loop.next_n(n, 0.6) == 30  # a magnetic preview at 100² (~0.6 s): ~√(0.06 / 0.6) × 100
+    assert loop.next_n(30, 0.6 * 0.09 * 2) == loop.PREVIEW_MIN_N  # never below the minimum
+    assert loop.next_n(30, 0.005) == 100  # fast again: back to PREVIEW_N
 
 
 def test_magnetic_maps_follow_the_drag_on_a_grid_their_compute_allows():
@@ -91,10 +92,10 @@ def test_magnetic_maps_follow_the_drag_on_a_grid_their_compute_allows():
     drag(lv, "mx", 60.0, 1)
     assert lv.drawn == 1 and "magnetometer" in t.figures.figures[0].title.text
     first = t.figures.previews[0].data["pv"][0].shape[0]
-    assert first == live.PREVIEW_N
+    assert first == loop.PREVIEW_N
     drag(lv, "mx", 70.0, 2)  # the next preview's grid follows the first one's compute time
     n = t.figures.previews[0].data["pv"][0].shape[0]
-    assert lv.drawn == 2 and live.PREVIEW_MIN_N <= n <= live.PREVIEW_N
+    assert lv.drawn == 2 and loop.PREVIEW_MIN_N <= n <= loop.PREVIEW_N
     assert f"grid {n} × {n}" in t.figures.captions[0].text.replace("\n", " ")
     drag(lv, "mx", 70.0, 3, released=True)
     assert scenario.target.mx == 70.0 and len(t.figures.preview_layers) == 3
@@ -119,7 +120,7 @@ def test_the_page_is_answered_for_every_value_it_sends(tab):
     lv.changed("state", [], ["Ph", 180.0, 4, False])  # an older answer never goes back
     assert lv.drag.ready == 5
     # the answer reaches the page's loop through a browser-side callback of Drag.ready
-    assert [cb.code for cb in lv.drag.js_property_callbacks["change:ready"]] == [live.READY_JS]
+    assert [cb.code for cb in lv.drag.js_property_callbacks["change:ready"]] == [loop.READY_JS]
 
 
 def test_a_number_input_holding_a_whole_number_keeps_a_dragged_values_decimals(tab):

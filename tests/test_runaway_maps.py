@@ -18,7 +18,7 @@ CRLB = "CRLB position error (m)"
 
 
 def _by_hand(plane, stations, crlb, observable):
-    """The flag, point by point from its definition (no shared code with app.tabs.maps.compute.runaway)."""
+    """The flag, point by point from its definition (no shared code with app.kit.runaway.runaway)."""
     u, v = plane.axes
     out = np.zeros(crlb.shape, dtype=bool)
     for i, vi in enumerate(v):

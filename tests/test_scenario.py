@@ -22,7 +22,7 @@ from app.state.scenario import (
     parameter,
 )
 from app.tabs.design import compute as dc
-from app.tabs.maps import data as map_data, figures as map_figures
+from app.tabs.maps import data as map_data, downloads, figures as map_figures
 from app.tabs.maps.compute import READS, Snapshot, compute
 
 
@@ -185,16 +185,16 @@ def test_downloads_carry_data_and_parameters():
     s = Scenario(resolution=21)
     p = compute(Snapshot.of(s))
     params = dict(Snapshot.of(s).items)
-    ds = xr.open_dataset(views.to_netcdf(p, params), engine="h5netcdf")
+    ds = xr.open_dataset(downloads.to_netcdf(p, params), engine="h5netcdf")
     np.testing.assert_array_equal(ds["B"].values, p.b.value)
     assert ds.attrs["Ph"] == 100.0 and ds["x"].attrs["units"] == "m"
-    text = views.to_csv(p, params).read()
+    text = downloads.to_csv(p, params).read()
     assert "# Ph = 100.0" in text
     rows = [line for line in text.splitlines() if not line.startswith("#")]
     assert len(rows) == 1 + 21 * 21 and rows[0].startswith("y (m),x (m),")
     # issue 25: the columns name the measure and unit (they were A, B, difference)
     assert f"A: {p.value_label}" in rows[0] and f"B vs A: {p.diff_label}" in rows[0]
-    assert views.download_name(p, "csv") == "fig_5_x_y_log10_det.csv"
+    assert downloads.download_name(p, "csv") == "fig_5_x_y_log10_det.csv"
 
 
 def test_maps_for_every_measure_and_plane():
@@ -446,7 +446,7 @@ def test_best_and_paper_maps_share_one_colour_range():
 
 
 def test_a_station_added_by_a_click_sits_at_the_station_depth():
-    from app.tabs.design.design import drawn_stations
+    from app.tabs.design.compute import drawn_stations
 
     old = [[0.0, 0.0, 100.0], [15.0, 0.0, 90.0]]
     data = {"x": [0.0, 20.0, 50.0], "y": [0.0, 0.0, 30.0], "z": [100.0, 90.0, 0.0]}  # z: empty_value
@@ -466,7 +466,7 @@ def test_the_sea_trial_preset_is_recognised_as_active():
 def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends():
     # issue 25, defect 1: each clicked station was rewritten to z = 0 when the next was added
     # (the point-draw tool's z column holds a placeholder for clicked points)
-    from app.tabs.design.design import drawn_stations
+    from app.tabs.design.compute import drawn_stations
 
     layout = [[0.0, 0.0, 100.0], [15.0, 0.0, 100.0]]
     for x, y in [(-229.0, 168.0), (-134.0, -165.0), (55.0, 205.0)]:
@@ -485,7 +485,7 @@ def test_stations_added_one_by_one_keep_their_depth_whatever_the_browser_sends()
 
 def test_a_dragged_station_is_rounded_as_the_table_shows_it_and_the_others_kept_exactly():
     # issue 46 defect 9: the link held 206.999985918 after a drag while the table showed 207.0
-    from app.tabs.design.design import drawn_stations
+    from app.tabs.design.compute import drawn_stations
 
     layout = [[0.0, 0.0, 100.0], [15.123456, -3.25, 90.0]]  # typed in the table: kept as typed
     moved = drawn_stations({"x": [206.999985918, 15.123456], "y": [-41.00000762, -3.25]}, layout, 100.0)

@@ -4,7 +4,7 @@ computation reads the input that changed.
 For every cached computation of a tab, two sets of inputs are found independently and compared:
 
 - what its key depends on: each input of the scenario is changed in turn, and the key (the
-  :class:`app.tabs.maps.compute.Snapshot` the tab builds, from the tab's own declaration) compared with the
+  :class:`app.state.snapshot.Snapshot` the tab builds, from the tab's own declaration) compared with the
   default's;
 - what the computation reads: it runs on that key's values with every attribute read recorded,
   over scenarios that take each of its branches (each sensor kind, a layered sea, the x–z plane,

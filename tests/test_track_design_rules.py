@@ -88,7 +88,7 @@ def test_the_station_depth_h_moves_the_custom_stations_at_it():
     # issue 40 defect 6: h = 120 moved neither the Layout design nor the Track stations; three
     # clicked stations then sat at 120 m beside two at 100 m, unsaid
     from app.state.scenario import Scenario
-    from app.tabs.design.design import drawn_stations
+    from app.tabs.design.compute import drawn_stations
     from app.tabs.track import track
 
     s = Scenario()

@@ -2,7 +2,7 @@
 the lock that runs numba's kernels one at a time.
 
 A tab computes a pure function of the values it reads (a hashable snapshot of them,
-:class:`app.tabs.maps.compute.Snapshot`) through :data:`SHARED`: every session of the process showing the
+:class:`app.state.snapshot.Snapshot`) through :data:`SHARED`: every session of the process showing the
 same values gets the same result, computed once. Off the event loop: :mod:`app.kit.offloop`.
 """
 
@@ -41,7 +41,7 @@ def _arrays(value, seen=None):
 
 class PanelCache:
     """Recent results of the tabs' pure computations (:func:`app.tabs.maps.compute.compute`, the Layout design
-    tab's :mod:`app.tabs.design.compute`, …), keyed by (function, :class:`app.tabs.maps.compute.Snapshot`) and shared by every
+    tab's :mod:`app.tabs.design.compute`, …), keyed by (function, :class:`app.state.snapshot.Snapshot`) and shared by every
     session of the process (:data:`SHARED`): the default view and the presets are computed once
     per process, not once per visitor (issue 29). Bounded by ``size`` entries and ``max_bytes``
     of arrays, least recently used out first. A key being computed is computed once: a second
@@ -57,7 +57,7 @@ class PanelCache:
 
     def get(self, snapshot, fn):
         """``fn(snapshot)``, from the cache when it was asked before. ``snapshot``: hashable, the
-        values ``fn`` reads (:class:`app.tabs.maps.compute.Snapshot`); ``fn``: a pure function of them."""
+        values ``fn`` reads (:class:`app.state.snapshot.Snapshot`); ``fn``: a pure function of them."""
         key = (fn.__module__, fn.__qualname__, snapshot)
         while True:
             with self._lock:

@@ -20,11 +20,11 @@ import panel as pn
 import param
 
 from app.state.part import declared
-from app.tabs.maps import live
+
 from .number_box import number_box, parsed, shown_text  # noqa: F401  (shown_text, parsed: as before)
 
 
-def number_input(owner, name, *, fmt=None, css_classes=(), visible=True):
+def number_input(owner, name, *, fmt=None, css_classes=(), visible=True, on_slider=None):
     """A Column (box, slider) for the Number or Integer parameter ``name`` of ``owner``.
 
     The box takes any typed text; a number sets ``owner.<name>`` (the owner may refuse it and
@@ -32,7 +32,9 @@ def number_input(owner, name, *, fmt=None, css_classes=(), visible=True):
     ``owner.message`` (module docstring). The slider spans the parameter's soft bounds, widened to
     include the current value. ``fmt``: the slider's number format (default: the parameter's
     declared ``fmt``, app.state.part, else ``0.[00]``); ``css_classes`` and
-    ``visible`` go to the Column (``visible`` may be a bound function)."""
+    ``visible`` go to the Column (``visible`` may be a bound function); ``on_slider(slider, name, box)``,
+    when given, is called with the slider and box made (the page's maps, and the box, follow a
+    drag: app.tabs.maps.live.follow)."""
     p = owner.param[name]
     fmt = fmt or declared(p).get("fmt", "0.[00]")
     integer = isinstance(p, param.Integer)
@@ -60,6 +62,7 @@ def number_input(owner, name, *, fmt=None, css_classes=(), visible=True):
 
     owner.param.watch(shown, [name])
     slider.param.watch(typed, ["value"])  # on release: the page's sliders are throttled
-    live.follow(slider, name, box)  # while dragged, the maps and the box follow (app/tabs/maps/live.py)
+    if on_slider is not None:  # while dragged, the maps and the box follow (app/tabs/maps/live.py)
+        on_slider(slider, name, box)
     return pn.Column(box, slider, css_classes=list(css_classes), visible=visible,
                      sizing_mode="stretch_width", margin=0)

@@ -1,20 +1,19 @@
-"""Pure view functions for the layout-design tab (HoloViews elements) and the downloads.
+"""Pure view functions of the tabs' CRLB maps (HoloViews elements): the Layout design and Track tabs.
 
 The comparison maps are plain Bokeh figures updated in place: :mod:`app.tabs.maps.figures`."""
 
 from __future__ import annotations
 
-import io
-import re
+from dataclasses import dataclass
 
 import holoviews as hv
 import numpy as np
-import xarray as xr
+
+import core
 
 from app.state.scenario import ERROR_QUANTITIES
-from app.tabs.maps import compute
-from app.tabs.maps.compute import RUNAWAY_LIMIT, Panels
-from app.tabs.maps.data import runaway_dots
+
+from .runaway import RUNAWAY_LIMIT, runaway, runaway_dots
 
 hv.extension("bokeh", logo=False)
 
@@ -46,59 +45,15 @@ def veil(observable, plane):
         cmap=["#ffffff00", VEIL], clim=(0, 1), alpha=0.55, colorbar=False, tools=[])
 
 
-def to_dataset(p: Panels, params: dict):
-    """The maps as an xarray Dataset with units and the scenario in its attributes."""
-    u, v = p.plane.axes
-    x, second = axes(p.plane)
-    coords = {second.name: (second.name, v, {"units": "m"}), "x": ("x", u, {"units": "m"})}
-    dims = (second.name, "x")
-    data = {
-        "A": (dims, p.a.value, {"long_name": f"{p.titles[0]}: {p.value_label}", "units": p.value_unit}),
-        "B": (dims, p.b.value, {"long_name": f"{p.titles[1]}: {p.value_label}", "units": p.value_unit}),
-        "difference": (dims, p.diff, {"long_name": p.diff_label}),
-        "A_observable": (dims, p.a.observable.astype("i1"), {"long_name": "1 where rank Γ is full"}),
-        "B_observable": (dims, p.b.observable.astype("i1"), {"long_name": "1 where rank Γ is full"}),
-    }
-    attrs = {k: (v if isinstance(v, (int, float, str)) else str(v)) for k, v in params.items()}
-    attrs["stations_A_m"] = str(p.stations[0].tolist())
-    attrs["stations_B_m"] = str(p.stations[1].tolist())
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+# -- a layout's CRLB map (the Layout design and Track tabs)
 
+@dataclass(frozen=True)
+class Design:
+    """CRLB maps of the custom layout over the x–y plane at the target depth."""
 
-def _names_unit(label, unit):
-    """Whether ``label`` ends by naming ``unit`` in its parentheses ("(1σ, m)", "(m)")."""
-    return re.search(r"[(,]\s*" + re.escape(unit) + r"\)$", label) is not None
-
-
-def to_csv(p: Panels, params: dict) -> io.StringIO:
-    """Tidy CSV, one row per grid point; the scenario as leading '#' comment lines."""
-    ds = to_dataset(p, params)
-    df = ds.to_dataframe().reset_index()
-    # columns say what they hold (they were bare A, B, difference): measure and unit
-    # (not when the label already ends with it: "CRLB position error (1σ, m) (m)")
-    unit = f" ({p.value_unit})" if p.value_unit and not _names_unit(p.value_label, p.value_unit) else ""
-    df = df.rename(columns={"x": "x (m)", ds["A"].dims[0]: f"{ds['A'].dims[0]} (m)",
-                            "A": f"A: {p.value_label}{unit}", "B": f"B: {p.value_label}{unit}",
-                            "difference": f"B vs A: {p.diff_label}"})
-    buf = io.StringIO()
-    for k, v in ds.attrs.items():
-        buf.write(f"# {k} = {v}\n")
-    df.to_csv(buf, index=False)
-    buf.seek(0)
-    return buf
-
-
-def download_name(p: Panels, ext):
-    """A download's file name after the scenario (the saved PNGs' stem), e.g. ``fig_5_x_y_log10_det.csv``."""
-    return f"{p.filename}.{ext}"
-
-
-def to_netcdf(p: Panels, params: dict) -> io.BytesIO:
-    """NetCDF-4 (h5netcdf) bytes of :func:`to_dataset`."""
-    buf = io.BytesIO()
-    to_dataset(p, params).to_netcdf(buf, engine="h5netcdf")
-    buf.seek(0)
-    return buf
+    plane: core.Plane
+    stations: np.ndarray  # (S, 3), m
+    errors: object  # core.CrlbErrors with (n, n) arrays
 
 
 # -- layout design tab --------------------------------------------------------------------------
@@ -159,9 +114,9 @@ def veiled(d):
 
 def runaway_marks(d, k=1):
     """Where a design's map gets a white dot (bool (k n, k n)): the 3-D position CRLB exceeds
-    RUNAWAY_LIMIT × the range to the nearest station (:func:`app.tabs.maps.compute.runaway`), each point
+    RUNAWAY_LIMIT × the range to the nearest station (:func:`app.kit.runaway.runaway`), each point
     repeated k × k times (a coarse preview's marks on a finer grid), on the dots' pattern."""
-    far = _finer(compute.runaway(d.plane, d.stations, d.errors.position, d.errors.observable), k)
+    far = _finer(runaway(d.plane, d.stations, d.errors.position, d.errors.observable), k)
     return far & runaway_dots(far.shape)
 
 

@@ -42,7 +42,7 @@ class Computed:
     values: dict
     maps: object  # app.compute.Panels: the maps as shown
     crlb: object  # app.compute.Panels of the CRLB position error (the same when it is shown)
-    design: object  # app.design_compute.Design: the custom layout's CRLB map
+    design: object  # app.kit.views.Design: the custom layout's CRLB map
     spacing: object  # app.design_compute.Spacing
     track: object  # app.track's dict, or an exception's text
     calibration: dict  # app.calibration.compute's dict

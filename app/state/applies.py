@@ -1,4 +1,4 @@
-"""Where each input applies: the tabs' indices, and the declared visibility rules
+"""Where each input applies: the declared visibility rules
 (:func:`app.state.parts.shown`) read against a scenario's values on a tab. The sidebar (app/page.py)
 shows and hides its inputs by these, and the maps' downloads list only the inputs that apply
 (app/tabs/maps/maps.py), so both read them here rather than one tab importing the page."""
@@ -7,7 +7,11 @@ from __future__ import annotations
 
 from .scenario import COMPARISONS, MEASURE_LABELS, PART_OF, SENSORS, Where, parameter, shown
 
-MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = 0, 1, 2, 3, 4
+#: The tabs whose rules differ, by key (a tab's key is the name of its own part of the scenario:
+#: app.kit.tab.Tab.key). Their order on the page, and so their indices, is the page's list of
+#: tabs (app/page.py's TABS); a tab of another key shows the inputs that apply off the Maps and
+#: Track tabs.
+MAPS_TAB, DESIGN_TAB, TRACK_TAB, CALIBRATION_TAB, SHAPE_TAB = "maps", "design", "track", "calibration", "shape"
 
 
 def sensor_kinds(s, tab):

@@ -486,7 +486,7 @@ def shown(name, where):
 
 def inputs(*parts, but=()):
     """The inputs of the parts named ``parts`` (keys of :data:`PARTS`), in their order, but those
-    named in ``but``: what a computation reads, the key of its results (:class:`app.tabs.maps.compute.Snapshot`)."""
+    named in ``but``: what a computation reads, the key of its results (:class:`app.state.snapshot.Snapshot`)."""
     unknown = set(but) - {n for a in parts for n in PARTS[a].names()}
     if unknown:
         raise KeyError(f"not inputs of {parts}: {sorted(unknown)}")

@@ -32,6 +32,9 @@ MAGNETIC_COMPONENTS = {
     "G": ("Gxx", "Gxy", "Gxz", "Gyy", "Gyz"),
     "BG": ("Bx", "By", "Bz", "Gxx", "Gxy", "Gxz", "Gyy", "Gyz"),
 }
+#: Rows code of each magnetic kind in :mod:`core.kernels.gamma` (the electric kinds use their
+#: field model's code, 0 exact, 1 paper): the one table of it (core.model.sensors reads it).
+MAGNETIC_CODES = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}
 #: Relative reciprocal condition number below which :func:`euler_locate` calls G singular.
 EULER_RCOND = 1e-10
 
@@ -202,7 +205,7 @@ def measurement_rows(states_value, stations_value, sensor, baseline, dt):
     n_s, n_c = stations.shape[0], len(MAGNETIC_COMPONENTS[sensor])
     h = np.empty((flat.shape[0], n_s, n_c))
     jac = np.empty((flat.shape[0], n_s, n_c, mk.N_STATE))
-    code = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}[sensor]
+    code = MAGNETIC_CODES[sensor]
     params = np.array([validation.ON_STATION, baseline, 1.0, 1.0])
     if flat.shape[0] > mk.BLOCK:
         gk.magnetic_rows(flat, stations, float(dt), code, params, h, jac)

@@ -18,13 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import magnetic as mk
 from ..kernels.electric import N_COMPONENTS as ELECTRIC_COMPONENTS
-from ..kernels.electric import N_STATES as ELECTRIC_STATES
-from ..kernels.magnetic import N_STATE as MAGNETIC_STATES
 from . import magnetic, validation
-from . import sea as sea_module
-from .fields import MODELS, field_jacobian
+from .fields import MODELS
+from .kinds import SPECS
 from .sea import Sea
 
 __all__ = ["KINDS", "MAGNETIC_NOISE", "Sensor", "sensor_model"]
@@ -45,9 +42,6 @@ KINDS = {
 MAGNETIC_NOISE = (0.01, 0.01)
 #: Default electric noise (V/m) per component, as core.DEFAULT_NOISE.
 ELECTRIC_NOISE = 1e-7
-#: Rows code of each magnetic kind in :mod:`core.kernels.gamma` (the electric kinds use their
-#: field model's code, 0 exact, 1 paper).
-_MAGNETIC_CODES = {"B": mk.CODE_B, "G": mk.CODE_G, "BG": mk.CODE_BG}
 
 
 @dataclass(frozen=True)
@@ -95,18 +89,13 @@ class Sensor:
         if self.sea is not None and not isinstance(self.sea, Sea):
             raise ValueError(f"sea must be None or a core.Sea; got {type(self.sea).__name__}")
         magnetic.baseline_value(self.baseline)
-        if self.magnetic and (self.sea is not None or self.model != "exact"):
-            raise ValueError(
-                f"sensor kind {self.kind!r} is magnetic: a static magnetic field does not see the "
-                "sea (μr ≈ 1), and the 'paper' model is the electric paper's; leave sea=None and "
-                "model='exact'"
-            )
+        SPECS[self.kind].check(self)
         self.noise_vector  # validates
 
     @property
     def magnetic(self):
         """True for the magnetic kinds B, G, BG."""
-        return self.kind != "E"
+        return SPECS[self.kind].magnetic
 
     @property
     def n_components(self):
@@ -116,12 +105,12 @@ class Sensor:
     @property
     def n_states(self):
         """State size: 7 (electric ``[x, y, z, vx, vy, Ph, Pv]``) or 8 (``[…, mx, my, mz]``)."""
-        return MAGNETIC_STATES if self.magnetic else ELECTRIC_STATES
+        return SPECS[self.kind].n_states
 
     @property
     def state_names(self):
         """Names of the state entries, in order."""
-        return magnetic.MAGNETIC_STATE_NAMES if self.magnetic else validation.STATE_NAMES
+        return SPECS[self.kind].state_names
 
     @property
     def noise_vector(self):
@@ -169,16 +158,7 @@ class Sensor:
         >>> h.shape, H.shape
         ((1, 5), (1, 5, 8))
         """
-        if self.magnetic:
-            return magnetic.magnetic_jacobian(states, stations, sensor=self.kind,
-                                              baseline=self.baseline)
-        states = np.asarray(states, dtype=float)
-        kw = dict(sigma=self.sigma, model=self.model)
-        if self.sea is not None:  # only when given: the whole-space core needs no sea argument
-            kw["sea"] = self.sea
-        J = field_jacobian(states, stations, **kw)  # (..., S, 3, 7)
-        h = J[..., 5] * states[..., None, None, 5] + J[..., 6] * states[..., None, None, 6]
-        return h, J
+        return SPECS[self.kind].measure(self, states, stations)
 
     @property
     def near(self):
@@ -198,43 +178,28 @@ class Sensor:
         and G in nT/m made commensurate) and the noise outside is 1; ``whiten=False`` gives
         the rows themselves (weights 1).
         """
-        if not self.magnetic:
-            code = validation.model_code(self.model, MODELS)
-            return (1.0 / (4.0 * np.pi * self.sigma), code, sea_module.medium(self.sea, self.sigma)), \
-                self.noise_vector[0]
-        noise = self.noise_vector
-        wb, wg = (1.0 / noise[0], 1.0 / noise[-1]) if whiten else (1.0, 1.0)
-        params = np.array([self.near, magnetic.baseline_value(self.baseline), wb, wg])
-        return (0.0, _MAGNETIC_CODES[self.kind], params), 1.0
+        return SPECS[self.kind].kernel_rows(self, whiten)
 
     def states(self, value):
         """Validated states of this kind as a contiguous (P, n_states) array, and the leading
         shape (electric states need a speed > 0: the field's heading is the velocity's)."""
-        return (magnetic.states if self.magnetic else validation.states)(value)
+        return SPECS[self.kind].states(value)
 
     def check_column(self, states, stations):
         """ValueError if targets or stations lie outside the medium's water column (a layered
         sea); a magnetostatic field does not see the sea."""
-        if not self.magnetic:
-            sea_module.check_column(self.sea, states, stations, self.model)
+        SPECS[self.kind].check_column(self, states, stations)
 
     def check_clear(self, states, stations, steps, T):
         """ValueError if a target (P, n_states) is on a station: electric, at the first instant
         (the kernels give NaN later); magnetic, within :attr:`near` at any of the ``steps``
         instants."""
-        if not self.magnetic:
-            validation.no_target_on_station(states, stations)
-            return
-        baseline = magnetic.baseline_value(self.baseline) if "G" in self.kind else 0.0
-        for i in range(1 if steps is None else steps):
-            moved = states.copy()
-            moved[:, :2] += i * T * states[:, 3:5]
-            magnetic.check_distances(moved, stations, baseline)
+        SPECS[self.kind].check_clear(self, states, stations, steps, T)
 
     def clear(self, states, stations, steps, T):
         """(P,) True where a target (P, n_states) is off every station: electric, at the first
         instant; magnetic, farther than :attr:`near` at every instant of Γ."""
-        n = 1 if not self.magnetic else validation.steps(steps, 1)
+        n = SPECS[self.kind].clear_instants(steps)
         T = validation.positive("T", T, "s")
         clear = np.ones(states.shape[0], dtype=bool)
         for i in range(n):
@@ -252,12 +217,7 @@ class Sensor:
         down: the induced moment of a hull under a mostly vertical geomagnetic field; a
         permanent moment's direction is not known beforehand), σ = strength_frac·p on each
         component, wide enough for any direction of strength ≤ p within ~2σ."""
-        p = np.asarray(strength, float)[..., None]
-        if self.magnetic:
-            mean = np.concatenate([np.zeros(p.shape[:-1] + (2,)), p], axis=-1)
-            return mean, np.repeat(strength_frac * p, 3, axis=-1)
-        mean = np.concatenate([p, np.zeros_like(p)], axis=-1)
-        return mean, np.concatenate([strength_frac * p, np.full_like(p, pv_std)], axis=-1)
+        return SPECS[self.kind].bank_moments(np.asarray(strength, float)[..., None], strength_frac, pv_std)
 
     def free_columns(self, known):
         """Indices of the unknown states, given the names of the known ones."""
@@ -315,9 +275,4 @@ def _outside_core():
 
 def refuse_square(sensor, what):
     """ValueError for the paper's square-Γ rule with a magnetic kind."""
-    if sensor.magnetic:
-        raise ValueError(
-            f"{what} uses the paper's square-Γ rule, which is the electric paper's (its row order "
-            f"and its 7 states); sensor kind {sensor.kind!r} needs the all-rows Γ: pass steps=N "
-            "(or a Fisher / CRLB measure)"
-        )
+    SPECS[sensor.kind].refuse_square(sensor, what)

@@ -20,12 +20,14 @@ import param
 from core import calibration as cal
 
 from app.kit import offloop
+from app.kit.alerts import refusal
 from app.kit.number_box import number_box
+from app.kit.tab import Tab
 from app.state.part import declared
 from app.state.presets import presets
 from app.state.scenario import Calibration
-from app.tabs.maps.maps import refusal
 from .plots import Figures, plot_data
+from .sources import readings
 
 #: The parts (app.state.scenario.PARTS) the tab reads: its own.
 READS = ("calibration",)
@@ -58,22 +60,6 @@ cases) or the least-squares solution. Upload a CSV with columns B1, B2, B3 (nT),
 (rad) and set Be for real data.
 """
 
-def parse_headings(text):
-    """Headings (deg) from comma- or space-separated text, each within ±360°, returned wrapped
-    to (−180°, 180°] (360° is north, as 0°); ValueError saying what is wrong.
-
-    Wrapped, as core's random attitudes are: core takes angles up to 2π rad in magnitude, and
-    a heading of ±360° plus the simulated angle error would exceed it ("radians?") although the
-    tab accepted it."""
-    parts = [p for p in str(text).replace(",", " ").split() if p]
-    try:
-        vals = [float(p.replace("−", "-")) for p in parts]
-    except ValueError:
-        raise ValueError(f"Headings must be numbers in degrees separated by commas; got {str(text)[:60]!r}") from None
-    if not vals or len(vals) > 72 or not all(np.isfinite(vals)) or max(map(abs, vals)) > 360:
-        raise ValueError("Headings must be 1 to 72 numbers in degrees, each within ±360")
-    return [180.0 - (180.0 - v) % 360.0 for v in vals]
-
 
 def compute(values, upload=None):
     """Everything the tab shows, from the cal_ values and the uploaded CSV bytes.
@@ -93,32 +79,11 @@ def compute(values, upload=None):
     v = values
     be = np.array([v[n] for n in BE], dtype=float)
     conv = v.get("cal_convention", "seed004")
-    sim = cal.SEED004_SIMULATION
-    truth = None
-    nominal = None  # the attitudes as designed (simulated cases): observability is theirs
+    src = v["cal_source"]
     try:
         if not np.linalg.norm(be) > 0:
             raise ValueError("Be must not be zero")
-        rng = np.random.default_rng(int(v["cal_seed"]))
-        src = v["cal_source"]
-        if src in ("Designed manoeuvre", "Seed 004 simulation"):
-            truth = (np.array(sim["K"]), np.array(sim["Bp"]))
-            n = int(v["cal_n_attitudes"])
-            if src == "Designed manoeuvre":
-                att = cal.heading_manoeuvre(parse_headings(v["cal_headings"]), roll_deg=v["cal_roll_deg"],
-                                            pitch_deg=v["cal_pitch_deg"], n_attitudes=n)
-            else:
-                att = cal.random_attitudes(n, rng)
-            # the simulated ship is recorded in the chosen convention
-            B, rec = cal.simulate_ship_data(*truth, att, be, rng, noise_nt=v["cal_noise_nt"],
-                                            angle_noise_deg=v["cal_angle_noise_deg"], convention=conv)
-            nominal = att
-        elif src == "Seed 004 Table 1":
-            B, rec = cal.seed004_table1()
-        else:
-            if not upload:
-                raise ValueError("Upload a CSV file (columns B1, B2, B3 in nT, psi, theta, phi in rad)")
-            B, rec = cal.parse_attitude_csv(upload)
+        B, rec, truth, nominal = readings(v, be, conv, upload)
         sigma = v["cal_noise_nt"] / np.sqrt(3)
         sig_a = np.deg2rad(v["cal_angle_noise_deg"]) / np.sqrt(3)
         # Rank and CRLB of the manoeuvre as sailed (designed), not of its noisy record: angle
@@ -481,3 +446,8 @@ def _set(scenario, values):
     """Set what a diagnosis button offers, in one update (as a preset)."""
     with pn.io.hold():
         scenario.update(values)
+
+
+#: The Calibration tab, as the page mounts it (app.kit.tab): its inputs in the sidebar.
+TAB = Tab("calibration", "Calibration", reads=tuple(FIELDS), sidebar=True,
+          view=lambda m: calibration_parts(m.scenario))

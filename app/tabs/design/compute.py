@@ -1,9 +1,9 @@
 """The Layout design tab's numbers: CRLB maps and ellipses of a layout, the best spacing and the
 optimised layout, over the x–y plane at the target depth.
 
-Pure functions of a :class:`app.tabs.maps.compute.Snapshot`, as :func:`app.tabs.maps.compute.compute` is for the Maps
-tab; :mod:`app.tabs.design.design` (the tab) asks for them through the shared cache
-(:data:`app.kit.cache.SHARED`), and :mod:`app.tabs.track.track` draws its CRLB map as a :class:`Design`.
+Pure functions of a :class:`app.state.snapshot.Snapshot`, as :func:`app.tabs.maps.compute.compute` is for the
+Maps tab; :mod:`app.tabs.design.design` (the tab) asks for them through the shared cache
+(:data:`app.kit.cache.SHARED`), and :mod:`app.tabs.track.track` draws its CRLB map as a :class:`app.kit.views.Design`.
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ import numpy as np
 import core
 
 from app.kit.cache import KERNEL_LOCK
+from app.kit.views import Design
 from app.state.scenario import CRITERIA, ScenarioValues, inputs
-from app.tabs.maps.compute import Snapshot
+from app.state.snapshot import Snapshot
 from .constraints import CONSTRAINT_READS, layout_constraints
 
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
@@ -44,13 +45,41 @@ def xy_region(s: ScenarioValues, n):
     return core.Plane("xy", (-s.extent, s.extent), (-s.extent, s.extent), s.z, n)
 
 
-@dataclass(frozen=True)
-class Design:
-    """CRLB maps of the custom layout over the x–y plane at the target depth."""
+#: Decimals of a station's coordinates in the table (its "0.0" format) and of a drawn one (m).
+DECIMALS = 1
+#: A drawn row within this of an old station (m) is that station, untouched: half the table's step.
+TOUCHED = 0.5 * 10 ** -DECIMALS
 
-    plane: core.Plane
-    stations: np.ndarray  # (S, 3), m
-    errors: object  # core.CrlbErrors with (n, n) arrays
+
+def drawn_stations(data, old, h):
+    """The custom layout after a PointDraw edit: ``data`` (columns x, y; any z is ignored) against
+    the ``old`` layout (S, 3), m.
+
+    The browser's z column is not trusted: the point-draw tool fills a new point's z with a
+    placeholder, and kept the placeholder (0, the surface) for earlier clicked stations when the
+    next one was added. So a depth comes from the layout itself: a row at an old station's (x, y)
+    keeps that station's depth; a moved station keeps the depth of the old station it replaces;
+    a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
+    # a dragged or clicked position to the table's 0.1 m: the browser's float noise
+    # (206.999985918) went into the link while the table showed 207.0 (issue 46 defect 9)
+    rows = [(round(float(x), DECIMALS), round(float(y), DECIMALS)) for x, y in zip(data["x"], data["y"])]
+    unused = list(range(len(old)))
+    depth = [None] * len(rows)
+    for i, (x, y) in enumerate(rows):  # unchanged stations, matched by position, kept exactly
+        j = next((j for j in unused if abs(old[j][0] - x) <= TOUCHED and abs(old[j][1] - y) <= TOUCHED), None)
+        if j is not None:
+            rows[i], depth[i] = (float(old[j][0]), float(old[j][1])), float(old[j][2])
+            unused.remove(j)
+    for i in range(len(rows)):
+        if depth[i] is None:  # dragged (an old station is left over for it) or added (at the end)
+            depth[i] = float(old[unused.pop(0)][2]) if i < len(old) and unused else float(h)
+    return [[x, y, z] for (x, y), z in zip(rows, depth)]
+
+
+#: What a bound of core.LayoutResult.at_bound means, for the result line.
+BOUNDS = {"d_min": "the smallest spacing scanned", "d_max": "the largest spacing that fits in the region",
+          "x_min": "the region's edge x = −extent", "x_max": "the region's edge x = +extent",
+          "y_min": "the region's edge y = −extent", "y_max": "the region's edge y = +extent"}
 
 
 def design(snapshot: Snapshot) -> Design:

@@ -9,15 +9,16 @@ import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
 from app.kit import offloop, views
+from app.kit.alerts import alert, refusal
 from app.kit.inputs import number_input
+from app.kit.runaway import RUNAWAY_LIMIT, nearest_range
 from app.kit.shown import ALWAYS
+from app.kit.tab import Tab
 from app.state.scenario import MAX_STATIONS, Design
 from app.state.survey import Survey
-from app.tabs.maps import compute
-from app.tabs.maps.compute import RUNAWAY_LIMIT, Snapshot
-from app.tabs.maps.maps import alert, refusal
+from app.state.snapshot import Snapshot
 from . import compute as design_compute, live as design_live, survey
-from .compute import ERROR_MAP_READS, LAYOUT_READS, SPACING_READS
+from .compute import DECIMALS, ERROR_MAP_READS, LAYOUT_READS, SPACING_READS, drawn_stations
 
 #: What redraws the Layout design map's layers (:func:`design_tab`).
 Refresh = hv.streams.Stream.define("Refresh")
@@ -41,37 +42,6 @@ DESIGN_TITLE = "Custom layout: Cramér–Rao error"
 COLUMNS = ["x (m)", "y (m)", "z (m)"]
 #: Inputs of this tab whose refusal is shown here, next to their inputs.
 OWN = ("stations", *Design.names(), *Survey.names())
-
-
-#: Decimals of a station's coordinates in the table (its "0.0" format) and of a drawn one (m).
-DECIMALS = 1
-#: A drawn row within this of an old station (m) is that station, untouched: half the table's step.
-TOUCHED = 0.5 * 10 ** -DECIMALS
-
-
-def drawn_stations(data, old, h):
-    """The custom layout after a PointDraw edit: ``data`` (columns x, y; any z is ignored) against
-    the ``old`` layout (S, 3), m.
-
-    The browser's z column is not trusted: the point-draw tool fills a new point's z with a
-    placeholder, and kept the placeholder (0, the surface) for earlier clicked stations when the
-    next one was added. So a depth comes from the layout itself: a row at an old station's (x, y)
-    keeps that station's depth; a moved station keeps the depth of the old station it replaces;
-    a station added by a click (a row beyond the old ones) sits at the station depth ``h``."""
-    # a dragged or clicked position to the table's 0.1 m: the browser's float noise
-    # (206.999985918) went into the link while the table showed 207.0 (issue 46 defect 9)
-    rows = [(round(float(x), DECIMALS), round(float(y), DECIMALS)) for x, y in zip(data["x"], data["y"])]
-    unused = list(range(len(old)))
-    depth = [None] * len(rows)
-    for i, (x, y) in enumerate(rows):  # unchanged stations, matched by position, kept exactly
-        j = next((j for j in unused if abs(old[j][0] - x) <= TOUCHED and abs(old[j][1] - y) <= TOUCHED), None)
-        if j is not None:
-            rows[i], depth[i] = (float(old[j][0]), float(old[j][1])), float(old[j][2])
-            unused.remove(j)
-    for i in range(len(rows)):
-        if depth[i] is None:  # dragged (an old station is left over for it) or added (at the end)
-            depth[i] = float(old[unused.pop(0)][2]) if i < len(old) and unused else float(h)
-    return [[x, y, z] for (x, y), z in zip(rows, depth)]
 
 
 #: What a bound of core.LayoutResult.at_bound means, for the result line.
@@ -106,20 +76,11 @@ def spacing_text(sp):
             "beside or below.")
 
 
-def design_tab(scenario, cache, widgets, shown=ALWAYS):
-    """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
-    widget spec of pn.Param (the sidebar's); ``shown``: the tab's :class:`app.kit.shown.WhenShown`
-    (hidden, the tab computes nothing: its map, table and readout follow the scenario when it is
-    shown again, a spinner over the map meanwhile)."""
-    snap = lambda: Snapshot.of(scenario, ERROR_MAP_READS)  # what the error map and the ellipse read
+def _map(scenario, cache, snap, redraw, follow, loss_line):
+    """The error map with its station layer (a click adds a station, a drag moves one), the
+    forbidden zones (app/tabs/design/survey.py) and the ellipse, redrawn by the stream ``redraw``:
+    (the pane, its Task). ``loss_line``: the pane saying the N−1 map's coverage."""
     st = scenario.stations  # the Stations part
-    # The map's three layers are redrawn by one stream, which the scenario's changes trigger
-    # through ``shown`` (streams on the scenario's parameters recomputed the map, on the thread
-    # of the change, on a hidden tab too: a preset clicked on the Maps tab waited for it)
-    redraw = Refresh()
-    # The map follows a dragged station: previews until the drop (app/tabs/design/live.py), drawn
-    # into layers the station layer's hook adds to the figure
-    follow = design_live.StationDrag(scenario, lambda: scenario.design.error_quantity, pn.state.curdoc)
     points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True).opts(hooks=[follow.hook]),
                            streams=[redraw])
     # One more than allowed: a 9th click reaches the Scenario, which refuses it ("at most 8
@@ -136,7 +97,6 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
             st.stations = drawn_stations(data, st.stations, st.h)
 
     draw.add_subscriber(drawn)
-    loss_line = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-loss-text"])
 
     def error_layer(**_):  # the layout's map, or its worst single-loss map (app/tabs/design/survey.py)
         d = survey.error_design(cache, scenario)
@@ -153,20 +113,29 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
         return views.error_ellipse(design_compute.error_at(snap(), x, y), x, y,
                                    scenario.region.extent)[0]
 
-    # The readout under the table, by a Task, which shows the latest change's text only
-    # (computed per change on Panel's threads, an older, slower computation ending last left an
-    # older preset's numbers on the page). The first one here and now: the tab is built when it
-    # is first shown (app.page.first_visit), and the readout is in its first frame
-    # (arriving later, it pushed what is under it ~85 px down, out of view at 1280 × 800).
-    readout_task = offloop.Task("design-readout")
+    map_pane = pn.pane.HoloViews(errors * zones * points * hv.DynamicMap(ellipse, streams=[redraw]))
+    # Shown again after a change made while hidden: the map computed off the event loop, a
+    # spinner over it meanwhile, then redrawn (from the shared cache) on the loop
+    return map_pane, offloop.Task("design-map", busy=[map_pane])
 
-    def readout_of(key):
-        snapshot, x, y = key
-        s = snapshot.scenario()
-        rng = float(compute.nearest_range([x, y, s.z], s.stations)) if len(s.stations) else None
-        column = float(s.sea_depth) if s.sea_model == "layered" else None
-        return views.error_ellipse(design_compute.error_at(snapshot, x, y), x, y, s.extent, rng,
-                                   column)[1]
+
+def _readout_of(key):
+    """The ellipse's text at (x, y) of ``key`` (snapshot, x, y)."""
+    snapshot, x, y = key
+    s = snapshot.scenario()
+    rng = float(nearest_range([x, y, s.z], s.stations)) if len(s.stations) else None
+    column = float(s.sea_depth) if s.sea_model == "layered" else None
+    return views.error_ellipse(design_compute.error_at(snapshot, x, y), x, y, s.extent, rng,
+                               column)[1]
+
+
+def _readout(scenario, shown, snap):
+    """The readout under the table, by a Task, which shows the latest change's text only
+    (computed per change on Panel's threads, an older, slower computation ending last left an
+    older preset's numbers on the page). The first one here and now: the tab is built when it
+    is first shown (app.page.first_visit), and the readout is in its first frame (arriving
+    later, it pushed what is under it ~85 px down, out of view at 1280 × 800)."""
+    readout_task = offloop.Task("design-readout")
 
     def now():
         return snap(), scenario.design.ellipse_x, scenario.design.ellipse_y
@@ -174,50 +143,34 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     def refresh(*_):
         with readout_task.lock:
             key = now()
-            readout_task.start(key, partial(readout_of, key), partial(setattr, readout, "object"))
+            readout_task.start(key, partial(_readout_of, key), partial(setattr, readout, "object"))
 
-    readout = pn.pane.Markdown(readout_of(now()), sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
+    readout = pn.pane.Markdown(_readout_of(now()), sizing_mode="stretch_width", css_classes=["w-ellipse-text"])
     scenario.watch_inputs(shown(refresh), ERROR_MAP_READS)
     scenario.design.param.watch(shown(refresh), ["ellipse_x", "ellipse_y"])
+    return readout
 
-    ell = hv.DynamicMap(ellipse, streams=[redraw])
-    map_pane = pn.pane.HoloViews(errors * zones * points * ell)
-    # Shown again after a change made while hidden: the map computed off the event loop, a
-    # spinner over it meanwhile, then redrawn (from the shared cache) on the loop
-    map_task = offloop.Task("design-map", busy=[map_pane])
 
-    def redraw_now(*_):
-        redraw.event()
+def _frame(scenario):  # x, y, z and the survey's fixed column
+    return survey.frame(scenario.stations.stations, scenario.survey.fixed_stations, COLUMNS)
 
-    def redraw_later():
-        snapshot = snap()
-        map_task.start(None, partial(cache.get, snapshot, design_compute.design),
-                       lambda _: redraw.event())
 
-    def frame(stations):  # x, y, z and the survey's fixed column
-        return survey.frame(stations, scenario.survey.fixed_stations, COLUMNS)
-
+def _station_table(scenario, shown):
+    """The custom layout as an editable table, in step with the Stations part both ways."""
+    st = scenario.stations
     table = pn.widgets.Tabulator(
-        frame(st.stations), show_index=False, sizing_mode="stretch_width", height=260,
+        _frame(scenario), show_index=False, sizing_mode="stretch_width", height=260,
         css_classes=["w-station-table"],
         formatters={**{c: NumberFormatter(format=f"0.{'0' * DECIMALS}") for c in COLUMNS},
                     survey.FIXED: {"type": "tickCross"}})
-
     showing = [False]  # the table's value is being set from the layout: not an edit
 
     def show_layout(*_):
         showing[0] = True
         try:
-            table.value = frame(st.stations)  # a new frame: Panel sends it even amid an edit's sync
+            table.value = _frame(scenario)  # a new frame: Panel sends it even amid an edit's sync
         finally:
             showing[0] = False
-
-    st.param.watch(shown(show_layout), ["stations"])
-    scenario.survey.param.watch(shown(show_layout), ["fixed_stations"])
-    # the map after the table: a change shows its layout at once, before the map (a layered
-    # sea's takes seconds) is computed
-    scenario.watch_inputs(shown(redraw_now, redraw_later), ERROR_MAP_READS)
-    scenario.design.param.watch(shown(redraw_now, redraw_later), ["error_quantity", "ellipse_x", "ellipse_y"])
 
     def edited(event):
         # On the table's value, not on_edit: Panel may run an edit's on_edit callbacks before
@@ -237,24 +190,32 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
             # table shows the kept layout at once (it kept the refused cell, silently)
             show_layout()
 
+    st.param.watch(shown(show_layout), ["stations"])
+    scenario.survey.param.watch(shown(show_layout), ["fixed_stations"])
     table.param.watch(edited, ["value"])
-    message = refusal(scenario, OWN, "w-design-message")
+    return table
+
+
+def _spacing_views(cache, snapshot):
+    """(the line under the button, the curve and the best and paper layouts' maps)."""
+    sp = cache.get(snapshot, design_compute.best_spacing)
+    clim = views.common_clim(sp.best, sp.paper)  # one scale: the comparison must not mislead
+    best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m", clim=clim, size=260)
+    paper = views.error_map(sp.paper, "Paper: d = 15 m", clim=clim, size=260)
+    return spacing_text(sp), (views.spacing_plot(sp), best * views.station_layer(sp.best.stations),
+                              paper * views.station_layer(sp.paper.stations))
+
+
+def _spacing(scenario, cache):
+    """The best spacing's button, its line and its plots: (run, said, found). The optimisers take
+    ~1 s (best spacing) to ~10 s (free layouts): off the event loop (app.kit.offloop), a spinner
+    over what they will change meanwhile. The result is said right under the button, where the
+    user is looking (the hint there gives way to it); its curve and maps follow (at 1280 px they
+    wrap below the fold: the line says where they are)."""
     run = pn.widgets.Button(name="Find best spacing", button_type="primary")
-    # The optimisers take ~1 s (best spacing) to ~10 s (free layouts): off the event loop
-    # (app.kit.offloop), a spinner over what they will change meanwhile. The result is said right
-    # under the button, where the user is looking (the hint there gives way to it); its curve and
-    # maps follow (at 1280 px they wrap below the fold: the line says where they are).
     said = pn.pane.Markdown(SPACING_HINT, sizing_mode="stretch_width", css_classes=["w-spacing-result"])
     found = pn.Column(sizing_mode="stretch_width", css_classes=["w-spacing-plots"])
     spacing_task = offloop.Task("design", busy=[said, found, run])
-
-    def spacing_views(snapshot):
-        sp = cache.get(snapshot, design_compute.best_spacing)
-        clim = views.common_clim(sp.best, sp.paper)  # one scale: the comparison must not mislead
-        best = views.error_map(sp.best, f"Best: d = {sp.result.d:.1f} m", clim=clim, size=260)
-        paper = views.error_map(sp.paper, "Paper: d = 15 m", clim=clim, size=260)
-        return spacing_text(sp), (views.spacing_plot(sp), best * views.station_layer(sp.best.stations),
-                                  paper * views.station_layer(sp.paper.stations))
 
     def spacing_shown(result):
         text, plots = result
@@ -268,28 +229,21 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
 
     def spacing(event):
         snapshot = Snapshot.of(scenario, SPACING_READS)
-        spacing_task.start(snapshot, partial(spacing_views, snapshot), spacing_shown, spacing_failed)
+        spacing_task.start(snapshot, partial(_spacing_views, cache, snapshot), spacing_shown, spacing_failed)
 
     run.on_click(spacing)
-    criteria = pn.Column(
-        pn.Param(scenario.design, parameters=["criterion"], show_name=False, widgets=widgets,
-                 sizing_mode="stretch_width"),
-        survey.criterion_unit(scenario),
-        number_input(scenario.design, "threshold", css_classes=["w-threshold"]),
-        pn.Param(scenario.design, parameters=["layout_kind"], show_name=False, widgets=widgets,
-                 sizing_mode="stretch_width"),
-        number_input(scenario.design, "n_stations", css_classes=["w-n_stations"]),
-        survey.survey_inputs(scenario),
-        sizing_mode="stretch_width", margin=0)
+    return run, said, found
+
+
+def _optimise(scenario, cache):
+    """The optimiser's button and its outcome line: (button, outcome)."""
     optimise = pn.widgets.Button(name="Optimise N-station layout → custom layout", button_type="primary")
-
     outcome = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-optimise-result"])
-
     optimise_task = offloop.Task("design", busy=[optimise, outcome])
 
     def optimised(result, criterion, kept):
-        st.stations = [[float(v) for v in station] for station in result.stations]
-        scenario.survey.fixed_stations = survey.rows_of(st.stations, kept)  # still ticked
+        scenario.stations.stations = [[float(v) for v in station] for station in result.stations]
+        scenario.survey.fixed_stations = survey.rows_of(scenario.stations.stations, kept)  # still ticked
         outcome.object = optimise_text(result, criterion)
 
     def optimise_failed(exc):
@@ -302,6 +256,55 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
                             optimise_failed)
 
     optimise.on_click(optimise_clicked)
+    return optimise, outcome
+
+
+def _criteria(scenario, widgets):
+    return pn.Column(
+        pn.Param(scenario.design, parameters=["criterion"], show_name=False, widgets=widgets,
+                 sizing_mode="stretch_width"),
+        survey.criterion_unit(scenario),
+        number_input(scenario.design, "threshold", css_classes=["w-threshold"]),
+        pn.Param(scenario.design, parameters=["layout_kind"], show_name=False, widgets=widgets,
+                 sizing_mode="stretch_width"),
+        number_input(scenario.design, "n_stations", css_classes=["w-n_stations"]),
+        survey.survey_inputs(scenario),
+        sizing_mode="stretch_width", margin=0)
+
+
+def design_tab(scenario, cache, widgets, shown=ALWAYS):
+    """Custom layouts in metres of error, and the best dual-station spacing. ``widgets``: the
+    widget spec of pn.Param (the sidebar's); ``shown``: the tab's :class:`app.kit.shown.WhenShown`
+    (hidden, the tab computes nothing: its map, table and readout follow the scenario when it is
+    shown again, a spinner over the map meanwhile)."""
+    snap = lambda: Snapshot.of(scenario, ERROR_MAP_READS)  # what the error map and the ellipse read
+    # The map's three layers are redrawn by one stream, which the scenario's changes trigger
+    # through ``shown`` (streams on the scenario's parameters recomputed the map, on the thread
+    # of the change, on a hidden tab too: a preset clicked on the Maps tab waited for it)
+    redraw = Refresh()
+    # The map follows a dragged station: previews until the drop (app/tabs/design/live.py), drawn
+    # into layers the station layer's hook adds to the figure
+    follow = design_live.StationDrag(scenario, lambda: scenario.design.error_quantity, pn.state.curdoc)
+    loss_line = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-loss-text"])
+    map_pane, map_task = _map(scenario, cache, snap, redraw, follow, loss_line)
+    readout = _readout(scenario, shown, snap)
+    table = _station_table(scenario, shown)
+
+    def redraw_now(*_):
+        redraw.event()
+
+    def redraw_later():
+        snapshot = snap()
+        map_task.start(None, partial(cache.get, snapshot, design_compute.design),
+                       lambda _: redraw.event())
+
+    # the map after the table: a change shows its layout at once, before the map (a layered
+    # sea's takes seconds) is computed
+    scenario.watch_inputs(shown(redraw_now, redraw_later), ERROR_MAP_READS)
+    scenario.design.param.watch(shown(redraw_now, redraw_later), ["error_quantity", "ellipse_x", "ellipse_y"])
+    message = refusal(scenario, OWN, "w-design-message")
+    run, said, found = _spacing(scenario, cache)
+    optimise, outcome = _optimise(scenario, cache)
     tab = pn.Column(
         pn.pane.Markdown(DESIGN_HELP, sizing_mode="stretch_width"),
         pn.FlexBox(map_pane,
@@ -312,11 +315,16 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
                              readout, loss_line,
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(pn.pane.Markdown(survey.ZONES_HELP, sizing_mode="stretch_width"), criteria, run,
-                             said, optimise, outcome, survey.count_section(scenario, cache),
-                             width=360), found,
+        pn.FlexBox(pn.Column(pn.pane.Markdown(survey.ZONES_HELP, sizing_mode="stretch_width"),
+                             _criteria(scenario, widgets), run, said, optimise, outcome,
+                             survey.count_section(scenario, cache), width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )
     tab.follow = follow  # the drag's previews (tests, the benchmark)
     return tab
+
+
+#: The Layout design tab, as the page mounts it (app.kit.tab).
+TAB = Tab("design", "Layout design", reads=ERROR_MAP_READS, banner=True, waits=True,
+          view=lambda m: design_tab(m.scenario, m.cache, m.widgets, m.shown))

@@ -10,14 +10,14 @@ Bokeh and HoloViews only:
   reads the stations' x and y from that source: BokehJS hands each pan to the active tool (the
   point-draw tool, which moves the point) before it triggers the figure's ``Pan`` event. A
   layout that differs from the last one goes into the page's closed loop to this tab's own
-  :class:`app.tabs.maps.live.Drag` (:data:`app.tabs.maps.live.LOOP_JS`: sent once the server has answered the
+  :class:`app.kit.drag.Drag` (:data:`app.kit.drag.LOOP_JS`: sent once the server has answered the
   previous one, at most one every THROTTLE_MS; the latest waiting layout replaces older ones);
   ``panend`` drops what waits (the drop reaches the server through the point-draw tool);
 * on the server, Bokeh's ``on_change`` of that model runs :meth:`StationDrag.changed` on the
   event loop as the message arrives. The layout is read as a drop would read it
-  (:func:`app.tabs.design.design.drawn_stations`: a moved station keeps its depth) and checked as the
+  (:func:`app.tabs.design.compute.drawn_stations`: a moved station keeps its depth) and checked as the
   scenario checks it; its map is computed off the loop (:func:`app.tabs.design.compute.design`) at
-  PREVIEW_N² points (fewer when one takes longer than PREVIEW_BUDGET_S: :func:`app.tabs.maps.live.next_n`),
+  PREVIEW_N² points (fewer when one takes longer than PREVIEW_BUDGET_S: :func:`app.kit.drag.next_n`),
   one at a time per session, the latest layout next. It is drawn into layers of the figure's
   own, added by the hook above the HoloViews map's layers and under the stations: the error
   (float32, coloured in the browser by the map's own colour mapper, whose range, and so the
@@ -48,11 +48,11 @@ from bokeh.models import (ColumnDataSource, CustomJS, GlyphRenderer, HoverTool, 
                           LinearColorMapper)
 
 from app.kit import offloop, views
+from app.kit.drag import LOOP_JS, PATIENCE_MS, PREVIEW_N, PREVIEWS, THROTTLE_MS, answer, drag_model, next_n
 from app.state.parts import MAX_STATIONS, Stations
-from app.tabs.maps.compute import Snapshot
-from app.tabs.maps.live import LOOP_JS, PATIENCE_MS, PREVIEW_N, PREVIEWS, THROTTLE_MS, answer, drag_model, next_n
+from app.state.snapshot import Snapshot
 from . import compute as design_compute
-from .compute import ERROR_MAP_READS
+from .compute import ERROR_MAP_READS, drawn_stations
 
 #: Previews of every session's design map, off the event loop.
 _PREVIEWS = offloop.pool("design-previews", 2)
@@ -204,8 +204,6 @@ class StationDrag:
     def layout(self, value):
         """The layout (S, 3) the page's x and y columns say, read as a drop would read it; None
         when the scenario would refuse it."""
-        from .design import drawn_stations  # (app.tabs.design.design imports this module)
-
         try:
             xs, ys = value
             ok = len(xs) == len(ys) and 1 <= len(xs) <= MAX_STATIONS and all(

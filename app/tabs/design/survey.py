@@ -21,11 +21,11 @@ import panel as pn
 import core
 
 from app.kit import offloop
+from app.kit.alerts import alert
 from app.kit.inputs import number_input
 from app.state.scenario import CRITERIA
+from app.state.snapshot import Snapshot
 from app.state.survey import MAX_ZONES, N1_MAP
-from app.tabs.maps.compute import Snapshot
-from app.tabs.maps.maps import alert
 from . import survey_compute
 from .compute import ERROR_MAP_READS
 from .survey_compute import COUNT_READS, LOSS_READS

@@ -14,10 +14,11 @@ import numpy as np
 import core
 
 from app.kit.cache import KERNEL_LOCK
+from app.kit.views import Design
 from app.state.scenario import CRITERIA, MAX_STATIONS
+from app.state.snapshot import Snapshot
 from app.state.survey import N1_MAP
-from app.tabs.maps.compute import Snapshot
-from .compute import ERROR_MAP_READS, LAYOUT_READS, Design, _fisher_options, design, xy_region
+from .compute import ERROR_MAP_READS, LAYOUT_READS, _fisher_options, design, xy_region
 from .constraints import layout_constraints
 
 #: :func:`loss_design`: the custom layout's map, and the threshold its coverage counts against.

@@ -16,67 +16,26 @@ import core
 
 from app.kit import timings
 from app.kit.cache import KERNEL_LOCK
+from app.kit.runaway import RUNAWAY_LIMIT, runaway
 from app.state.scenario import (
     COMPARISONS,
     DIFFERENCES,
     PAPER_MAPS,
     SENSORS,
-    Scenario,
     ScenarioValues,
-    inputs,
     preset_of,
 )
 from app.state.sensors import KINDS as SENSOR_PARTS
+from app.state.snapshot import SCENE, Snapshot
 
 #: The inputs the comparison maps read (:func:`compute`): the scene (a target in a sea, seen by
 #: sensors on the paper's stations, over a region) and the Maps tab's own settings; not the
 #: custom stations of the Layout design and Track tabs. The key of the maps' results: a change of
 #: any other input leaves them as they are (tests/test_tab_keys.py checks this against what
 #: :func:`compute` reads).
-READS = inputs("target", "stations", "medium", "sensor", "region", "maps", but=("stations",))
+READS = SCENE
 #: Every input the maps read, as a set.
 MAP_INPUTS = frozenset(READS)
-#: Largest CRLB / range at which a linearised bound still predicts a tracker's error
-#: (:func:`core.linearisation_breaks`, issue 18): beyond it the maps hatch the point.
-RUNAWAY_LIMIT = 0.3
-
-
-def _frozen(value):
-    """A value as a key holds it: lists (stations, zones, fixed stations) as tuples, nested."""
-    return tuple(_frozen(v) for v in value) if isinstance(value, list) else value
-
-
-def _thawed(value):
-    return [_thawed(v) for v in value] if isinstance(value, tuple) else value
-
-
-@dataclass(frozen=True)
-class Snapshot:
-    """The values of the inputs a computation reads as a hashable tuple of (name, value) pairs:
-    the key of every tab's computations in the one cache (:class:`app.kit.cache.PanelCache`)."""
-
-    items: tuple
-
-    @classmethod
-    def of(cls, scenario: Scenario, reads=READS):
-        """The values of the inputs ``reads`` (names; default the maps', :data:`READS`)."""
-        return cls(tuple((n, _frozen(scenario.value(n))) for n in reads))
-
-    @classmethod
-    def of_values(cls, scenario: Scenario, values, reads=READS):
-        """As :meth:`of`, with the inputs in ``values`` (name -> value) replaced: a dragged
-        slider's value before it reaches the scenario (app/tabs/maps/live.py)."""
-        unknown = set(values) - set(reads)
-        if unknown:
-            raise KeyError(f"not inputs read: {sorted(unknown)}")
-        return cls(tuple((n, _frozen(values[n] if n in values else scenario.value(n)))
-                         for n in reads))
-
-    def scenario(self):
-        """These values alone, with the methods that build core's inputs (not a live Scenario).
-        Reading an input the snapshot does not hold raises AttributeError: a computation keyed
-        on a snapshot cannot read a value its key leaves out."""
-        return ScenarioValues(**{k: _thawed(val) for k, val in self.items})
 
 
 @dataclass(frozen=True)
@@ -267,32 +226,6 @@ def unobservable_note(s: ScenarioValues, results, stations, moments, kinds=("E",
                          "N instants).")
             lines.append(line)
     return "\n".join(lines)
-
-
-def nearest_range(points, stations):
-    """Distance (m) from each of ``points`` (..., 3) to the nearest of ``stations`` (S, 3), S ≥ 1:
-    shape (...)."""
-    points = np.asarray(points, dtype=float)
-    out = np.full(points.shape[:-1], np.inf)
-    for st in np.asarray(stations, dtype=float).reshape(-1, 3):
-        out = np.minimum(out, np.linalg.norm(points - st, axis=-1))
-    return out
-
-
-def plane_points(plane):
-    """The (x, y, z) of every point of ``plane`` (m): shape (n, n, 3), rows its second axis."""
-    uu, vv = np.meshgrid(*plane.axes)
-    fixed = np.full_like(uu, plane.fixed)
-    return np.stack((uu, fixed, vv) if plane.kind == "xz" else (uu, vv, fixed), axis=-1)
-
-
-def runaway(plane, stations, crlb, observable):
-    """Observable points of a CRLB map (m, (n, n)) whose bound exceeds RUNAWAY_LIMIT × the range
-    to the nearest station: there the linearised bound stops predicting a tracker's error."""
-    if len(stations) == 0:
-        return np.zeros(np.shape(crlb), dtype=bool)
-    rng = np.maximum(nearest_range(plane_points(plane), stations), 1e-9)  # on a station the CRLB is NaN: False
-    return observable & np.isfinite(crlb) & core.linearisation_breaks(crlb, rng, limit=RUNAWAY_LIMIT)
 
 
 def runaway_note(results, masks):

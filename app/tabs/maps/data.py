@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from bokeh.palettes import RdBu11, Viridis256
 
+from app.kit.runaway import runaway_dots
+
 from .compute import KIND_NAMES, Panels, colour_range
 
 #: Veil codes of a pixel (the veil image): 0 observable, 1 and 2 unobservable (the two colours of
@@ -32,15 +34,6 @@ NAN_COLOUR = "#ffffff"
 #: where there is no value (drawn in NAN_COLOUR, the preview mapper's ``high_color``).
 PREVIEW_TOP, PREVIEW_NAN = 254, 255
 STRIPE = 6  # pixels of the map grid per stripe of the veil
-DOT = 3  # pixels of the map grid per side of a runaway dot (one every 2 DOT, in both directions)
-
-
-def runaway_dots(shape):
-    """Where the white dots of the runaway marks are, on a map grid of ``shape`` (bool): squares
-    of DOT × DOT points on a 2 DOT grid, a pattern no stripe of the unobservable veil resembles
-    (the Maps, Layout design and Track tabs all mark runaway points with it)."""
-    i, j = np.indices(shape)
-    return ((i // DOT) % 2 == 0) & ((j // DOT) % 2 == 0)
 
 
 def exaggeration(plane):

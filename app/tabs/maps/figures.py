@@ -60,7 +60,8 @@ from bokeh.core.property.validation import validate
 from bokeh.model import DataModel
 from bokeh.palettes import Viridis256
 
-from .compute import RUNAWAY_LIMIT
+from app.kit.runaway import RUNAWAY_LIMIT
+
 from .data import (
     NAN_COLOUR,
     PREVIEW_TOP,
@@ -104,7 +105,7 @@ const sup = String(Number(e)).replace(/[0-9-]/g, d => "\u2070\u00b9\u00b2\u00b3\
 return (c === "1" ? "" : c + "\u00d7") + "10" + sup;
 """
 
-#: Hover text after the value of a runaway point (app.tabs.maps.compute.runaway).
+#: Hover text after the value of a runaway point (app.kit.runaway.runaway).
 RUNAWAY_TEXT = (f" — over {RUNAWAY_LIMIT:.0%} of the range to the nearest station: the linearised "
                 "bound does not predict a tracker's error here (far-field runaway)")
 RUNAWAY_DIFF_TEXT = f" — A's or B's CRLB is over {RUNAWAY_LIMIT:.0%} of the range (far-field runaway)"
@@ -314,6 +315,28 @@ def uniform_veil(veil):
     return None
 
 
+def _set_veil(figs, which, veil, where, preview):
+    """The veil of map ``which``: ``veil`` over the rectangle ``where``, of a preview or not."""
+    old = figs.veils[which].data
+    same_rect = all(old[k] == v for k, v in where.items())
+    # sent only when it changes; a preview's veil also not when it says what the one shown
+    # says everywhere (clear, or striped: :func:`uniform_veil`): the exact veil stays, so
+    # the release has nothing to re-send (each release re-sent three 200² veils, 120 kB,
+    # after a drag's 100² ones)
+    # (the exact veil keeps its rectangle, the exact grid's pixel edges, within a coarse pixel
+    # of the preview's: the same plane)
+    was = old["image"][0]
+    same = same_rect and was.shape == veil.shape and np.array_equal(was, veil)
+    if preview and not same:
+        du, dv = where["dw"][0] / veil.shape[1], where["dh"][0] / veil.shape[0]
+        near = all(abs(old[k][0] - where[k][0]) <= step
+                   for k, step in (("x", du), ("dw", du), ("y", dv), ("dh", dv)))
+        shows = uniform_veil(veil)
+        same = near and shows is not None and shows == uniform_veil(was)
+    if not same:
+        figs.veils[which].data = dict(image=[veil], **where)
+
+
 def set_maps(figs: MapFigures, prepared):
     """Everything but the colour bars' ranges: images, veils, stations, titles, labels, tooltips,
     captions (the scenario's parameters, also in a saved PNG), PNG file names. ``prepared``:
@@ -337,25 +360,7 @@ def set_maps(figs: MapFigures, prepared):
         _update_mapper(mapper, dict(palette=palette))
         if layer is not None and layer.visible != d.preview:
             layer.visible = d.preview
-        veil = d.veils[which]
-        old = figs.veils[which].data
-        same_rect = all(old[k] == v for k, v in where.items())
-        # sent only when it changes; a preview's veil also not when it says what the one shown
-        # says everywhere (clear, or striped: :func:`uniform_veil`): the exact veil stays, so
-        # the release has nothing to re-send (each release re-sent three 200² veils, 120 kB,
-        # after a drag's 100² ones)
-        # (the exact veil keeps its rectangle, the exact grid's pixel edges, within a coarse pixel
-        # of the preview's: the same plane)
-        was = old["image"][0]
-        same = same_rect and was.shape == veil.shape and np.array_equal(was, veil)
-        if d.preview and not same:
-            du, dv = where["dw"][0] / veil.shape[1], where["dh"][0] / veil.shape[0]
-            near = all(abs(old[k][0] - where[k][0]) <= step
-                       for k, step in (("x", du), ("dw", du), ("y", dv), ("dh", dv)))
-            shows = uniform_veil(veil)
-            same = near and shows is not None and shows == uniform_veil(was)
-        if not same:
-            figs.veils[which].data = dict(image=[veil], **where)
+        _set_veil(figs, which, d.veils[which], where, d.preview)
         st = figs.stations[which].data
         if len(st["x"]) != len(stations) or not (np.array_equal(st["x"], stations[:, 0])
                                                  and np.array_equal(st["y"], stations[:, 1])):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import html
 import time
 from functools import partial
 
@@ -11,12 +10,16 @@ import numpy as np
 import panel as pn
 from bokeh.layouts import row
 
-from app.kit import offloop, timings, views
+from app.kit import offloop, timings
+from app.kit.alerts import alert
+from app.kit.runaway import RUNAWAY_LIMIT
+from app.kit.tab import Tab
 from app.state.applies import MAPS_TAB, applies
 from app.state.scenario import defaults
-from . import export, live, data as map_data, figures as map_figures
-from .compute import READS, RUNAWAY_LIMIT, Snapshot, compute
 from app.serve.warmup import WARMUP
+from app.state.snapshot import Snapshot
+from . import downloads, export, live, data as map_data, figures as map_figures
+from .compute import READS, compute
 
 #: Seconds a change may compute before the busy spinner shows (each toggle re-styles the page).
 BUSY_AFTER = 0.1
@@ -72,7 +75,7 @@ All logarithms are base 10.
 """
 
 _SWATCH = 'display:inline-block;width:22px;height:14px;vertical-align:middle;border:1px solid #888;'
-#: The runaway marks' swatch: white dots over a map colour, as drawn (app.tabs.maps.data.runaway_dots).
+#: The runaway marks' swatch: white dots over a map colour, as drawn (app.kit.runaway.runaway_dots).
 RUNAWAY_SWATCH = (_SWATCH + "background:radial-gradient(circle,#ffffff 0 2px,transparent 2.5px) 0 0/6px 6px,"
                   "#46327e")
 
@@ -102,57 +105,6 @@ def legend(p=None):
 LEGEND = legend()
 
 
-def alert(text, kind):
-    """Plain text in a Bootstrap alert box: escaped, never interpreted as HTML or Markdown."""
-    fg, bg = {"danger": ("#842029", "#f8d7da"), "warning": ("#664d03", "#fff3cd"),
-              "info": ("#084298", "#cfe2ff")}[kind]
-    style = f"color:{fg};background:{bg};border:1px solid {fg}33;border-radius:6px;padding:8px 12px"
-    return (f'<div class="alert alert-{kind}" role="alert" style="{style}">'
-            f'{html.escape(text).replace(chr(10), "<br>")}</div>')
-
-
-def _refused_here(message, refused, names):
-    return bool(message) and (not refused if names is None else bool(set(refused) & set(names)))
-
-
-def refusal(scenario, names, css):
-    """The Scenario's refusal message, shown here when it is about one of ``names`` (an input, or
-    a tab's inputs: each shows only its own; ``None``: a message about no input, e.g. the page's
-    link)."""
-    def shows(message, refused):
-        return _refused_here(message, refused, names)
-
-    return pn.pane.HTML(
-        pn.bind(lambda m, r: alert(m, "danger" if "refused" in m or "Kept" in m else "warning")
-                if shows(m, r) else "", scenario.param.message, scenario.param.refused),
-        visible=pn.bind(shows, scenario.param.message, scenario.param.refused),
-        sizing_mode="stretch_width", css_classes=[css])
-
-
-def with_refusal(scenario, column, names, css):
-    """``column`` (a Column holding an input) with :func:`refusal`'s message about ``names`` at its
-    end while there is one: the message pane is made on the first refusal and put in the column
-    only while it says something (a page of inputs carried one hidden pane each)."""
-    inputs, pane = list(column.objects), []
-    doc = pn.state.curdoc  # the session's (None outside a server)
-
-    def update():
-        if _refused_here(scenario.message, scenario.refused, names):
-            if not pane:
-                pane.append(refusal(scenario, names, css))
-            if len(column.objects) == len(inputs):
-                column.objects = [*inputs, pane[0]]
-        elif len(column.objects) > len(inputs):
-            column.objects = inputs
-
-    # A watcher on Panel's threads: the pane's models join the page as a change of the document
-    # on its loop, events held, so no later message can overtake the one bringing them
-    # (offloop.soon).
-    scenario.param.watch(lambda *_: offloop.soon(doc, update), ["message", "refused"])
-    update()
-    return column
-
-
 def _notes(p):
     """The warnings under the maps: unobservable points, then runaway CRLB points."""
     return "\n".join(t for t in (p.note, p.far_note) if t)
@@ -175,111 +127,140 @@ def _paper_line(p):
     return alert(f"Paper {p.preset}: {p.paper[1]} (red frame).", "info")
 
 
-def maps_tab(scenario, cache, *, busy=None, after_draw=None, warmup=WARMUP):
-    """The Maps tab of ``scenario``: its layout, kept current by a watcher on the maps' fields.
+def _opening(scenario):
+    """Whether the page is as it opens: every input of the maps at its default."""
+    return scenario.inputs(READS) == OPENING
 
-    ``busy``: a LoadingSpinner shown while a slow change computes; ``after_draw``: called
-    ``URL_AFTER`` s after a change's maps are sent (the URL update); ``warmup``: the first
-    start's (:func:`compiling_text`, said while a slow change waits on it)."""
-    first = cache.get(Snapshot.of(scenario), compute)
-    figs = map_figures.build()
-    map_figures.fill(figs, first)
+
+def _remedies(scenario, p):
+    """Which remedy buttons apply to maps ``p``: only where a map is veiled."""
+    return dict(known=bool(p.note) and not (scenario.sensor.state_set.startswith("moments known")
+                                            and p.measure == "d_optimal"),
+                crlb=bool(p.note) and p.measure != "crlb_position")
+
+
+def _panes(scenario, first):
+    """The panes around the maps, showing maps ``first``: {name: pane}."""
     # Written by redraw together with the maps (not bound to the scenario: a binding would compute
     # the maps once more, synchronously, before redraw could start).
     note = pn.pane.HTML(alert(_notes(first), "warning"), visible=bool(_notes(first)),
                         sizing_mode="stretch_width", css_classes=["w-note"])
     # The marks' legend, redrawn with the maps: runaway dots only on CRLB maps (issue 25)
     key = pn.pane.HTML(legend(first), sizing_mode="stretch_width", css_classes=["w-legend"])
+    # under the maps (above them it would move them when it goes)
+    start = pn.pane.HTML(alert(START, "info"), visible=_opening(scenario), sizing_mode="stretch_width",
+                         css_classes=["w-start"])
     # Always laid out, at the height of its one-line banner: the maps no longer jump ~45 px when
     # a paper figure's banner comes and goes
-    def opening():  # the page as it opens: every input of the maps at its default
-        return scenario.inputs(READS) == OPENING
-
-    # under the maps (above them it would move them when it goes)
-    start = pn.pane.HTML(alert(START, "info"), visible=opening(), sizing_mode="stretch_width",
-                         css_classes=["w-start"])
     paper = pn.pane.HTML(_paper_line(first), sizing_mode="stretch_width", min_height=PAPER_HEIGHT,
                          css_classes=["w-paper"])
     waiting = pn.pane.HTML("", visible=False, sizing_mode="stretch_width", css_classes=["w-compiling"])
     known = pn.widgets.Button(name="Moments known (5 states), D-optimal measure", button_type="warning",
                               css_classes=["w-remedy-known"],
                               on_click=lambda e: scenario.update(state_set="moments known (5 states)",
-                                                                       measure="D-optimal ½·log10 det F"))
+                                                                 measure="D-optimal ½·log10 det F"))
     crlb = pn.widgets.Button(name="Show CRLB position error (m)", button_type="warning",
                              css_classes=["w-remedy-crlb"],
                              on_click=lambda e: setattr(scenario.maps, "measure", "CRLB position error (m)"))
-
-    def remedies(p):
-        """Which remedy buttons apply to maps ``p``: only where a map is veiled."""
-        return dict(known=bool(p.note) and not (scenario.sensor.state_set.startswith("moments known")
-                                                and p.measure == "d_optimal"),
-                    crlb=bool(p.note) and p.measure != "crlb_position")
-
-    shown = remedies(first)
+    shown = _remedies(scenario, first)
     known.visible, crlb.visible = shown["known"], shown["crlb"]
+    return dict(note=note, key=key, start=start, paper=paper, waiting=waiting, known=known, crlb=crlb)
 
-    #: The scenario of the maps drawn or being drawn: a change that ends where it began (a refused
-    #: value, restored) sends no maps again (0.5 MB, which held up its message by ~30 ms).
-    latest = [Snapshot.of(scenario)]
-    doc = pn.state.curdoc  # the session document this tab is built for
-    timings.watch_arrivals(doc)  # where an update's time goes, when APP_TIMINGS asks (app/kit/timings.py)
 
-    def redraw(*_):
+class _Maps:
+    """One session's Maps tab kept current: a change of the maps' inputs computes them on a
+    worker thread and draws them in place on the event loop (:meth:`redraw`)."""
+
+    def __init__(self, scenario, cache, busy, after_draw, warmup=WARMUP):
+        self.scenario, self.cache, self.busy, self.after_draw = scenario, cache, busy, after_draw
+        self.warmup = warmup  # the first start's (compiling_text, said while a change waits on it)
+        first = cache.get(Snapshot.of(scenario), compute)
+        self.figs = map_figures.build()
+        map_figures.fill(self.figs, first)
+        self.panes = _panes(scenario, first)
+        #: The scenario of the maps drawn or being drawn: a change that ends where it began (a
+        #: refused value, restored) sends no maps again (0.5 MB, which held up its message by ~30 ms).
+        self.latest = Snapshot.of(scenario)
+        self.doc = pn.state.curdoc  # the session document this tab is built for
+        timings.watch_arrivals(self.doc)  # where an update's time goes, when APP_TIMINGS asks (app/kit/timings.py)
+        # the maps follow a dragged slider: previews until its release (app/tabs/maps/live.py)
+        self.follow = live.Live(scenario, self.figs, self.doc, self.exact)
+        scenario.watch_inputs(self.redraw, READS)
+
+    def redraw(self, *_):
         # Start computing at once, on a worker thread (the kernels release the GIL): the server's
         # event loop keeps serving other sessions meanwhile, and the compute does not wait for
         # the widget updates already queued on the loop. Then draw, on the loop.
-        rec = timings.start(doc)
-        snapshot = Snapshot.of(scenario)
+        rec = timings.start(self.doc)
+        snapshot = Snapshot.of(self.scenario)
         if rec is not None:
-            rec["changed"] = _changed_inputs(latest[0], snapshot)
-        if snapshot == latest[0]:
+            rec["changed"] = _changed_inputs(self.latest, snapshot)
+        if snapshot == self.latest:
             timings.finish(rec, "unchanged")
             return
-        latest[0] = snapshot
+        self.latest = snapshot
         timings.stamp(rec, "submitted")
-        computing = _COMPUTE.submit(prepared_maps, snapshot, rec)
-        offloop.schedule(doc, partial(draw, snapshot, computing, rec))  # app.kit.offloop's pattern
+        computing = _COMPUTE.submit(self.prepared_maps, snapshot, rec)
+        offloop.schedule(self.doc, partial(self.draw, snapshot, computing, rec))  # app.kit.offloop's pattern
 
-    def prepared_maps(snapshot, rec):  # on a thread of the maps' pool
+    def prepared_maps(self, snapshot, rec):  # on a thread of the maps' pool
         timings.stamp(rec, "started")
         with timings.current(rec):  # the kernel lock's legs (app.tabs.maps.compute.compute)
-            prepared = map_data.prepare(cache.get(snapshot, compute))
+            prepared = map_data.prepare(self.cache.get(snapshot, compute))
         timings.stamp(rec, "computed")
         return prepared
 
-    async def draw(snapshot, computing, rec=None):
+    async def draw(self, snapshot, computing, rec=None):
         try:
-            await show_maps(snapshot, computing, rec)
+            await self.show_maps(snapshot, computing, rec)
         except BaseException:
             timings.finish(rec, "failed")
             raise
         finally:
-            if after_draw is not None:
+            if self.after_draw is not None:
                 await asyncio.sleep(URL_AFTER)  # the browser paints the maps first
-                await offloop.changes(doc, after_draw)
+                await offloop.changes(self.doc, self.after_draw)
 
-    def spinner(on):
-        busy.param.update(value=on, visible=on)
+    def spinner(self, on):
+        self.busy.param.update(value=on, visible=on)
 
-    async def show_maps(snapshot, computing, rec=None):
+    async def arrived(self, computing):
+        """The maps and the arrays to send (map_data.prepare), from the worker; the spinner only
+        for a slow change: for a fast one it costs more than it says."""
         maps = asyncio.wrap_future(computing)
-        # ``panels``: the maps and the arrays to send (map_data.prepare), from the worker
-        try:  # the spinner only for a slow change: for a fast one it costs more than it says
-            panels = await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
+        try:
+            return await asyncio.wait_for(asyncio.shield(maps), BUSY_AFTER)
         except asyncio.TimeoutError:
-            if busy is not None:
-                await offloop.changes(doc, partial(spinner, True))
+            if self.busy is not None:
+                await offloop.changes(self.doc, partial(self.spinner, True))
             try:
-                panels = await wait_saying(maps)
+                return await self.wait_saying(maps)
             finally:
-                if busy is not None:
-                    await offloop.changes(doc, partial(spinner, False))
-                if waiting.visible:
-                    await offloop.changes(doc, partial(say_waiting, ""))
+                if self.busy is not None:
+                    await offloop.changes(self.doc, partial(self.spinner, False))
+                if self.panes["waiting"].visible:
+                    await offloop.changes(self.doc, partial(self.say_waiting, ""))
+
+    def say_waiting(self, text):
+        self.panes["waiting"].param.update(object=alert(text, "warning") if text else "", visible=bool(text))
+
+    async def wait_saying(self, maps):
+        """The maps, saying meanwhile what they wait for while the warm-up is not done."""
+        while True:
+            text = compiling_text(self.warmup)
+            if text or self.panes["waiting"].visible:
+                await offloop.changes(self.doc, partial(self.say_waiting, text))
+            try:
+                return await asyncio.wait_for(asyncio.shield(maps), WAITING_POLL_S)
+            except asyncio.TimeoutError:
+                continue
+
+    async def show_maps(self, snapshot, computing, rec=None):
+        panels = await self.arrived(computing)
         timings.stamp(rec, "resumed")
         # Each session's draw is a callback of its own on the loop (~10 ms of Python): other
         # sessions' events queued meanwhile go between them
-        if snapshot != Snapshot.of(scenario):  # a newer change draws its own maps
+        if snapshot != Snapshot.of(self.scenario):  # a newer change draws its own maps
             timings.finish(rec, "superseded")
             return
         # The maps' own Bokeh models in one message, as Panel sends a change made on the
@@ -289,45 +270,37 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None, warmup=WARMUP):
         # with the old images (~20 ms in the browser); through offloop.changes (one message
         # per event) the images were painted up to ~50 ms apart.
         with pn.io.hold():
-            map_figures.fill(figs, panels)
+            map_figures.fill(self.figs, panels)
             timings.stamp(rec, "drawn")
         timings.stamp(rec, "sent")
         timings.finish(rec, "sent")
-        follow.drawn_exact()
+        self.follow.drawn_exact()
         # the panes under the maps, whose first update brings Panel's stylesheets: in order
         # with the threads' changes
-        await offloop.changes(doc, partial(show, panels))
+        await offloop.changes(self.doc, partial(self.show, panels))
 
-    def say_waiting(text):
-        waiting.param.update(object=alert(text, "warning") if text else "", visible=bool(text))
+    def show(self, panels):
+        p, panes = panels.panels, self.panes
+        panes["note"].param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
+        panes["paper"].object = _paper_line(p)
+        panes["start"].visible = _opening(self.scenario)
+        panes["key"].object = legend(p)
+        now = _remedies(self.scenario, p)
+        panes["known"].visible, panes["crlb"].visible = now["known"], now["crlb"]
 
-    async def wait_saying(maps):
-        """The maps, saying meanwhile what they wait for while the warm-up is not done."""
-        while True:
-            text = compiling_text(warmup)
-            if text or waiting.visible:
-                await offloop.changes(doc, partial(say_waiting, text))
-            try:
-                return await asyncio.wait_for(asyncio.shield(maps), WAITING_POLL_S)
-            except asyncio.TimeoutError:
-                continue
+    def exact(self):  # the exact maps again, of the scenario as it is (previews drawn over them)
+        self.latest = None
+        self.redraw()
 
-    def show(panels):
-        p = panels.panels
-        note.param.update(object=alert(_notes(p), "warning"), visible=bool(_notes(p)))
-        paper.object = _paper_line(p)
-        start.visible = opening()
-        key.object = legend(p)
-        now = remedies(p)
-        known.visible, crlb.visible = now["known"], now["crlb"]
 
-    def exact():  # the exact maps again, of the scenario as it is (previews drawn over them)
-        latest[0] = None
-        redraw()
+def maps_tab(scenario, cache, *, busy=None, after_draw=None, warmup=WARMUP):
+    """The Maps tab of ``scenario``: its layout, kept current by a watcher on the maps' fields.
 
-    # the maps follow a dragged slider: previews until its release (app/tabs/maps/live.py)
-    follow = live.Live(scenario, figs, doc, exact)
-    scenario.watch_inputs(redraw, READS)
+    ``busy``: a LoadingSpinner shown while a slow change computes; ``after_draw``: called
+    ``URL_AFTER`` s after a change's maps are sent (the URL update); ``warmup``: the first
+    start's (:func:`compiling_text`, said while a slow change waits on it)."""
+    view = _Maps(scenario, cache, busy, after_draw, warmup)
+    figs, panes = view.figs, view.panes
     # A row that wraps (public ``styles`` of Bokeh's models, on their elements): three maps
     # across where each gets MAP_MIN_PX (a 1600 px screen), else A and B across and the
     # difference under them (at 1280 × 800 the three in one row had 204 × 189 px frames). At
@@ -338,11 +311,12 @@ def maps_tab(scenario, cache, *, busy=None, after_draw=None, warmup=WARMUP):
                       "max-width": f"min({MAP_MAX_PX}px, 50%)"}
     plots = pn.pane.Bokeh(row(*figs.layout, sizing_mode="stretch_width", styles={"flex-wrap": "wrap"}),
                           sizing_mode="stretch_width")
-    tab = pn.Column(paper, waiting, plots, start, key, note,
-                    pn.Row(known, crlb), pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
+    tab = pn.Column(panes["paper"], panes["waiting"], plots, panes["start"], panes["key"], panes["note"],
+                    pn.Row(panes["known"], panes["crlb"]),
+                    pn.pane.Markdown(READING_GUIDE, sizing_mode="stretch_width"),
                     sizing_mode="stretch_width")
     tab.figures = figs  # for tests
-    tab.live = follow
+    tab.live = view.follow
     return tab
 
 
@@ -367,18 +341,18 @@ def _current(scenario, cache):
 
 
 def download_name(scenario, cache, ext):
-    """The file name of a download of ``scenario``'s maps (:func:`app.kit.views.download_name`)."""
-    return views.download_name(cache.get(Snapshot.of(scenario), compute), ext)
+    """The file name of a download of ``scenario``'s maps (:func:`app.tabs.maps.downloads.download_name`)."""
+    return downloads.download_name(cache.get(Snapshot.of(scenario), compute), ext)
 
 
 def to_csv(scenario, cache):
     """The maps of ``scenario`` as CSV (the download button's file)."""
-    return views.to_csv(*_current(scenario, cache))
+    return downloads.to_csv(*_current(scenario, cache))
 
 
 def to_netcdf(scenario, cache):
     """The maps of ``scenario`` as NetCDF (the download button's file)."""
-    return views.to_netcdf(*_current(scenario, cache))
+    return downloads.to_netcdf(*_current(scenario, cache))
 
 
 def to_png(scenario, cache, which=export.ALL):
@@ -390,3 +364,8 @@ def to_png(scenario, cache, which=export.ALL):
 
 #: The one-map PNG downloads: (label, map index, file name suffix).
 MAP_PNGS = (("A", 0, "A"), ("B", 1, "B"), ("B vs A", 2, "difference"))
+
+
+#: The Maps tab, as the page mounts it (app.kit.tab).
+TAB = Tab("maps", "Maps", reads=READS,
+          view=lambda m: maps_tab(m.scenario, m.cache, busy=m.busy, after_draw=m.after_draw))

@@ -38,11 +38,12 @@ from core.shape.experiment import EULER_FLAG_COND, SETTLE, Case, run_case
 from core.shape.model import LAG
 
 from app.kit import offloop
+from app.kit.alerts import alert, with_refusal
 from app.kit.cache import KERNEL_LOCK, SHARED
 from app.kit.inputs import number_input
+from app.kit.tab import Tab
 from app.state.scenario import Scenario, Shape, groups, inputs
-from app.tabs.maps.compute import Snapshot
-from app.tabs.maps.maps import alert, with_refusal
+from app.state.snapshot import Snapshot
 from .text import verdict_text
 
 hv.extension("bokeh", logo=False)
@@ -158,7 +159,7 @@ def preset_of(values):
 
 
 def key_of(scenario):
-    """The tab's inputs as a hashable key (its part's inputs' :class:`app.tabs.maps.compute.Snapshot`)."""
+    """The tab's inputs as a hashable key (its part's inputs' :class:`app.state.snapshot.Snapshot`)."""
     return Snapshot.of(scenario, inputs(*READS))
 
 
@@ -443,3 +444,7 @@ def shape_tab(scenario: Scenario):
     """The Shape tab as one layout: its inputs beside its results (:func:`shape_parts`)."""
     inputs, outputs = _build(scenario)
     return pn.Row(inputs, outputs, sizing_mode="stretch_width")
+
+
+#: The Shape tab, as the page mounts it (app.kit.tab): its inputs in the sidebar.
+TAB = Tab("shape", "Shape", reads=tuple(Shape.names()), sidebar=True, view=lambda m: shape_parts(m.scenario))

@@ -38,17 +38,18 @@ import core
 from core.tracking import montecarlo as core_track
 
 # The maps' lock on numba's parallel kernels (its workqueue layer must not be entered from two
-# threads at once): the tab's Monte-Carlo takes it too. Private to app.tabs.maps.compute; if app/ moves it,
-# import it from there.
+# threads at once): the tab's Monte-Carlo takes it too (app.kit.cache).
 from app.kit import offloop, views
+from app.kit.alerts import refusal
 from app.kit.cache import KERNEL_LOCK, SHARED
 from app.kit.inputs import number_input
+from app.kit.runaway import RUNAWAY_LIMIT, nearest_range
 from app.kit.shown import ALWAYS
+from app.kit.tab import Tab
+from app.kit.views import Design
 from app.state.scenario import SENSORS, Scenario, inputs
 from app.state.sensors import BY_KIND
-from app.tabs.design.compute import Design
-from app.tabs.maps.compute import RUNAWAY_LIMIT, Snapshot, nearest_range
-from app.tabs.maps.maps import refusal
+from app.state.snapshot import Snapshot
 
 hv.extension("bokeh", logo=False)
 
@@ -418,3 +419,8 @@ def track_tab(scenario: Scenario, shown=ALWAYS):
         ),
         sizing_mode="stretch_width",  # stretch_both made Panel override the Tabs' sizing (logged)
     )
+
+
+#: The Track tab, as the page mounts it (app.kit.tab).
+TAB = Tab("track", "Track", reads=READS, banner=True, waits=True,
+          view=lambda m: track_tab(m.scenario, m.shown))
