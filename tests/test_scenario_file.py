@@ -28,8 +28,9 @@ def _other_value(name):
     p = parameter(name)
     if isinstance(p, param.Selector):
         return [o for o in p.objects if o != p.default]
-    if isinstance(p, param.List):
-        return [[[5.0, -7.5, 90.0]], [[0.0, 0.0, 100.0], [30.0, 10.0, 100.0], [60.0, 0.0, 110.0]]]
+    if isinstance(p, param.List):  # of its item type: stations, zones (polygons), station numbers
+        return [[[5.0, -7.5, 90.0]], [[0.0, 0.0, 100.0], [30.0, 10.0, 100.0], [60.0, 0.0, 110.0]],
+                [[[0.0, 0.0], [50.0, 0.0], [0.0, 50.0]]], [2], [1, 3]]
     if isinstance(p, param.String):
         return ["0, 120, 240", "-20, 0", "90"]
     lo, hi = p.softbounds

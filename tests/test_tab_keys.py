@@ -23,7 +23,7 @@ from __future__ import annotations
 import pytest
 
 from app.state.scenario import PART_OF, Scenario, ScenarioValues, defaults, inputs
-from app.tabs.design import compute as design_compute
+from app.tabs.design import compute as design_compute, survey_compute
 from app.tabs.maps import compute
 from app.tabs.maps.compute import Snapshot
 from app.tabs.shape import shape
@@ -115,6 +115,9 @@ COMPUTATIONS = {
                                     KINDS[:1] + KINDS[3:]),
     "Layout design: optimised layout": (design_compute.LAYOUT_READS, design_compute.optimised_layout,
                                         KINDS[:1] + KINDS[3:]),
+    "Layout design: the N−1 loss map": (survey_compute.LOSS_READS, survey_compute.loss_design, KINDS),
+    "Layout design: stations-count curve": (survey_compute.COUNT_READS, survey_compute.count_curve,
+                                            KINDS[:1] + KINDS[3:]),
     "Track: the Monte-Carlo": (track.READS, track.outputs_of, KINDS),
 }
 

@@ -22,6 +22,7 @@ import core
 
 from .part import CARDS, Part, declared, limits
 from .sensors import KINDS, MODELS
+from .survey import SURVEY_CRITERIA, SURVEY_QUANTITIES, Survey
 
 #: Most stations a custom layout may have.
 MAX_STATIONS = 8
@@ -43,6 +44,7 @@ CRITERIA = {
     "Mean D-optimal over the region": "mean_dopt",
     "Worst-case D-optimal over the region": "worst_dopt",
     "Area with CRLB error under threshold": "area_crlb",
+    **SURVEY_CRITERIA,  # issue 49's: A, E, worst point, N−1 coverage (app/state/survey.py)
 }
 #: Error maps of the design tab: label -> core.CrlbErrors attribute.
 ERROR_QUANTITIES = {
@@ -50,6 +52,7 @@ ERROR_QUANTITIES = {
     "Horizontal error, semi-major axis (m)": "semi_major",
     "Depth error σz (m)": "sigma_z",
     "Speed error σ|v| (m/s)": "sigma_speed",
+    **SURVEY_QUANTITIES,  # the worst single-loss map (app/state/survey.py)
 }
 #: Sensor kinds (spec §11, core.Sensor): label -> core kind, of the sensor parts (app.state.sensors).
 SENSORS = {part.label: part.kind for part in KINDS}
@@ -436,7 +439,7 @@ class Shape(Part):
 
 #: The parts of a scenario: attribute -> class. Their parameter names are unique across them.
 PARTS = {"target": Target, "stations": Stations, "medium": Medium, "sensor": Sensor,
-         "region": Region, "maps": Maps, "design": Design, "track": Track,
+         "region": Region, "maps": Maps, "design": Design, "survey": Survey, "track": Track,
          "calibration": Calibration, "shape": Shape}
 #: Each parameter's part: name -> attribute of :data:`PARTS`.
 PART_OF = {n: attr for attr, cls in PARTS.items() for n in cls.names()}
@@ -479,8 +482,6 @@ def shown(name, where):
         return False
     rule = d.get("shown")
     return True if rule is None else bool(rule(where))
-
-
 
 
 def inputs(*parts, but=()):

@@ -389,7 +389,7 @@ def _magnetic_maps(sensor, comparison, sensor_b):
 #: Parts that are one tab's own settings shown beside the paper-figure buttons (the Layout design
 #: and Track tabs): a figure button leaves those of their inputs that no figure sets as the user
 #: set them (Fig. 1 reset the Track tab's runs from 2 to 5, without a word).
-TAB_OWN = ("design", "track")
+TAB_OWN = ("design", "survey", "track")
 
 
 def preset_values(name):

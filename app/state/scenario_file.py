@@ -214,8 +214,8 @@ def accepted(name):
         return "a whole number"
     if isinstance(p, param.Number):
         return "a number"
-    if isinstance(p, param.List):
-        return "a list of stations [x, y, z] (m)"
+    if isinstance(p, param.List):  # its label says what of: stations (x, y, z), zones, numbers
+        return f"a list: {p.label}"
     return "text"
 
 

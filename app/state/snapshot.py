@@ -15,7 +15,12 @@ SCENE = inputs("target", "stations", "medium", "sensor", "region", "maps", but=(
 
 
 def _frozen(value):
-    return tuple(tuple(v) for v in value) if isinstance(value, list) else value
+    """A value as a key holds it: lists (stations, zones, fixed stations) as tuples, nested."""
+    return tuple(_frozen(v) for v in value) if isinstance(value, list) else value
+
+
+def _thawed(value):
+    return [_thawed(v) for v in value] if isinstance(value, tuple) else value
 
 
 @dataclass(frozen=True)
@@ -44,5 +49,4 @@ class Snapshot:
         """These values alone, with the methods that build core's inputs (not a live Scenario).
         Reading an input the snapshot does not hold raises AttributeError: a computation keyed
         on a snapshot cannot read a value its key leaves out."""
-        return ScenarioValues(**{k: [list(v) for v in val] if k == "stations" else val
-                                 for k, val in self.items})
+        return ScenarioValues(**{k: _thawed(val) for k, val in self.items})

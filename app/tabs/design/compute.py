@@ -18,6 +18,7 @@ from app.kit.cache import KERNEL_LOCK
 from app.kit.views import Design
 from app.state.scenario import CRITERIA, ScenarioValues, inputs
 from app.state.snapshot import Snapshot
+from .constraints import CONSTRAINT_READS, layout_constraints
 
 #: Spacings d (m) scanned for the best-spacing curve, and the resolution of its region.
 SPACING_RANGE, SPACING_POINTS, REGION_RESOLUTION = (2.0, 200.0), 25, 41
@@ -31,7 +32,8 @@ ERROR_MAP_READS = (*_TARGET_SEEN, "stations", "extent", "resolution")
 #: :func:`best_spacing`: dual stations at depth h, the criterion.
 SPACING_READS = (*_TARGET_SEEN, "h", "extent", "resolution", "criterion", "threshold")
 #: :func:`optimised_layout`: N stations at depth h in a shape, the criterion.
-LAYOUT_READS = (*_TARGET_SEEN, "h", "extent", "criterion", "threshold", "layout_kind", "n_stations")
+LAYOUT_READS = (*_TARGET_SEEN, "h", "extent", "criterion", "threshold", "layout_kind", "n_stations",
+                *CONSTRAINT_READS)
 
 
 def _fisher_options(s: ScenarioValues):
@@ -132,12 +134,14 @@ def best_spacing(snapshot: Snapshot) -> Spacing:
 
 
 def optimised_layout(snapshot: Snapshot):
-    """core.optimise_layout for the chosen shape and N over the x–y region: a core.LayoutResult."""
+    """core.optimise_layout for the chosen shape and N new stations over the x–y region, beside
+    the fixed ones and clear of the zones (app/tabs/design/constraints.py): a core.LayoutResult."""
     s = snapshot.scenario()
     with KERNEL_LOCK:
         problem = core.LayoutProblem(xy_region(s, 31), h=s.h, velocity=s.velocity(),
                                      moments=s.moments(), criterion=CRITERIA[s.criterion],
-                                     threshold=s.threshold, **_fisher_options(s))
+                                     threshold=s.threshold, constraints=layout_constraints(s),
+                                     **_fisher_options(s))
         return core.optimise_layout(s.layout_kind, int(s.n_stations), problem)  # fits the region
 
 

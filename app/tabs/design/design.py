@@ -5,7 +5,6 @@ from __future__ import annotations
 from functools import partial
 
 import holoviews as hv
-import pandas as pd
 import panel as pn
 from bokeh.models.widgets.tables import NumberFormatter
 
@@ -16,8 +15,9 @@ from app.kit.runaway import RUNAWAY_LIMIT, nearest_range
 from app.kit.shown import ALWAYS
 from app.kit.tab import Tab
 from app.state.scenario import MAX_STATIONS, Design
+from app.state.survey import Survey
 from app.state.snapshot import Snapshot
-from . import compute as design_compute, live as design_live
+from . import compute as design_compute, live as design_live, survey
 from .compute import DECIMALS, ERROR_MAP_READS, LAYOUT_READS, SPACING_READS, drawn_stations
 
 #: What redraws the Layout design map's layers (:func:`design_tab`).
@@ -41,7 +41,7 @@ DESIGN_TITLE = "Custom layout: Cramér–Rao error"
 #: The station table's columns.
 COLUMNS = ["x (m)", "y (m)", "z (m)"]
 #: Inputs of this tab whose refusal is shown here, next to their inputs.
-OWN = ("stations", *Design.names())
+OWN = ("stations", *Design.names(), *Survey.names())
 
 
 #: What a bound of core.LayoutResult.at_bound means, for the result line.
@@ -76,9 +76,10 @@ def spacing_text(sp):
             "beside or below.")
 
 
-def _map(scenario, cache, snap, redraw, follow):
-    """The error map with its station layer (a click adds a station, a drag moves one) and the
-    ellipse, redrawn by the stream ``redraw``: (the pane, its Task)."""
+def _map(scenario, cache, snap, redraw, follow, loss_line):
+    """The error map with its station layer (a click adds a station, a drag moves one), the
+    forbidden zones (app/tabs/design/survey.py) and the ellipse, redrawn by the stream ``redraw``:
+    (the pane, its Task). ``loss_line``: the pane saying the N−1 map's coverage."""
     st = scenario.stations  # the Stations part
     points = hv.DynamicMap(lambda **_: views.station_layer(st.stations, editable=True).opts(hooks=[follow.hook]),
                            streams=[redraw])
@@ -96,10 +97,14 @@ def _map(scenario, cache, snap, redraw, follow):
             st.stations = drawn_stations(data, st.stations, st.h)
 
     draw.add_subscriber(drawn)
-    errors = hv.DynamicMap(lambda **_: views.error_map(cache.get(snap(), design_compute.design),
-                                                       DESIGN_TITLE,
-                                                       scenario.design.error_quantity),
-                           streams=[redraw])
+
+    def error_layer(**_):  # the layout's map, or its worst single-loss map (app/tabs/design/survey.py)
+        d = survey.error_design(cache, scenario)
+        loss_line.object = survey.loss_text(d)
+        return views.error_map(d, DESIGN_TITLE, scenario.design.error_quantity)
+
+    errors = hv.DynamicMap(error_layer, streams=[redraw])
+    zones, _zone_streams = survey.zone_layer(scenario, Refresh())
 
     # The ellipse's point is an input of its own (a click on the map adds a station: it cannot
     # also move the ellipse)
@@ -108,7 +113,7 @@ def _map(scenario, cache, snap, redraw, follow):
         return views.error_ellipse(design_compute.error_at(snap(), x, y), x, y,
                                    scenario.region.extent)[0]
 
-    map_pane = pn.pane.HoloViews(errors * points * hv.DynamicMap(ellipse, streams=[redraw]))
+    map_pane = pn.pane.HoloViews(errors * zones * points * hv.DynamicMap(ellipse, streams=[redraw]))
     # Shown again after a change made while hidden: the map computed off the event loop, a
     # spinner over it meanwhile, then redrawn (from the shared cache) on the loop
     return map_pane, offloop.Task("design-map", busy=[map_pane])
@@ -146,23 +151,24 @@ def _readout(scenario, shown, snap):
     return readout
 
 
-def _frame(stations):
-    return pd.DataFrame(stations, columns=COLUMNS, dtype=float)
+def _frame(scenario):  # x, y, z and the survey's fixed column
+    return survey.frame(scenario.stations.stations, scenario.survey.fixed_stations, COLUMNS)
 
 
 def _station_table(scenario, shown):
     """The custom layout as an editable table, in step with the Stations part both ways."""
     st = scenario.stations
     table = pn.widgets.Tabulator(
-        _frame(st.stations), show_index=False, sizing_mode="stretch_width", height=260,
+        _frame(scenario), show_index=False, sizing_mode="stretch_width", height=260,
         css_classes=["w-station-table"],
-        formatters={c: NumberFormatter(format=f"0.{'0' * DECIMALS}") for c in COLUMNS})
+        formatters={**{c: NumberFormatter(format=f"0.{'0' * DECIMALS}") for c in COLUMNS},
+                    survey.FIXED: {"type": "tickCross"}})
     showing = [False]  # the table's value is being set from the layout: not an edit
 
     def show_layout(*_):
         showing[0] = True
         try:
-            table.value = _frame(st.stations)  # a new frame: Panel sends it even amid an edit's sync
+            table.value = _frame(scenario)  # a new frame: Panel sends it even amid an edit's sync
         finally:
             showing[0] = False
 
@@ -172,7 +178,10 @@ def _station_table(scenario, shown):
         # into the next edit, which was refused with it: y = 130 was lost; issue 40 defect 4).
         if showing[0]:
             return
-        wanted = event.new.astype(float).values.tolist()
+        wanted = event.new[COLUMNS].astype(float).values.tolist()
+        fixed = survey.fixed_of(event.new)
+        if fixed != scenario.survey.fixed_stations:
+            scenario.survey.fixed_stations = fixed
         if wanted == st.stations:
             return
         st.stations = wanted
@@ -182,6 +191,7 @@ def _station_table(scenario, shown):
             show_layout()
 
     st.param.watch(shown(show_layout), ["stations"])
+    scenario.survey.param.watch(shown(show_layout), ["fixed_stations"])
     table.param.watch(edited, ["value"])
     return table
 
@@ -231,8 +241,9 @@ def _optimise(scenario, cache):
     outcome = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-optimise-result"])
     optimise_task = offloop.Task("design", busy=[optimise, outcome])
 
-    def optimised(result, criterion):
+    def optimised(result, criterion, kept):
         scenario.stations.stations = [[float(v) for v in station] for station in result.stations]
+        scenario.survey.fixed_stations = survey.rows_of(scenario.stations.stations, kept)  # still ticked
         outcome.object = optimise_text(result, criterion)
 
     def optimise_failed(exc):
@@ -241,7 +252,8 @@ def _optimise(scenario, cache):
     def optimise_clicked(event):
         snapshot, criterion = Snapshot.of(scenario, LAYOUT_READS), scenario.design.criterion
         optimise_task.start(None, partial(cache.get, snapshot, design_compute.optimised_layout),
-                            partial(optimised, criterion=criterion), optimise_failed)
+                            partial(optimised, criterion=criterion, kept=survey.fixed_of_scenario(scenario)),
+                            optimise_failed)
 
     optimise.on_click(optimise_clicked)
     return optimise, outcome
@@ -251,10 +263,12 @@ def _criteria(scenario, widgets):
     return pn.Column(
         pn.Param(scenario.design, parameters=["criterion"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
+        survey.criterion_unit(scenario),
         number_input(scenario.design, "threshold", css_classes=["w-threshold"]),
         pn.Param(scenario.design, parameters=["layout_kind"], show_name=False, widgets=widgets,
                  sizing_mode="stretch_width"),
         number_input(scenario.design, "n_stations", css_classes=["w-n_stations"]),
+        survey.survey_inputs(scenario),
         sizing_mode="stretch_width", margin=0)
 
 
@@ -271,7 +285,8 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
     # The map follows a dragged station: previews until the drop (app/tabs/design/live.py), drawn
     # into layers the station layer's hook adds to the figure
     follow = design_live.StationDrag(scenario, lambda: scenario.design.error_quantity, pn.state.curdoc)
-    map_pane, map_task = _map(scenario, cache, snap, redraw, follow)
+    loss_line = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["w-loss-text"])
+    map_pane, map_task = _map(scenario, cache, snap, redraw, follow, loss_line)
     readout = _readout(scenario, shown, snap)
     table = _station_table(scenario, shown)
 
@@ -297,10 +312,12 @@ def design_tab(scenario, cache, widgets, shown=ALWAYS):
                              message, table,
                              number_input(scenario.design, "ellipse_x", css_classes=["w-ellipse_x"]),
                              number_input(scenario.design, "ellipse_y", css_classes=["w-ellipse_y"]),
-                             readout,
+                             readout, loss_line,
                              width=380),
                    sizing_mode="stretch_width"),
-        pn.FlexBox(pn.Column(_criteria(scenario, widgets), run, said, optimise, outcome, width=360), found,
+        pn.FlexBox(pn.Column(pn.pane.Markdown(survey.ZONES_HELP, sizing_mode="stretch_width"),
+                             _criteria(scenario, widgets), run, said, optimise, outcome,
+                             survey.count_section(scenario, cache), width=360), found,
                    sizing_mode="stretch_width"),
         sizing_mode="stretch_width",
     )
