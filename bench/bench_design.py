@@ -20,13 +20,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
-import time
 
 import numba
 import numpy as np
 
 import core
+from bench.bench_sea import interleaved_medians  # one timing loop for the benchmarks that compare in one run
 
 VELOCITY, MOMENTS = (2.0, 2.0), (100.0, 20.0)
 FOUR = np.array([[-100.0, -100.0, 100.0], [100.0, 100.0, 100.0], [50.0, -80.0, 100.0],
@@ -35,19 +34,6 @@ ZONES = ([(-250, -250), (-150, -250), (-150, -100), (-250, -100)],  # a mooring-
          [(50, 50), (200, 60), (120, 200)],  # a wreck
          [(-100, 150), (0, 150), (0, 250), (-100, 250)])  # a cable landing
 FIXED = [[-200.0, 0.0, 100.0], [200.0, -200.0, 100.0]]
-
-
-def interleaved_medians(fns, repeat):
-    """Median wall time of each function, runs interleaved so that all see the same load."""
-    for fn in fns:
-        fn()  # warm-up (compilation, caches)
-    times = [[] for _ in fns]
-    for _ in range(repeat):
-        for fn, t in zip(fns, times):
-            t0 = time.perf_counter()
-            fn()
-            t.append(time.perf_counter() - t0)
-    return [statistics.median(t) for t in times]
 
 
 def main(argv=None):
